@@ -1,0 +1,78 @@
+#pragma once
+/// Core model types (thesis §1.2, §3): the point primitive, the line-segment primitive, the
+/// hybrid model holding both, and the triangle mesh that §3.3 cuts into segments.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "linesurf/core/image.h"
+#include "linesurf/core/math.h"
+
+namespace linesurf {
+
+/// A point primitive: a small elliptical-disc surface element (surfel, thesis §2.1).
+struct Point {
+  Vec3f position = Vec3f::Zero();  ///< object space
+  Vec3f normal = Vec3f::Zero();    ///< unit length, or zero when unknown
+  Color color = Color(1, 1, 1, 1); ///< linear RGBA in [0,1]
+  float radius = 0;                ///< object-space radius of the surface element (0 = unknown)
+};
+
+/// A line-segment primitive (thesis §1.2): a strip of surface of half-width `radius` around
+/// the segment p0-p1, with one normal perpendicular to the segment.
+struct Segment {
+  Vec3f p0 = Vec3f::Zero(), p1 = Vec3f::Zero();  ///< endpoints, object space
+  Vec3f normal = Vec3f::Zero();                  ///< unit, perpendicular to p1 - p0
+  Color color = Color(1, 1, 1, 1);               ///< linear RGBA in [0,1]
+  float radius = 0;                              ///< half-width of the strip, object space
+  Vec2f uv0 = Vec2f::Zero(), uv1 = Vec2f::Zero(); ///< texture coordinates at the endpoints (§5.2.4)
+  float length() const { return (p1 - p0).norm(); }
+};
+
+/// Which optional attributes a model carries. A file without normals gives hasNormals = false
+/// and zero normals; later stages (geometry, §6.1) fill them in.
+struct Attributes {
+  bool normals = false;
+  bool colors = false;
+  bool radii = false;
+  bool texcoords = false;  ///< segments carry uv0/uv1
+};
+
+/// A hybrid point + line-segment model (thesis §3). A point cloud is a HybridModel without
+/// segments.
+struct HybridModel {
+  std::vector<Point> points;
+  std::vector<Segment> segments;
+  Attributes attributes;
+  /// Texture image sampled by segment uv (§5.2.4); null when untextured.
+  std::shared_ptr<const Image> texture;
+  /// Extra per-point scalar properties (e.g. curvature "k_min"), each of points.size().
+  std::map<std::string, std::vector<float>> pointProperties;
+  /// Optional per-segment list of the input point indices it replaced (--provenance).
+  std::vector<std::vector<uint32_t>> provenance;
+  /// Free-form header comments kept through read/write (e.g. "source: ...").
+  std::vector<std::string> comments;
+
+  bool empty() const { return points.empty() && segments.empty(); }
+  Bounds3f bounds() const;
+};
+
+/// A triangle mesh (input of §3.3).
+struct TriangleMesh {
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;   ///< per vertex; empty or positions.size()
+  std::vector<Color> colors;    ///< per vertex; empty or positions.size()
+  std::vector<std::array<uint32_t, 3>> faces;
+  /// Per-corner texture coordinates; empty or faces.size().
+  std::vector<std::array<Vec2f, 3>> cornerUVs;
+  std::shared_ptr<const Image> texture;  ///< texture image; null when none
+  std::vector<std::string> comments;
+
+  Bounds3f bounds() const;
+};
+
+}  // namespace linesurf

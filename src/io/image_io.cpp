@@ -1,0 +1,56 @@
+#include "linesurf/io/image_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "linesurf/core/error.h"
+#include "linesurf/io/atomic_file.h"
+
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STBI_NO_STDIO_WRITE_UNUSED
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+namespace linesurf {
+
+std::vector<unsigned char> encodePng(const Image& image, bool withAlpha) {
+  const int channels = withAlpha ? 4 : 3;
+  std::vector<unsigned char> raw(size_t(image.width) * image.height * channels);
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    for (int c = 0; c < channels; ++c) {
+      float v = image.pixels[i][c];
+      if (!(v >= 0)) v = 0;  // also maps NaN to 0
+      raw[i * channels + c] = (unsigned char)std::lround(std::min(v, 1.0f) * 255.0f);
+    }
+  std::vector<unsigned char> out;
+  auto sink = [](void* ctx, void* data, int size) {
+    auto* v = static_cast<std::vector<unsigned char>*>(ctx);
+    v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
+  };
+  if (image.width <= 0 || image.height <= 0 ||
+      !stbi_write_png_to_func(sink, &out, image.width, image.height, channels, raw.data(), image.width * channels))
+    throw Error(Error::Kind::Io, "<png>", "", "cannot encode an empty image");
+  return out;
+}
+
+void writePng(const std::filesystem::path& path, const Image& image, bool withAlpha) {
+  std::vector<unsigned char> bytes = encodePng(image, withAlpha);
+  writeFileAtomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+Image readImage(const std::filesystem::path& path) {
+  int w = 0, h = 0, n = 0;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throwBadInput(path.string(), "", "is a directory");
+  unsigned char* data = stbi_load(path.string().c_str(), &w, &h, &n, 4);
+  if (!data) throwBadInput(path.string(), "", std::string("cannot read image: ") + stbi_failure_reason());
+  Image img(w, h);
+  for (size_t i = 0; i < size_t(w) * h; ++i)
+    for (int c = 0; c < 4; ++c) img.pixels[i][c] = data[i * 4 + c] / 255.0f;
+  stbi_image_free(data);
+  return img;
+}
+
+}  // namespace linesurf
