@@ -1,0 +1,89 @@
+#pragma once
+/// Geometry processing of point clouds, thesis §6.1: the five stages computed once per cloud and
+/// shared by every later stage (extraction §3.1/§3.2, rendering of raw scans):
+///   1. spatial index and exact k nearest neighbours,
+///   2. PCA normals (Hoppe 1992) with eigenvalues / surface variation, consistently oriented by a
+///      minimum spanning tree over the neighbour graph,
+///   3. local Delaunay neighbours on each tangent plane,
+///   4. curvature by Taubin's method (§6.1.2) with local-Delaunay triangle-area weights,
+///   5. average spacing, global and per point.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "linesurf/core/model.h"
+#include "linesurf/core/progress.h"
+
+namespace linesurf {
+
+struct GeometryOptions {
+  int k = 12;                      ///< neighbours per point (stage 1), >= 3
+  bool recomputeNormals = false;   ///< recompute even when the cloud has normals
+  bool orientNormals = true;       ///< MST orientation of computed normals (stage 2)
+  bool delaunayNeighbours = true;  ///< stage 3
+  bool curvature = true;           ///< stage 4 (needs stage 3)
+  ProgressFn progress;             ///< optional progress callback
+};
+
+/// Per-point degeneracy flags (bit set), reported as counts by the CLI.
+enum PointFlag : uint8_t {
+  kPointOk = 0,
+  kPointDuplicate = 1,        ///< coincides with another point (within 1e-6 of the bbox diagonal)
+  kPointFewNeighbours = 2,    ///< fewer than 3 distinct neighbours
+  kPointFlatNeighbourhood = 4,///< collinear neighbourhood: normal undefined, a fallback was used
+  kPointIsolated = 8,         ///< no neighbour within the graph (own component of size 1)
+};
+
+struct GeometryStageTimes {
+  double neighbours = 0, normals = 0, orientation = 0, delaunay = 0, curvature = 0, spacing = 0;
+};
+
+/// Everything §6.1 derives per point. Arrays are indexed like the cloud's points.
+struct PointGeometry {
+  int k = 0;
+  /// Stage 1: row i holds the k nearest other points of i, nearest first: neighbours[i*k + j].
+  /// When the cloud has fewer than k+1 points, rows are padded with kNoNeighbour.
+  std::vector<uint32_t> neighbours;
+  std::vector<float> neighbourDistances;  ///< Euclidean distances, same layout
+  static constexpr uint32_t kNoNeighbour = UINT32_MAX;
+
+  /// Stage 2: unit normals (consistently oriented when requested), PCA eigenvalues
+  /// λ0 <= λ1 <= λ2 of the neighbourhood covariance and surface variation λ0/(λ0+λ1+λ2) (§3.2.3.1).
+  std::vector<Vec3f> normals;
+  std::vector<Vec3f> eigenvalues;
+  std::vector<float> surfaceVariation;
+  size_t orientationComponents = 0;  ///< MST seeds used (one per connected component)
+  size_t orientationFlips = 0;       ///< normals flipped by the orientation pass
+
+  /// Stage 3: local Delaunay neighbours in CSR form: delaunayOf(i).
+  std::vector<uint32_t> delaunayOffsets;  ///< size n+1
+  std::vector<uint32_t> delaunayIndices;
+  std::span<const uint32_t> delaunayOf(size_t i) const {
+    return {delaunayIndices.data() + delaunayOffsets[i], delaunayOffsets[i + 1] - delaunayOffsets[i]};
+  }
+
+  /// Stage 4: principal curvature values and unit directions (tangent to the surface).
+  std::vector<float> kMin, kMax;
+  std::vector<Vec3f> minCurvatureDir, maxCurvatureDir;
+
+  /// Stage 5: mean distance to the k nearest neighbours, per point and over the cloud.
+  std::vector<float> spacing;
+  float averageSpacing = 0;
+
+  std::vector<uint8_t> flags;  ///< PointFlag bits per point
+  GeometryStageTimes times;
+
+  size_t size() const { return normals.size(); }
+  size_t countFlag(PointFlag f) const;
+};
+
+/// Runs the §6.1 stages on the cloud's points. Normals present in the model are kept (and only
+/// oriented if needed) unless options.recomputeNormals. Deterministic for any thread count.
+/// Throws linesurf::Error (BadParameter) for k < 3; handles clouds of any size >= 1.
+PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options = {});
+
+/// Writes the geometry's normals into the model's points, and radii from the per-point spacing
+/// where the model has none (radius rule in docs/decisions.md), setting the attribute flags.
+void applyGeometry(HybridModel& cloud, const PointGeometry& geometry);
+
+}  // namespace linesurf
