@@ -44,6 +44,7 @@ Image readImage(const std::filesystem::path& path) {
   int w = 0, h = 0, n = 0;
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throwBadInput(path.string(), "", "is a directory");
+  if (!std::filesystem::exists(path, ec)) throwBadInput(path.string(), "", "no such file");
   unsigned char* data = stbi_load(path.string().c_str(), &w, &h, &n, 4);
   if (!data) throwBadInput(path.string(), "", std::string("cannot read image: ") + stbi_failure_reason());
   Image img(w, h);

@@ -1,0 +1,27 @@
+#pragma once
+/// Image-quality measures of thesis §7 (mse and nccm of Tables 1-3, the absolute-difference
+/// statistics of Table 5) plus PSNR and SSIM. Definitions in docs/metrics.md.
+#include "linesurf/core/image.h"
+
+namespace linesurf {
+
+struct ImageMetrics {
+  double mse = 0;        ///< mean squared error over R, G, B, values in [0,1]
+  double psnr = 0;       ///< 10 log10(1 / mse) dB, +inf for identical images
+  double nccm = 0;       ///< Σ A·B / Σ A² over R, G, B (Eskicioglu & Fisher; 1 = identical, may exceed 1)
+  double ssim = 0;       ///< mean SSIM of the luma channel, 8x8 windows, stride 4 (Wang et al. 2004)
+  double meanAbsDiff = 0;///< mean |A-B| over the R, G, B composite, in grey levels of 255 (Table 5)
+  double stdAbsDiff = 0; ///< standard deviation of |A-B| over the same composite, grey levels
+  double maxAbsDiff = 0; ///< largest |A-B| of any channel, grey levels
+  double differingPixels = 0;  ///< fraction of pixels with any channel differing by > 1 grey level
+};
+
+/// Compares two images of equal size (throws linesurf::Error BadParameter otherwise). Both are
+/// quantised to 8 bits first, as the thesis compares 256-level images; alpha is ignored.
+ImageMetrics compareImages(const Image& a, const Image& b);
+
+/// A heat-map of the per-pixel maximum channel difference (black = equal, through red and yellow
+/// to white at `saturate` grey levels and above).
+Image differenceHeatmap(const Image& a, const Image& b, double saturate = 32);
+
+}  // namespace linesurf

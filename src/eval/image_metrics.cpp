@@ -1,0 +1,114 @@
+#include "linesurf/eval/image_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "linesurf/core/error.h"
+
+namespace linesurf {
+namespace {
+
+/// 8-bit quantisation as in a PNG file: clamp to [0,1], round to 1/255.
+inline double q8(float v) {
+  if (!(v > 0)) return 0;
+  return std::round(std::min(v, 1.0f) * 255.0f);
+}
+
+void checkSizes(const Image& a, const Image& b) {
+  if (a.width != b.width || a.height != b.height || a.empty())
+    throwBadParameter("images", "sizes differ or are empty (" + std::to_string(a.width) + "x" + std::to_string(a.height) +
+                                    " vs " + std::to_string(b.width) + "x" + std::to_string(b.height) + ")");
+}
+
+/// SSIM on luma with a uniform 8x8 window moved by 4 pixels (Wang, Bovik, Sheikh, Simoncelli 2004).
+double ssimLuma(const Image& a, const Image& b) {
+  const int w = a.width, h = a.height;
+  auto luma = [](const Color& c) { return 0.299 * q8(c[0]) + 0.587 * q8(c[1]) + 0.114 * q8(c[2]); };
+  std::vector<double> la(size_t(w) * h), lb(size_t(w) * h);
+  for (size_t i = 0; i < la.size(); ++i) {
+    la[i] = luma(a.pixels[i]);
+    lb[i] = luma(b.pixels[i]);
+  }
+  const double c1 = std::pow(0.01 * 255, 2), c2 = std::pow(0.03 * 255, 2);
+  const int win = std::min({8, w, h});
+  double sum = 0;
+  long count = 0;
+  for (int y0 = 0; y0 + win <= h; y0 += std::max(1, win / 2))
+    for (int x0 = 0; x0 + win <= w; x0 += std::max(1, win / 2)) {
+      double ma = 0, mb = 0;
+      for (int y = y0; y < y0 + win; ++y)
+        for (int x = x0; x < x0 + win; ++x) {
+          ma += la[size_t(y) * w + x];
+          mb += lb[size_t(y) * w + x];
+        }
+      const double n = double(win) * win;
+      ma /= n;
+      mb /= n;
+      double va = 0, vb = 0, cov = 0;
+      for (int y = y0; y < y0 + win; ++y)
+        for (int x = x0; x < x0 + win; ++x) {
+          double da = la[size_t(y) * w + x] - ma, db = lb[size_t(y) * w + x] - mb;
+          va += da * da;
+          vb += db * db;
+          cov += da * db;
+        }
+      va /= n - 1;
+      vb /= n - 1;
+      cov /= n - 1;
+      sum += ((2 * ma * mb + c1) * (2 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2));
+      ++count;
+    }
+  return count ? sum / count : 1.0;
+}
+
+}  // namespace
+
+ImageMetrics compareImages(const Image& a, const Image& b) {
+  checkSizes(a, b);
+  ImageMetrics m;
+  double se = 0, ab = 0, aa = 0, sumAbs = 0, sumAbs2 = 0, maxAbs = 0;
+  size_t differing = 0;
+  const size_t n = a.pixels.size();
+  for (size_t i = 0; i < n; ++i) {
+    bool differs = false;
+    for (int c = 0; c < 3; ++c) {
+      const double va = q8(a.pixels[i][c]), vb = q8(b.pixels[i][c]);
+      const double d = std::abs(va - vb);
+      se += (d / 255) * (d / 255);
+      ab += (va / 255) * (vb / 255);
+      aa += (va / 255) * (va / 255);
+      sumAbs += d;
+      sumAbs2 += d * d;
+      maxAbs = std::max(maxAbs, d);
+      differs |= d > 1;
+    }
+    differing += differs;
+  }
+  const double count = 3.0 * double(n);
+  m.mse = se / count;
+  m.psnr = m.mse > 0 ? 10 * std::log10(1.0 / m.mse) : std::numeric_limits<double>::infinity();
+  m.nccm = aa > 0 ? ab / aa : (ab == 0 ? 1.0 : 0.0);
+  m.meanAbsDiff = sumAbs / count;
+  m.stdAbsDiff = std::sqrt(std::max(0.0, sumAbs2 / count - m.meanAbsDiff * m.meanAbsDiff));
+  m.maxAbsDiff = maxAbs;
+  m.differingPixels = double(differing) / double(n);
+  m.ssim = ssimLuma(a, b);
+  return m;
+}
+
+Image differenceHeatmap(const Image& a, const Image& b, double saturate) {
+  checkSizes(a, b);
+  Image out(a.width, a.height, Color(0, 0, 0, 1));
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    double d = 0;
+    for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(q8(a.pixels[i][c]) - q8(b.pixels[i][c])));
+    const float t = float(std::clamp(d / std::max(saturate, 1e-9), 0.0, 1.0));
+    // black -> red -> yellow -> white
+    out.pixels[i] = Color(std::min(1.0f, 3 * t), std::clamp(3 * t - 1, 0.0f, 1.0f), std::clamp(3 * t - 2, 0.0f, 1.0f), 1);
+  }
+  return out;
+}
+
+}  // namespace linesurf
