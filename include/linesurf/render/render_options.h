@@ -1,0 +1,114 @@
+#pragma once
+/// Every parameter of the software splatting pipeline (thesis §4, §5, §6.2), with documented
+/// defaults. validate() throws linesurf::Error (BadParameter) for absurd values.
+///
+/// Filter model (thesis §4.2.2, object-space EWA after Ren, Pfister, Zwicker 2002):
+///  - A primitive of object-space radius r carries a reconstruction Gaussian of standard
+///    deviation sigma_r = reconstructionScale * r in its tangent plane (for a segment: across
+///    the strip, integrated along it, §5).
+///  - The screen prefilter is a Gaussian of variance prefilterVariance (pixels^2), warped into
+///    object space by the inverse local Jacobian of the projection and convolved with the
+///    reconstruction Gaussian: the resampling filter.
+///  - The resampling filter is cut off at cutoffRadius standard deviations (its bounding
+///    quadrilateral is Rot(theta) * Lambda scaled by the cutoff, §5.2.3.1).
+#include <cstdint>
+
+#include "linesurf/core/math.h"
+#include "linesurf/core/progress.h"
+
+namespace linesurf {
+
+/// How two fragments at one pixel are judged to be the same surface (Z^3 merging, §6.2.3).
+enum class ZThresholdMode {
+  /// The thesis's single threshold for the whole frame: zThreshold * bounding-sphere radius
+  /// (depth units). Misbehaves with depth (thesis Figure 20).
+  Fixed,
+  /// Per primitive, from its own depth extent over its footprint (the delta-z idea of
+  /// §6.2.3.2; interpolated along a segment): zThreshold * extent. Default.
+  PerPrimitive,
+};
+
+/// How a line-segment splat's resampling filter is evaluated (thesis §5.2.3).
+enum class SegmentMethod {
+  Approx,       ///< §5.2.3: 2-10 weight-texture-mapped bounding quadrilaterals (the thesis)
+  ScreenSpace,  ///< exact screen-space integral of the Gaussian along the segment (erf closed form)
+  Reference,    ///< numerical quadrature of point splats along the segment (slow, for tests)
+};
+
+/// Phong material (thesis §6.2.2 lighting: ambient, diffuse, specular).
+/// colour = albedo * (ambient + diffuse * max(0, n.l)) + specular * max(0, n.h)^shininess.
+struct Material {
+  float ambient = 0.25f;   ///< [0, 1]
+  float diffuse = 0.75f;   ///< [0, 1]
+  float specular = 0.2f;   ///< [0, 1], white highlight
+  float shininess = 24.0f; ///< Phong exponent, > 0
+};
+
+/// One directional light.
+struct Light {
+  /// Direction towards the light, in CAMERA space when headlight is true (default: from above
+  /// left, behind the viewer), otherwise in world space. Normalised by the pipeline.
+  Vec3f direction = Vec3f(-0.35f, 0.45f, 1.0f);
+  Vec3f color = Vec3f(1, 1, 1);
+  bool headlight = true;
+};
+
+struct RenderOptions {
+  // --- filtering (§4.2.2) -------------------------------------------------------------------
+  /// Variance of the screen-space Gaussian prefilter, pixels^2. 0 disables the prefilter (plain
+  /// object-space splatting, aliases under minification). Default 1 (Zwicker et al. 2001).
+  float prefilterVariance = 1.0f;
+  /// Cut-off of the resampling Gaussian, in standard deviations; fragments beyond it are not
+  /// generated. [1, 5], default 2.5 (weights below e^-3.1 = 4% are dropped).
+  float cutoffRadius = 2.5f;
+  /// sigma_r = reconstructionScale * primitive radius (object space). Default 0.5: the disc of
+  /// the primitive's radius is the 2-sigma ellipse of its reconstruction Gaussian. (0, 4].
+  float reconstructionScale = 0.5f;
+
+  // --- visibility and blending (§6.2.3, modified Z^3) -----------------------------------------
+  ZThresholdMode zThresholdMode = ZThresholdMode::PerPrimitive;
+  /// Fixed: fraction of the bounding-sphere radius. PerPrimitive: multiple of the primitive's
+  /// depth extent. >= 0; default 1.0 for PerPrimitive, use ~0.01 for Fixed (see
+  /// docs/rendering.md and the measurement in docs/decisions.md).
+  float zThreshold = 1.0f;
+  /// Fragment layers per pixel, [1, kMaxLayers]. Default 4 (thesis).
+  int layers = 4;
+  static constexpr int kMaxLayers = 8;
+
+  // --- shading (§6.2.2) -----------------------------------------------------------------------
+  Material material;
+  Light light;
+  /// false: Gouraud (lit at the quadrilateral's vertices and interpolated, the thesis);
+  /// true: lit at every fragment.
+  bool perPixelLighting = false;
+  /// Albedo of primitives when the model has no colours.
+  Color defaultColor = Color(0.78f, 0.78f, 0.80f, 1.0f);
+  /// Overrides every primitive's alpha when in [0, 1]; < 0 keeps the model's alpha.
+  float alphaOverride = -1.0f;
+  /// Shown where nothing is drawn; colour images are composited over it. Default opaque white.
+  Color background = Color(1, 1, 1, 1);
+
+  // --- culling ----------------------------------------------------------------------------------
+  /// Drop primitives whose normal faces away from the viewer (§6.2.2 back-face culling). When
+  /// off, back faces are lit with the flipped normal (two-sided lighting).
+  bool backfaceCulling = true;
+
+  // --- line segments (§5) -------------------------------------------------------------------
+  SegmentMethod segmentMethod = SegmentMethod::ScreenSpace;
+
+  // --- outputs ------------------------------------------------------------------------------
+  bool depthBuffer = false;   ///< RenderResult::depth: nearest surface depth (0 = empty)
+  bool alphaBuffer = false;   ///< RenderResult::alpha: coverage alpha before the background
+  bool normalBuffer = false;  ///< RenderResult::normal: camera-space normal as (n+1)/2 RGB
+
+  // --- execution ----------------------------------------------------------------------------
+  /// Side of the square screen tiles rasterised in parallel, [8, 1024]. The image does not
+  /// depend on it nor on the thread count (primitives are drawn in index order in each tile).
+  int tileSize = 64;
+  ProgressFn progress;  ///< optional, reported per tile batch from the calling thread
+};
+
+/// Throws linesurf::Error (BadParameter) naming the first absurd field.
+void validate(const RenderOptions& options);
+
+}  // namespace linesurf

@@ -1,0 +1,73 @@
+// Per-frame constants, option validation and Phong lighting of the pipeline (thesis §6.2.2).
+#include "linesurf/render/splat_context.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "linesurf/core/error.h"
+
+namespace linesurf {
+
+namespace {
+bool inRange(float v, float lo, float hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+}  // namespace
+
+void validate(const RenderOptions& o) {
+  if (!inRange(o.prefilterVariance, 0, 100)) throwBadParameter("prefilter variance", "must be in [0, 100] pixels^2");
+  if (!inRange(o.cutoffRadius, 1, 5)) throwBadParameter("cutoff radius", "must be in [1, 5] standard deviations");
+  if (!(o.reconstructionScale > 0 && o.reconstructionScale <= 4))
+    throwBadParameter("reconstruction scale", "must be in (0, 4]");
+  if (!inRange(o.zThreshold, 0, 1e6)) throwBadParameter("z threshold", "must be finite and >= 0");
+  if (o.layers < 1 || o.layers > RenderOptions::kMaxLayers)
+    throwBadParameter("layers", "must be in [1, " + std::to_string(RenderOptions::kMaxLayers) + "]");
+  const Material& m = o.material;
+  if (!inRange(m.ambient, 0, 1) || !inRange(m.diffuse, 0, 1) || !inRange(m.specular, 0, 1))
+    throwBadParameter("material", "ambient, diffuse and specular must be in [0, 1]");
+  if (!inRange(m.shininess, 1e-3f, 1e4f)) throwBadParameter("shininess", "must be in (0, 10000]");
+  if (!o.light.direction.allFinite() || o.light.direction.norm() == 0)
+    throwBadParameter("light direction", "must be a finite non-zero vector");
+  if (!o.light.color.allFinite() || (o.light.color.array() < 0).any())
+    throwBadParameter("light colour", "must be finite and >= 0");
+  if (!o.defaultColor.allFinite() || (o.defaultColor.array() < 0).any() || (o.defaultColor.array() > 1).any())
+    throwBadParameter("default colour", "channels must be in [0, 1]");
+  if (!o.background.allFinite() || (o.background.array() < 0).any() || (o.background.array() > 1).any())
+    throwBadParameter("background", "channels must be in [0, 1]");
+  if (!(std::isfinite(o.alphaOverride) && o.alphaOverride <= 1))
+    throwBadParameter("alpha", "must be in [0, 1] (or negative to keep the model's alpha)");
+  if (o.tileSize < 8 || o.tileSize > 1024) throwBadParameter("tile size", "must be in [8, 1024] pixels");
+}
+
+FrameContext FrameContext::make(const Camera& camera, const RenderOptions& options, const BoundingSphere& sphere,
+                                bool modelHasColors, const Image* texture) {
+  FrameContext f;
+  f.camera = &camera;
+  f.options = &options;
+  f.texture = texture;
+  f.sphere = sphere;
+  f.modelHasColors = modelHasColors;
+  Vec3f l = options.light.direction.normalized();
+  f.lightDirCamera = options.light.headlight ? l : Vec3f((camera.rotation() * l).normalized());
+  f.fixedZThreshold = options.zThreshold * (sphere.radius > 0 ? sphere.radius : 1.0f);
+  f.cutoffQ = options.cutoffRadius * options.cutoffRadius;
+  return f;
+}
+
+Vec3f FrameContext::shade(const Vec3f& albedo, const Vec3f& n, const Vec3f& p) const {
+  const Material& m = options->material;
+  const Vec3f& l = lightDirCamera;
+  float ndl = std::max(0.0f, n.dot(l));
+  Vec3f out = albedo * (m.ambient + m.diffuse * ndl);
+  if (m.specular > 0 && ndl > 0) {
+    float pn = p.norm();
+    Vec3f v = pn > 0 ? Vec3f(-p / pn) : Vec3f(0, 0, 1);
+    Vec3f h = (l + v);
+    float hn = h.norm();
+    if (hn > 0) {
+      float ndh = std::max(0.0f, n.dot(h / hn));
+      out.array() += m.specular * std::pow(ndh, m.shininess);
+    }
+  }
+  return out.cwiseProduct(options->light.color);
+}
+
+}  // namespace linesurf
