@@ -97,8 +97,19 @@ Mat4f Camera::screenFromCamera() const {
   return m;
 }
 
+Vec3f Camera::frontAxis(const Vec3f& up) {
+  Vec3f u = up.normalized();
+  Vec3f front;
+  if (std::abs(u.y()) > 0.9f) front = Vec3f::UnitZ();
+  else if (u.z() > 0.9f) front = -Vec3f::UnitY();
+  else if (u.z() < -0.9f) front = Vec3f::UnitY();
+  else front = Vec3f::UnitZ();
+  return (front - front.dot(u) * u).normalized();
+}
+
 Camera Camera::orbit(const BoundingSphere& sphere, float azimuthDegrees, float elevationDegrees, float distance,
-                     int width, int height, float fovYDegrees) {
+                     int width, int height, float fovYDegrees, const Vec3f& upAxis) {
+  if (!upAxis.allFinite() || upAxis.norm() == 0) throwBadParameter("up axis", "must be a finite non-zero vector");
   if (!std::isfinite(azimuthDegrees)) throwBadParameter("azimuth", "must be finite");
   if (!(elevationDegrees >= -90 && elevationDegrees <= 90)) throwBadParameter("elevation", "must be in [-90, 90] degrees");
   if (!(fovYDegrees > 0 && fovYDegrees < 180)) throwBadParameter("fov", "must be in (0, 180) degrees");
@@ -113,14 +124,16 @@ Camera Camera::orbit(const BoundingSphere& sphere, float azimuthDegrees, float e
     distance = 1.05f * r / std::sin(half);
   }
   float az = radians(azimuthDegrees), el = radians(elevationDegrees);
-  Vec3f dir(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+  const Vec3f U = upAxis.normalized(), F = frontAxis(U), Rt = U.cross(F);
+  Vec3f dir = std::cos(el) * (std::cos(az) * F + std::sin(az) * Rt) + std::sin(el) * U;
   Vec3f eye = sphere.center + distance * dir;
   // Near/far hug the sphere so depth precision stays good; near never reaches 0.
   float nearD = std::max(1e-4f * distance, distance - 1.01f * r);
   float farD = std::max(distance + 1.01f * r, nearD * 2);
-  Vec3f up = std::abs(elevationDegrees) > 89.9f ? Vec3f(-std::sin(az) * (elevationDegrees > 0 ? 1.f : -1.f), 0,
-                                                        -std::cos(az) * (elevationDegrees > 0 ? 1.f : -1.f))
-                                                : Vec3f(0, 1, 0);
+  // Looking straight down/up: the image's up is the horizontal direction away from the eye.
+  Vec3f up = std::abs(elevationDegrees) > 89.9f
+                 ? Vec3f(-(elevationDegrees > 0 ? 1.f : -1.f) * (std::cos(az) * F + std::sin(az) * Rt))
+                 : U;
   return lookAt(eye, sphere.center, up, fovYDegrees, width, height, nearD, farD);
 }
 
@@ -155,9 +168,10 @@ std::vector<Vec2f> Camera::spreadViewAngles(int n) {
   return out;
 }
 
-std::vector<Camera> Camera::spreadViews(const BoundingSphere& sphere, int n, int width, int height, float fovYDegrees) {
+std::vector<Camera> Camera::spreadViews(const BoundingSphere& sphere, int n, int width, int height, float fovYDegrees,
+                                        const Vec3f& up) {
   std::vector<Camera> cams;
-  for (const Vec2f& a : spreadViewAngles(n)) cams.push_back(orbit(sphere, a.x(), a.y(), 0, width, height, fovYDegrees));
+  for (const Vec2f& a : spreadViewAngles(n)) cams.push_back(orbit(sphere, a.x(), a.y(), 0, width, height, fovYDegrees, up));
   return cams;
 }
 

@@ -37,19 +37,24 @@ class Camera {
   static Camera lookAt(const Vec3f& eye, const Vec3f& target, const Vec3f& up, float fovYDegrees,
                        int width, int height, float nearDepth = 0.01f, float farDepth = 1000.0f);
 
-  /// Orbit view of a bounding sphere: azimuth about +y (0 = looking from +z towards -z, 90 =
-  /// from +x), elevation towards +y (degrees, [-90, 90]). distance <= 0 frames the sphere: the
-  /// camera backs off until the sphere fills the smaller field of view with a 5% margin.
-  /// near/far are set from the sphere (near = max(1e-4 d, d - 1.01 r), far = d + 1.01 r).
+  /// Orbit view of a bounding sphere: azimuth about the world `up` axis, elevation towards it
+  /// (degrees, [-90, 90]). With up = +y (default): azimuth 0 looks from +z towards -z, 90 from
+  /// +x. For other up axes azimuth 0 looks from frontAxis(up) (up +z: from -y). distance <= 0
+  /// frames the sphere: the camera backs off until the sphere fills the smaller field of view
+  /// with a 5% margin. near/far hug the sphere (near = max(1e-4 d, d - 1.01 r), far = d + 1.01 r).
   static Camera orbit(const BoundingSphere& sphere, float azimuthDegrees, float elevationDegrees,
-                      float distance, int width, int height, float fovYDegrees = 30.0f);
+                      float distance, int width, int height, float fovYDegrees = 30.0f,
+                      const Vec3f& up = Vec3f(0, 1, 0));
+  /// The direction azimuth 0 looks from, for a world up axis: +z for up = +-y, -y for up = +z,
+  /// +y for up = -z, +z for up = +-x; for other axes a fixed perpendicular.
+  static Vec3f frontAxis(const Vec3f& up);
 
   /// `n` view directions spread evenly over the sphere (Fibonacci lattice, deterministic),
   /// as (azimuth, elevation) in degrees; the first view is the front-most one (azimuth 0).
   static std::vector<Vec2f> spreadViewAngles(int n);
   /// `n` auto-framed orbit cameras of the sphere at spreadViewAngles(n).
   static std::vector<Camera> spreadViews(const BoundingSphere& sphere, int n, int width, int height,
-                                         float fovYDegrees = 30.0f);
+                                         float fovYDegrees = 30.0f, const Vec3f& up = Vec3f(0, 1, 0));
 
   /// Rigid transform world -> camera (rotation + translation, last row 0 0 0 1).
   const Mat4f& cameraFromWorld() const { return cameraFromWorld_; }
