@@ -22,6 +22,9 @@ struct GeometryOptions {
   bool orientNormals = true;       ///< MST orientation of computed normals (stage 2)
   bool delaunayNeighbours = true;  ///< stage 3
   bool curvature = true;           ///< stage 4 (needs stage 3)
+  /// Stage 3 with CGAL::Delaunay_triangulation_2 per point instead of the default star by
+  /// inversion (same neighbours except on co-circular sets; see docs/decisions.md). For comparison.
+  bool cgalDelaunay = false;
   ProgressFn progress;             ///< optional progress callback
 };
 
@@ -32,6 +35,7 @@ enum PointFlag : uint8_t {
   kPointFewNeighbours = 2,    ///< fewer than 3 distinct neighbours
   kPointFlatNeighbourhood = 4,///< collinear neighbourhood: normal undefined, a fallback was used
   kPointIsolated = 8,         ///< no neighbour within the graph (own component of size 1)
+  kPointNoStar = 16,          ///< local Delaunay star without a triangle: curvature set to 0
 };
 
 struct GeometryStageTimes {
@@ -42,7 +46,8 @@ struct GeometryStageTimes {
 struct PointGeometry {
   int k = 0;
   /// Stage 1: row i holds the k nearest other points of i, nearest first: neighbours[i*k + j].
-  /// When the cloud has fewer than k+1 points, rows are padded with kNoNeighbour.
+  /// When the cloud has fewer than k+1 points, rows are padded with kNoNeighbour (distance
+  /// +infinity). Equal distances are ordered by index.
   std::vector<uint32_t> neighbours;
   std::vector<float> neighbourDistances;  ///< Euclidean distances, same layout
   static constexpr uint32_t kNoNeighbour = UINT32_MAX;
@@ -58,11 +63,20 @@ struct PointGeometry {
   /// Stage 3: local Delaunay neighbours in CSR form: delaunayOf(i).
   std::vector<uint32_t> delaunayOffsets;  ///< size n+1
   std::vector<uint32_t> delaunayIndices;
+  /// Normalised triangle-area weights w_ik of §6.1.2, same layout as delaunayIndices (sum 1 per
+  /// point with a star). Each row lists the neighbours counter-clockwise around the normal.
+  std::vector<float> delaunayWeights;
   std::span<const uint32_t> delaunayOf(size_t i) const {
     return {delaunayIndices.data() + delaunayOffsets[i], delaunayOffsets[i + 1] - delaunayOffsets[i]};
   }
+  std::span<const float> delaunayWeightsOf(size_t i) const {
+    return {delaunayWeights.data() + delaunayOffsets[i], delaunayOffsets[i + 1] - delaunayOffsets[i]};
+  }
 
   /// Stage 4: principal curvature values and unit directions (tangent to the surface).
+  /// Sign convention: positive where the surface bends away from its normal (a sphere of radius
+  /// r with outward normals has kMin = kMax = 1/r); kMin <= kMax. Directions are canonicalised
+  /// so that their largest-magnitude component is positive.
   std::vector<float> kMin, kMax;
   std::vector<Vec3f> minCurvatureDir, maxCurvatureDir;
 
@@ -85,5 +99,9 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
 /// Writes the geometry's normals into the model's points, and radii from the per-point spacing
 /// where the model has none (radius rule in docs/decisions.md), setting the attribute flags.
 void applyGeometry(HybridModel& cloud, const PointGeometry& geometry);
+
+/// Adds the curvature of `geometry` to cloud.pointProperties as "k_min", "k_max", "dmin_x",
+/// "dmin_y", "dmin_z" (minimum-curvature direction). Requires geometry.kMin to be filled.
+void addCurvatureProperties(HybridModel& cloud, const PointGeometry& geometry);
 
 }  // namespace linesurf

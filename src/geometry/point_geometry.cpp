@@ -1,0 +1,484 @@
+// Geometry processing of point clouds, thesis §6.1 (five stages; see point_geometry.h).
+// Every stage is parallel over points and each task writes only its own slots, so the result is
+// identical for any thread count; the one sequential stage (MST orientation) is deterministic.
+#include "linesurf/geometry/point_geometry.h"
+
+#include <nanoflann.hpp>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <queue>
+
+#include "geometry/detail/local_delaunay.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/core/timer.h"
+
+namespace linesurf {
+namespace {
+
+constexpr uint32_t kNone = PointGeometry::kNoNeighbour;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+struct CloudAdaptor {
+  const std::vector<Point>* pts;
+  size_t kdtree_get_point_count() const { return pts->size(); }
+  float kdtree_get_pt(size_t i, size_t d) const { return (*pts)[i].position[int(d)]; }
+  template <class B> bool kdtree_get_bbox(B&) const { return false; }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CloudAdaptor>, CloudAdaptor, 3, uint32_t>;
+
+/// Runs f(begin, end) over [0, n) in parallel, in ~64 blocks so the caller can report progress.
+void forBlocks(size_t n, const ProgressFn& progress, std::string_view stage, size_t grain,
+               const std::function<void(size_t, size_t)>& f) {
+  const size_t blocks = progress && n > 200000 ? 64 : 1;
+  const size_t step = (n + blocks - 1) / std::max<size_t>(blocks, 1);
+  for (size_t b = 0; b < n; b += step) {
+    parallelForRange(b, std::min(n, b + step), f, grain);
+    reportProgress(progress, stage, double(std::min(n, b + step)) / double(n));
+  }
+}
+
+/// The two unit tangents x, y of §6.1.2: second and third columns of the Householder matrix
+/// that maps e_0 to n (so that (n, x, y) is orthonormal).
+inline void householderTangents(const Vec3d& n, Vec3d& x, Vec3d& y) {
+  // H = I - 2 v v^T / (v^T v), v = e0 - n (or e0 + n for stability, mapping e0 to -n).
+  Vec3d v = n;
+  const double s = n.x() >= 0 ? 1.0 : -1.0;
+  v.x() += s;  // v = n + s e0
+  const double vv = v.squaredNorm();
+  const Mat3d h = Mat3d::Identity() - (2.0 / vv) * v * v.transpose();
+  x = h.col(1);
+  y = h.col(2);
+}
+
+/// Makes the largest-magnitude component of a direction positive (a canonical sign).
+inline Vec3f canonicalDirection(Vec3f d) {
+  int i = 0;
+  d.cwiseAbs().maxCoeff(&i);
+  return d[i] < 0 ? Vec3f(-d) : d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stage 1: exact k nearest neighbours (nanoflann kd-tree).
+void computeNeighbours(const HybridModel& cloud, int k, PointGeometry& g, const ProgressFn& progress) {
+  const size_t n = cloud.points.size();
+  g.neighbours.assign(n * size_t(k), kNone);
+  g.neighbourDistances.assign(n * size_t(k), kInf);
+  if (n < 2) return;
+  CloudAdaptor adaptor{&cloud.points};
+  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  tree.buildIndex();
+  const size_t want = std::min(n, size_t(k) + 1);
+  forBlocks(n, progress, "neighbours", 512, [&](size_t b, size_t e) {
+    std::vector<uint32_t> idx(want);
+    std::vector<float> d2(want);
+    std::vector<std::pair<float, uint32_t>> row;
+    for (size_t i = b; i < e; ++i) {
+      nanoflann::KNNResultSet<float, uint32_t> rs(want);
+      rs.init(idx.data(), d2.data());
+      tree.findNeighbors(rs, cloud.points[i].position.data(), nanoflann::SearchParams());
+      row.clear();
+      bool selfSeen = false;
+      for (size_t t = 0; t < rs.size(); ++t) {
+        if (idx[t] == i) { selfSeen = true; continue; }
+        row.emplace_back(d2[t], idx[t]);
+      }
+      std::sort(row.begin(), row.end());
+      if (!selfSeen && row.size() > size_t(k)) row.resize(size_t(k));
+      const size_t m = std::min(row.size(), size_t(k));
+      for (size_t t = 0; t < m; ++t) {
+        g.neighbours[i * k + t] = row[t].second;
+        g.neighbourDistances[i * k + t] = std::sqrt(row[t].first);
+      }
+    }
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stage 2a: PCA normals (Hoppe 1992): covariance of p and its neighbours about their centroid.
+void computeNormals(const HybridModel& cloud, int k, float dupTol, bool keepFileNormals, PointGeometry& g,
+                    std::vector<uint8_t>& fixedNormal, const ProgressFn& progress) {
+  const size_t n = cloud.points.size();
+  g.normals.assign(n, Vec3f(0, 0, 1));
+  g.eigenvalues.assign(n, Vec3f::Zero());
+  g.surfaceVariation.assign(n, 0.0f);
+  fixedNormal.assign(n, 0);
+  forBlocks(n, progress, "normals", 256, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      const Vec3d p = cloud.points[i].position.cast<double>();
+      Vec3d sum = Vec3d::Zero();
+      int cnt = 1, distinct = 0;
+      for (int t = 0; t < k; ++t) {
+        const uint32_t j = g.neighbours[i * k + t];
+        if (j == kNone) break;
+        sum += cloud.points[j].position.cast<double>() - p;
+        ++cnt;
+        if (g.neighbourDistances[i * k + t] > dupTol) ++distinct;
+        else g.flags[i] |= kPointDuplicate;
+      }
+      const Vec3d mean = sum / cnt;  // relative to p
+      Mat3d cov = Mat3d::Zero();
+      for (int t = 0; t < k; ++t) {
+        const uint32_t j = g.neighbours[i * k + t];
+        if (j == kNone) break;
+        const Vec3d d = cloud.points[j].position.cast<double>() - p - mean;
+        cov += d * d.transpose();
+      }
+      cov += mean * mean.transpose();  // p itself (at 0 relative to p)
+      cov /= cnt;
+      Eigen::SelfAdjointEigenSolver<Mat3d> es;
+      es.computeDirect(cov);
+      Vec3d lambda = es.eigenvalues().cwiseMax(0.0);
+      const double total = lambda.sum();
+      g.eigenvalues[i] = lambda.cast<float>();
+      g.surfaceVariation[i] = total > 0 ? float(lambda[0] / total) : 0.0f;
+      if (distinct < 3) g.flags[i] |= kPointFewNeighbours;
+      Vec3d nrm(0, 0, 1);
+      if (!(lambda[2] > 0) || !std::isfinite(lambda[2])) {
+        g.flags[i] |= kPointFlatNeighbourhood;  // all neighbours coincide: nothing to fit
+      } else if (lambda[1] <= 1e-6 * lambda[2]) {
+        // Collinear neighbourhood: any normal of the line fits; take a deterministic one.
+        g.flags[i] |= kPointFlatNeighbourhood;
+        const Vec3d dir = es.eigenvectors().col(2).normalized();
+        Vec3d axis = Vec3d::Zero();
+        int a = 0;
+        dir.cwiseAbs().minCoeff(&a);
+        axis[a] = 1;
+        nrm = dir.cross(axis).normalized();
+      } else {
+        nrm = es.eigenvectors().col(0).normalized();
+      }
+      if (!nrm.allFinite()) nrm = Vec3d(0, 0, 1);
+      g.normals[i] = nrm.cast<float>();
+      if (keepFileNormals) {
+        const Vec3f fn = cloud.points[i].normal;
+        const float len = fn.norm();
+        if (len > 0 && std::isfinite(len)) {
+          g.normals[i] = fn / len;
+          fixedNormal[i] = 1;
+        }
+      }
+    }
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stage 2b: consistent orientation by a minimum spanning tree (Hoppe 1992) over the symmetrised
+// kNN graph with weights 1 - |n_i . n_j|; Prim's algorithm with a binary heap, one seed per
+// connected component (see docs/decisions.md for the seed rule).
+void orientNormals(const HybridModel& cloud, int k, PointGeometry& g, const std::vector<uint8_t>& fixedNormal) {
+  const size_t n = cloud.points.size();
+  // Symmetrised adjacency (CSR): row i = kNN row of i, then every j that lists i.
+  std::vector<uint32_t> deg(n + 1, 0);
+  for (size_t i = 0; i < n; ++i)
+    for (int t = 0; t < k; ++t) {
+      const uint32_t j = g.neighbours[i * k + t];
+      if (j == kNone) break;
+      ++deg[i + 1];
+      ++deg[j + 1];
+    }
+  std::vector<uint32_t> off(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) off[i + 1] = off[i] + deg[i + 1];
+  std::vector<uint32_t> adj(off[n]);
+  std::vector<uint32_t> fill(off.begin(), off.end() - 1);
+  for (size_t i = 0; i < n; ++i)
+    for (int t = 0; t < k; ++t) {
+      const uint32_t j = g.neighbours[i * k + t];
+      if (j == kNone) break;
+      adj[fill[i]++] = j;
+    }
+  for (size_t i = 0; i < n; ++i)
+    for (int t = 0; t < k; ++t) {
+      const uint32_t j = g.neighbours[i * k + t];
+      if (j == kNone) break;
+      adj[fill[j]++] = uint32_t(i);
+    }
+
+  // Connected components (BFS in index order: deterministic).
+  std::vector<uint32_t> comp(n, kNone);
+  std::vector<uint32_t> order;
+  order.reserve(n);
+  std::vector<uint32_t> compStart;
+  for (size_t s = 0; s < n; ++s) {
+    if (comp[s] != kNone) continue;
+    const uint32_t c = uint32_t(compStart.size());
+    compStart.push_back(uint32_t(order.size()));
+    comp[s] = c;
+    order.push_back(uint32_t(s));
+    for (size_t h = order.size() - 1; h < order.size(); ++h) {
+      const uint32_t u = order[h];
+      for (uint32_t e = off[u]; e < off[u + 1]; ++e)
+        if (comp[adj[e]] == kNone) comp[adj[e]] = c, order.push_back(adj[e]);
+    }
+  }
+  compStart.push_back(uint32_t(n));
+  g.orientationComponents = compStart.size() - 1;
+
+  using Item = std::tuple<float, uint32_t, uint32_t>;  // weight, node, parent
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+  std::vector<uint8_t> done(n, 0);
+  size_t flips = 0;
+  for (size_t c = 0; c + 1 < compStart.size(); ++c) {
+    const uint32_t* members = order.data() + compStart[c];
+    const size_t size = compStart[c + 1] - compStart[c];
+    if (size == 1) g.flags[members[0]] |= kPointIsolated;
+    bool anyFixed = false;
+    for (size_t t = 0; t < size; ++t)
+      if (fixedNormal[members[t]]) {
+        anyFixed = true;
+        heap.emplace(-1.0f, members[t], members[t]);
+      }
+    if (!anyFixed) {
+      // Seed: the points extreme along +z, -z, +x, -x, +y, -y; the first whose normal is within
+      // 30 degrees of its direction (else the best aligned) is oriented along that direction.
+      // On a closed surface the outward normal at an extreme point along d is d itself.
+      static const std::array<Vec3f, 6> dirs = {Vec3f(0, 0, 1), Vec3f(0, 0, -1), Vec3f(1, 0, 0),
+                                                Vec3f(-1, 0, 0), Vec3f(0, 1, 0), Vec3f(0, -1, 0)};
+      uint32_t seed = members[0];
+      Vec3f seedDir = dirs[0];
+      float bestAlign = -1;
+      for (const Vec3f& d : dirs) {
+        uint32_t ext = members[0];
+        float best = -kInf;
+        for (size_t t = 0; t < size; ++t) {
+          const uint32_t u = members[t];
+          const float v = cloud.points[u].position.dot(d);
+          if (v > best || (v == best && u < ext)) best = v, ext = u;
+        }
+        const float align = std::abs(g.normals[ext].dot(d));
+        if (align > bestAlign) bestAlign = align, seed = ext, seedDir = d;
+        if (align >= 0.866f) break;
+      }
+      if (g.normals[seed].dot(seedDir) < 0) {
+        g.normals[seed] = -g.normals[seed];
+        ++flips;
+      }
+      heap.emplace(-1.0f, seed, seed);
+    }
+    while (!heap.empty()) {
+      const auto [w, u, parent] = heap.top();
+      heap.pop();
+      if (done[u]) continue;
+      done[u] = 1;
+      if (parent != u && !fixedNormal[u] && g.normals[u].dot(g.normals[parent]) < 0) {
+        g.normals[u] = -g.normals[u];
+        ++flips;
+      }
+      const Vec3f nu = g.normals[u];
+      for (uint32_t e = off[u]; e < off[u + 1]; ++e) {
+        const uint32_t v = adj[e];
+        if (done[v]) continue;
+        heap.emplace(1.0f - std::abs(nu.dot(g.normals[v])), v, u);
+      }
+    }
+  }
+  g.orientationFlips = flips;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stages 3 and 4.
+void computeDelaunay(const HybridModel& cloud, int k, float dupTol, bool useCgal, PointGeometry& g,
+                     const ProgressFn& progress) {
+  const size_t n = cloud.points.size();
+  std::vector<uint32_t> tmpIdx(n * size_t(k), kNone);
+  std::vector<float> tmpW(n * size_t(k), 0.0f);
+  std::vector<uint32_t> count(n, 0);
+  const double minDist2 = double(dupTol) * dupTol;
+  forBlocks(n, progress, "local Delaunay", 256, [&](size_t b, size_t e) {
+    detail::LocalStar star;
+    detail::StarScratch scratch;
+    std::vector<Vec2d> q(static_cast<size_t>(k));
+    for (size_t i = b; i < e; ++i) {
+      const Vec3d p = cloud.points[i].position.cast<double>();
+      Vec3d x, y;
+      householderTangents(g.normals[i].cast<double>(), x, y);
+      int m = 0;
+      for (; m < k; ++m) {
+        const uint32_t j = g.neighbours[i * k + m];
+        if (j == kNone) break;
+        const Vec3d d = cloud.points[j].position.cast<double>() - p;
+        q[size_t(m)] = Vec2d(d.dot(x), d.dot(y));
+      }
+      std::span<const Vec2d> qs(q.data(), size_t(m));
+      if (useCgal) detail::localDelaunayStarCgal(qs, minDist2, star);
+      else detail::localDelaunayStar(qs, minDist2, star, scratch);
+      double total = 0;
+      for (double a : star.areas) total += a;
+      const size_t s = star.ids.size();
+      for (size_t t = 0; t < s; ++t) {
+        tmpIdx[i * k + t] = g.neighbours[i * k + size_t(star.ids[t])];
+        tmpW[i * k + t] = total > 0 ? float(star.areas[t] / total) : 0.0f;
+      }
+      count[i] = uint32_t(s);
+      if (star.triangles == 0) g.flags[i] |= kPointNoStar;
+    }
+  });
+  g.delaunayOffsets.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) g.delaunayOffsets[i + 1] = g.delaunayOffsets[i] + count[i];
+  g.delaunayIndices.resize(g.delaunayOffsets[n]);
+  g.delaunayWeights.resize(g.delaunayOffsets[n]);
+  parallelForRange(0, n, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      std::copy_n(tmpIdx.begin() + i * k, count[i], g.delaunayIndices.begin() + g.delaunayOffsets[i]);
+      std::copy_n(tmpW.begin() + i * k, count[i], g.delaunayWeights.begin() + g.delaunayOffsets[i]);
+    }
+  }, 4096);
+}
+
+/// Taubin 1995 as in thesis §6.1.2: M = sum_j w_j kappa_j T_j T_j^T restricted to the tangent
+/// plane; its eigenvalues m1 >= m2 give kappa_max = 3 m1 - m2, kappa_min = 3 m2 - m1.
+void computeCurvature(const HybridModel& cloud, PointGeometry& g, const ProgressFn& progress) {
+  const size_t n = cloud.points.size();
+  g.kMin.assign(n, 0.0f);
+  g.kMax.assign(n, 0.0f);
+  g.minCurvatureDir.assign(n, Vec3f::Zero());
+  g.maxCurvatureDir.assign(n, Vec3f::Zero());
+  forBlocks(n, progress, "curvature", 256, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      const Vec3d p = cloud.points[i].position.cast<double>();
+      const Vec3d nrm = g.normals[i].cast<double>();
+      Vec3d x, y;
+      householderTangents(nrm, x, y);
+      const auto ids = g.delaunayOf(i);
+      const auto ws = g.delaunayWeightsOf(i);
+      double m11 = 0, m12 = 0, m22 = 0;
+      for (size_t t = 0; t < ids.size(); ++t) {
+        const Vec3d d = p - cloud.points[ids[t]].position.cast<double>();  // q_j -> p
+        const double d2 = d.squaredNorm();
+        const double tx = d.dot(x), ty = d.dot(y), tl2 = tx * tx + ty * ty;
+        if (!(d2 > 0) || !(tl2 > 0)) continue;
+        const double kappa = 2.0 * nrm.dot(d) / d2;  // §6.1.2 directional curvature, convex > 0
+        const double wk = double(ws[t]) * kappa / tl2;
+        m11 += wk * tx * tx;
+        m12 += wk * tx * ty;
+        m22 += wk * ty * ty;
+      }
+      // Eigen decomposition of the symmetric 2x2 block [m11 m12; m12 m22].
+      const double half = 0.5 * (m11 - m22), r = std::hypot(half, m12), mid = 0.5 * (m11 + m22);
+      const double e1 = mid + r, e2 = mid - r;  // e1 >= e2
+      double ux = 1, uy = 0;                    // eigenvector of e1
+      if (r > 0) {
+        const double theta = 0.5 * std::atan2(m12, half);
+        ux = std::cos(theta), uy = std::sin(theta);
+      }
+      const Vec3d dMax = ux * x + uy * y, dMin = -uy * x + ux * y;
+      g.kMax[i] = float(3 * e1 - e2);
+      g.kMin[i] = float(3 * e2 - e1);
+      g.maxCurvatureDir[i] = canonicalDirection(dMax.cast<float>().normalized());
+      g.minCurvatureDir[i] = canonicalDirection(dMin.cast<float>().normalized());
+    }
+  });
+}
+
+}  // namespace
+
+size_t PointGeometry::countFlag(PointFlag f) const {
+  size_t c = 0;
+  for (uint8_t v : flags)
+    if (f == kPointOk ? v == 0 : (v & f) != 0) ++c;
+  return c;
+}
+
+PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {
+  if (options.k < 3) throwBadParameter("k", "must be at least 3 (got " + std::to_string(options.k) + ")");
+  if (options.k > 256) throwBadParameter("k", "must be at most 256 (got " + std::to_string(options.k) + ")");
+  for (size_t i = 0; i < cloud.points.size(); ++i)
+    if (!cloud.points[i].position.allFinite())
+      throwBadParameter("points", "point " + std::to_string(i) + " has a non-finite position");
+  PointGeometry g;
+  const int k = options.k;
+  g.k = k;
+  const size_t n = cloud.points.size();
+  g.flags.assign(n, kPointOk);
+  const Bounds3f bb = cloud.bounds();
+  const float diag = n > 0 ? bb.diagonal().norm() : 0.0f;
+  const float dupTol = 1e-6f * diag;
+  const ProgressFn& progress = options.progress;
+
+  Timer timer;
+  computeNeighbours(cloud, k, g, progress);
+  g.times.neighbours = timer.seconds();
+
+  timer.reset();
+  const bool keepFile = cloud.attributes.normals && !options.recomputeNormals;
+  std::vector<uint8_t> fixedNormal;
+  computeNormals(cloud, k, dupTol, keepFile, g, fixedNormal, progress);
+  g.times.normals = timer.seconds();
+
+  timer.reset();
+  const bool needOrient = options.orientNormals &&
+                          std::any_of(fixedNormal.begin(), fixedNormal.end(), [](uint8_t f) { return f == 0; });
+  if (needOrient) {
+    reportProgress(progress, "orientation", 0.0);
+    orientNormals(cloud, k, g, fixedNormal);
+    reportProgress(progress, "orientation", 1.0);
+  }
+  g.times.orientation = timer.seconds();
+
+  if (options.delaunayNeighbours || options.curvature) {
+    timer.reset();
+    computeDelaunay(cloud, k, dupTol, options.cgalDelaunay, g, progress);
+    g.times.delaunay = timer.seconds();
+  }
+  if (options.curvature) {
+    timer.reset();
+    computeCurvature(cloud, g, progress);
+    g.times.curvature = timer.seconds();
+  }
+
+  // Stage 5: spacing = mean distance to the k nearest neighbours; global = mean over points.
+  timer.reset();
+  g.spacing.assign(n, 0.0f);
+  parallelForRange(0, n, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      double s = 0;
+      int c = 0;
+      for (int t = 0; t < k && g.neighbours[i * k + t] != kNone; ++t) s += g.neighbourDistances[i * k + t], ++c;
+      g.spacing[i] = c > 0 ? float(s / c) : 0.0f;
+    }
+  }, 4096);
+  double total = 0;
+  size_t counted = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (g.neighbours.empty() || g.neighbours[i * k] != kNone) total += g.spacing[i], ++counted;
+  g.averageSpacing = counted > 0 ? float(total / double(counted)) : 0.0f;
+  g.times.spacing = timer.seconds();
+  return g;
+}
+
+void applyGeometry(HybridModel& cloud, const PointGeometry& geometry) {
+  const size_t n = std::min(cloud.points.size(), geometry.size());
+  for (size_t i = 0; i < n; ++i) cloud.points[i].normal = geometry.normals[i];
+  cloud.attributes.normals = true;
+  if (!cloud.attributes.radii && geometry.spacing.size() >= n) {
+    // Radius rule (docs/decisions.md): the per-point spacing, else the cloud's average.
+    for (size_t i = 0; i < n; ++i)
+      cloud.points[i].radius = geometry.spacing[i] > 0 ? geometry.spacing[i] : geometry.averageSpacing;
+    cloud.attributes.radii = true;
+  }
+}
+
+void addCurvatureProperties(HybridModel& cloud, const PointGeometry& geometry) {
+  const size_t n = cloud.points.size();
+  if (geometry.kMin.size() != n) throwBadParameter("curvature", "geometry has no curvature for this cloud");
+  auto& props = cloud.pointProperties;
+  props["k_min"] = geometry.kMin;
+  props["k_max"] = geometry.kMax;
+  std::vector<float> dx(n), dy(n), dz(n);
+  for (size_t i = 0; i < n; ++i) {
+    dx[i] = geometry.minCurvatureDir[i].x();
+    dy[i] = geometry.minCurvatureDir[i].y();
+    dz[i] = geometry.minCurvatureDir[i].z();
+  }
+  props["dmin_x"] = std::move(dx);
+  props["dmin_y"] = std::move(dy);
+  props["dmin_z"] = std::move(dz);
+}
+
+}  // namespace linesurf

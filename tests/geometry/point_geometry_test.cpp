@@ -1,0 +1,289 @@
+// Tests of the §6.1 geometry pipeline on sampled analytic shapes with known normals/curvature.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <set>
+
+#include "geometry/detail/local_delaunay.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/core/shapes.h"
+#include "linesurf/geometry/point_geometry.h"
+
+using namespace linesurf;
+
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+GeometryOptions recompute(int k = 12) {
+  GeometryOptions o;
+  o.k = k;
+  o.recomputeNormals = true;
+  return o;
+}
+
+struct NormalStats {
+  double meanAngleDeg = 0;  ///< unsigned angle (orientation ignored)
+  size_t inward = 0;        ///< normals pointing against the truth
+};
+
+NormalStats compareNormals(const HybridModel& truth, const PointGeometry& g) {
+  NormalStats s;
+  for (size_t i = 0; i < truth.points.size(); ++i) {
+    const double d = double(truth.points[i].normal.dot(g.normals[i]));
+    s.meanAngleDeg += std::acos(std::min(1.0, std::abs(d))) * kDeg;
+    if (d < 0) ++s.inward;
+  }
+  s.meanAngleDeg /= double(truth.points.size());
+  return s;
+}
+
+void expectAllFinite(const PointGeometry& g) {
+  for (size_t i = 0; i < g.size(); ++i) {
+    ASSERT_TRUE(g.normals[i].allFinite()) << i;
+    ASSERT_NEAR(g.normals[i].norm(), 1.0f, 1e-4f) << i;
+    ASSERT_TRUE(g.eigenvalues[i].allFinite()) << i;
+    ASSERT_TRUE(std::isfinite(g.surfaceVariation[i])) << i;
+    ASSERT_TRUE(std::isfinite(g.spacing[i])) << i;
+    if (!g.kMin.empty()) {
+      ASSERT_TRUE(std::isfinite(g.kMin[i]) && std::isfinite(g.kMax[i])) << i;
+      ASSERT_TRUE(g.minCurvatureDir[i].allFinite() && g.maxCurvatureDir[i].allFinite()) << i;
+    }
+  }
+  for (float w : g.delaunayWeights) ASSERT_TRUE(std::isfinite(w));
+  ASSERT_TRUE(std::isfinite(g.averageSpacing));
+}
+
+}  // namespace
+
+TEST(PointGeometry, PlaneNormalsAccurateAndUp) {
+  auto cloud = shapes::plane(2, 2, 40, 40);
+  auto g = computePointGeometry(cloud, recompute());
+  auto s = compareNormals(cloud, g);
+  EXPECT_LT(s.meanAngleDeg, 1.0);
+  EXPECT_EQ(s.inward, 0u);
+  EXPECT_EQ(g.orientationComponents, 1u);
+  expectAllFinite(g);
+  for (size_t i = 0; i < g.size(); ++i) EXPECT_LT(g.surfaceVariation[i], 1e-6f);
+}
+
+TEST(PointGeometry, ClosedShapesNoiseFreeNormalsAccurateAndOutward) {
+  const HybridModel clouds[] = {shapes::sphere(1, 3000), shapes::torus(2, 0.7f, 90, 30),
+                                shapes::cylinder(1, 3, 60, 30)};
+  for (const auto& cloud : clouds) {
+    auto g = computePointGeometry(cloud, recompute());
+    auto s = compareNormals(cloud, g);
+    EXPECT_LT(s.meanAngleDeg, 1.0);
+    EXPECT_EQ(s.inward, 0u);  // the cylinder's highest points have horizontal normals
+    expectAllFinite(g);
+  }
+}
+
+TEST(PointGeometry, NoisyAndIrregularShapesOutward) {
+  shapes::SampleOptions irregular{.irregular = true, .seed = 7};
+  shapes::SampleOptions noisy{.noise = 0.1f, .seed = 3};
+  shapes::SampleOptions both{.noise = 0.1f, .irregular = true, .seed = 5};
+  const HybridModel clouds[] = {shapes::sphere(1, 3000, irregular), shapes::sphere(1, 3000, noisy),
+                                shapes::torus(2, 0.7f, 90, 30, irregular), shapes::torus(2, 0.7f, 90, 30, both),
+                                shapes::plane(2, 2, 40, 40, both)};
+  for (const auto& cloud : clouds) {
+    auto g = computePointGeometry(cloud, recompute());
+    auto s = compareNormals(cloud, g);
+    EXPECT_LT(s.meanAngleDeg, 6.0);
+    EXPECT_EQ(s.inward, 0u);
+    expectAllFinite(g);
+  }
+}
+
+TEST(PointGeometry, CylinderMinCurvatureAlongAxis) {
+  for (bool irregular : {false}) {
+    shapes::SampleOptions o{.irregular = irregular, .seed = 11};
+    const float r = 1;
+    auto cloud = shapes::cylinder(r, 4, 60, 40, o);
+    auto g = computePointGeometry(cloud, recompute());
+    size_t aligned = 0, interior = 0;
+    std::vector<float> kmax;
+    for (size_t i = 0; i < g.size(); ++i) {
+      if (std::abs(cloud.points[i].position.z()) > 1.6f) continue;  // away from the open ends
+      ++interior;
+      if (std::abs(g.minCurvatureDir[i].z()) >= std::cos(10.0 / kDeg)) ++aligned;
+      kmax.push_back(g.kMax[i]);
+    }
+    EXPECT_GE(double(aligned), 0.9 * double(interior)) << "irregular " << irregular;
+    std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
+    EXPECT_NEAR(kmax[kmax.size() / 2], 1 / r, 0.15 / r) << "irregular " << irregular;
+    expectAllFinite(g);
+  }
+}
+
+TEST(PointGeometry, SphereCurvatureIsInverseRadius) {
+  const float r = 2;
+  auto cloud = shapes::sphere(r, 4000);
+  auto g = computePointGeometry(cloud, recompute());
+  std::vector<float> mean(g.size());
+  for (size_t i = 0; i < g.size(); ++i) mean[i] = 0.5f * (g.kMin[i] + g.kMax[i]);
+  std::nth_element(mean.begin(), mean.begin() + mean.size() / 2, mean.end());
+  EXPECT_NEAR(mean[mean.size() / 2], 1 / r, 0.05 / r);
+  for (size_t i = 0; i < g.size(); ++i) {
+    EXPECT_LE(g.kMin[i], g.kMax[i]);
+    EXPECT_NEAR(g.minCurvatureDir[i].dot(g.normals[i]), 0, 1e-4);
+    EXPECT_NEAR(g.minCurvatureDir[i].dot(g.maxCurvatureDir[i]), 0, 1e-4);
+  }
+}
+
+TEST(PointGeometry, GridPointDelaunayNeighboursAreGridNeighbours) {
+  const int nx = 9;
+  auto cloud = shapes::plane(1, 1, nx, nx);
+  auto g = computePointGeometry(cloud, recompute());
+  for (int j = 1; j + 1 < nx; ++j)
+    for (int i = 1; i + 1 < nx; ++i) {
+      std::set<uint32_t> expected;
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di)
+          if (di || dj) expected.insert(uint32_t((j + dj) * nx + i + di));
+      const auto star = g.delaunayOf(size_t(j * nx + i));
+      EXPECT_EQ(std::set<uint32_t>(star.begin(), star.end()), expected) << i << "," << j;
+      for (float w : g.delaunayWeightsOf(size_t(j * nx + i))) EXPECT_NEAR(w, 1.0f / 8, 1e-5f);
+    }
+  // A corner point: its two edge neighbours and the diagonal (co-circular square).
+  const auto corner = g.delaunayOf(0);
+  EXPECT_EQ(std::set<uint32_t>(corner.begin(), corner.end()), (std::set<uint32_t>{1, uint32_t(nx), uint32_t(nx + 1)}));
+}
+
+TEST(PointGeometry, StarMatchesCgalOnGenericPoints) {
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(-1, 1);
+  detail::LocalStar a, b;
+  detail::StarScratch scratch;
+  for (int trial = 0; trial < 500; ++trial) {
+    std::vector<Vec2d> q(12);
+    for (auto& v : q) v = Vec2d(u(rng), u(rng));
+    if (trial % 3 == 0)  // p on the boundary of its neighbourhood
+      for (auto& v : q) v.y() = std::abs(v.y());
+    detail::localDelaunayStar(q, 1e-12, a, scratch);
+    detail::localDelaunayStarCgal(q, 1e-12, b);
+    ASSERT_EQ(a.ids.size(), b.ids.size()) << trial;
+    ASSERT_EQ(std::set<int>(a.ids.begin(), a.ids.end()), std::set<int>(b.ids.begin(), b.ids.end())) << trial;
+    EXPECT_EQ(a.boundary, b.boundary) << trial;
+    EXPECT_EQ(a.triangles, b.triangles) << trial;
+    for (size_t t = 0; t < a.ids.size(); ++t) {
+      auto it = std::find(b.ids.begin(), b.ids.end(), a.ids[t]);
+      EXPECT_NEAR(a.areas[t], b.areas[size_t(it - b.ids.begin())], 1e-12) << trial;
+    }
+  }
+}
+
+TEST(PointGeometry, IdenticalForOneAndTwoThreads) {
+  shapes::SampleOptions o{.noise = 0.1f, .irregular = true, .seed = 9};
+  auto cloud = shapes::torus(2, 0.7f, 120, 40, o);
+  PointGeometry g1, g2;
+  {
+    ThreadLimit one(1);
+    g1 = computePointGeometry(cloud, recompute());
+  }
+  {
+    ThreadLimit two(2);
+    g2 = computePointGeometry(cloud, recompute());
+  }
+  EXPECT_EQ(g1.neighbours, g2.neighbours);
+  EXPECT_EQ(g1.neighbourDistances, g2.neighbourDistances);
+  EXPECT_EQ(g1.normals, g2.normals);
+  EXPECT_EQ(g1.eigenvalues, g2.eigenvalues);
+  EXPECT_EQ(g1.delaunayOffsets, g2.delaunayOffsets);
+  EXPECT_EQ(g1.delaunayIndices, g2.delaunayIndices);
+  EXPECT_EQ(g1.delaunayWeights, g2.delaunayWeights);
+  EXPECT_EQ(g1.kMin, g2.kMin);
+  EXPECT_EQ(g1.kMax, g2.kMax);
+  EXPECT_EQ(g1.minCurvatureDir, g2.minCurvatureDir);
+  EXPECT_EQ(g1.spacing, g2.spacing);
+  EXPECT_EQ(g1.flags, g2.flags);
+  EXPECT_EQ(g1.orientationFlips, g2.orientationFlips);
+}
+
+TEST(PointGeometry, DuplicatesCountedWithoutNan) {
+  auto cloud = shapes::sphere(1, 500);
+  const size_t n = cloud.points.size();
+  for (size_t i = 0; i < n; i += 2) cloud.points.push_back(cloud.points[i]);   // doubles
+  for (size_t i = 0; i < n; i += 50) cloud.points.push_back(cloud.points[i]);  // some triples
+  auto g = computePointGeometry(cloud, recompute());
+  expectAllFinite(g);
+  EXPECT_GE(g.countFlag(kPointDuplicate), n / 2 * 2);
+  auto s = compareNormals(cloud, g);
+  EXPECT_EQ(s.inward, 0u);
+  EXPECT_LT(s.meanAngleDeg, 2.0);
+}
+
+TEST(PointGeometry, TinyCollinearAndCoincidentClouds) {
+  for (size_t n : {1u, 2u, 3u, 4u, 7u}) {
+    HybridModel cloud;
+    for (size_t i = 0; i < n; ++i) cloud.points.push_back({.position = Vec3f(float(i), float(i * i % 3), 0.5f * float(i % 2))});
+    auto g = computePointGeometry(cloud, recompute());
+    ASSERT_EQ(g.size(), n);
+    expectAllFinite(g);
+    if (n < 13) EXPECT_EQ(g.neighbours[(n - 1) * 12 + 11], PointGeometry::kNoNeighbour);
+    if (n == 1) EXPECT_EQ(g.countFlag(kPointIsolated), 1u);
+  }
+  HybridModel line;
+  for (int i = 0; i < 100; ++i) line.points.push_back({.position = Vec3f(0.1f * float(i), 0.2f * float(i), -0.05f * float(i))});
+  auto gl = computePointGeometry(line, recompute());
+  expectAllFinite(gl);
+  EXPECT_EQ(gl.countFlag(kPointFlatNeighbourhood), line.points.size());
+  const Vec3f dir = Vec3f(0.1f, 0.2f, -0.05f).normalized();
+  for (const Vec3f& nrm : gl.normals) EXPECT_NEAR(nrm.dot(dir), 0, 1e-3);
+
+  HybridModel same;
+  for (int i = 0; i < 30; ++i) same.points.push_back({.position = Vec3f(1, 2, 3)});
+  auto gs = computePointGeometry(same, recompute());
+  expectAllFinite(gs);
+  EXPECT_EQ(gs.countFlag(kPointDuplicate), same.points.size());
+  EXPECT_EQ(gs.averageSpacing, 0.0f);
+}
+
+TEST(PointGeometry, DisconnectedPartsGetOneSeedEach) {
+  auto a = shapes::sphere(1, 800);
+  auto b = shapes::sphere(0.5f, 400);
+  for (auto& p : b.points) {
+    p.position += Vec3f(10, 3, -4);
+    a.points.push_back(p);
+  }
+  auto g = computePointGeometry(a, recompute());
+  EXPECT_EQ(g.orientationComponents, 2u);
+  EXPECT_EQ(compareNormals(a, g).inward, 0u);
+}
+
+TEST(PointGeometry, FileNormalsKeptUnlessRecompute) {
+  auto cloud = shapes::sphere(1, 500);
+  for (auto& p : cloud.points) p.normal = -3.0f * p.normal;  // inward, not unit: kept as given
+  GeometryOptions keep;
+  auto g = computePointGeometry(cloud, keep);
+  for (size_t i = 0; i < g.size(); ++i) EXPECT_LT((g.normals[i] - cloud.points[i].normal.normalized()).norm(), 1e-6f);
+  EXPECT_EQ(g.orientationFlips, 0u);
+  auto gr = computePointGeometry(cloud, recompute());
+  for (size_t i = 0; i < gr.size(); ++i) EXPECT_GT(gr.normals[i].dot(cloud.points[i].position), 0);
+}
+
+TEST(PointGeometry, BadParametersThrow) {
+  auto cloud = shapes::sphere(1, 100);
+  GeometryOptions o;
+  o.k = 2;
+  EXPECT_THROW(computePointGeometry(cloud, o), Error);
+  HybridModel empty;
+  auto g = computePointGeometry(empty, GeometryOptions{});
+  EXPECT_EQ(g.size(), 0u);
+}
+
+TEST(PointGeometry, ApplyWritesNormalsRadiiAndCurvatureProperties) {
+  auto cloud = shapes::sphere(1, 500);
+  cloud.attributes.radii = false;
+  auto g = computePointGeometry(cloud, recompute());
+  applyGeometry(cloud, g);
+  addCurvatureProperties(cloud, g);
+  EXPECT_TRUE(cloud.attributes.normals && cloud.attributes.radii);
+  for (size_t i = 0; i < cloud.points.size(); ++i) EXPECT_EQ(cloud.points[i].radius, g.spacing[i]);
+  for (const char* name : {"k_min", "k_max", "dmin_x", "dmin_y", "dmin_z"})
+    EXPECT_EQ(cloud.pointProperties.at(name).size(), cloud.points.size()) << name;
+}
