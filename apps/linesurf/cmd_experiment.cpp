@@ -1,0 +1,112 @@
+// linesurf experiment DATA_DIR -o OUT_DIR: the experiments of thesis §7 (Tables 1-5) on every
+// model of a folder; writes results.json, results.md, index.html and images.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "command.h"
+#include "linesurf/core/error.h"
+#include "linesurf/eval/experiment.h"
+
+namespace linesurf::cli {
+namespace {
+
+struct ExperimentArgs {
+  std::string dataDir, outDir;
+  int views = 50, meshViews = 20, size = 512, imageViews = 3, k = 12;
+  std::vector<std::string> methods, only;
+  double epsilonRelative = 0.05, delta = 0.004;
+  float deltaN = 0.008f;
+  bool noImages = false;
+};
+
+std::vector<std::string> splitCommas(const std::vector<std::string>& in) {
+  std::vector<std::string> out;
+  for (const std::string& s : in) {
+    std::istringstream is(s);
+    std::string tok;
+    while (std::getline(is, tok, ','))
+      if (!tok.empty()) out.push_back(tok);
+  }
+  return out;
+}
+
+std::string pct(double x) { return std::isfinite(x) ? fmt::format("{:.1f}%", 100 * x) : "-"; }
+
+void run(const ExperimentArgs& a) {
+  ExperimentOptions o;
+  o.dataDir = a.dataDir;
+  o.outDir = a.noImages ? std::filesystem::path() : std::filesystem::path(a.outDir);
+  o.views = a.views;
+  o.meshViews = a.meshViews;
+  o.size = a.size;
+  o.imageViews = a.imageViews;
+  o.only = splitCommas(a.only);
+  for (const std::string& m : splitCommas(a.methods)) o.methods.push_back(parseExperimentMethod(m));
+  o.geometry.k = a.k;
+  o.epsDelta.epsilonRelative = a.epsilonRelative;
+  o.epsDelta.delta = a.delta;
+  o.shapeApprox.clustering.deltaN = a.deltaN;
+
+  ExperimentResults res = runExperiment(o, progressBar());
+  endProgress();
+
+  const std::filesystem::path out = a.outDir;
+  std::filesystem::create_directories(out);
+  writeExperimentJson(res, out / "results.json");
+  writeExperimentMarkdown(res, out / "results.md");
+  writeExperimentHtml(res, out / "index.html");
+
+  for (const ModelResult& m : res.models) {
+    if (m.failed) {
+      say(fmt::format("{}: FAILED: {}", m.name, m.error));
+      continue;
+    }
+    say(fmt::format("{} ({}{}{}): {} vertices{}, read {:.2f} s{}", m.name, m.isMesh ? "mesh" : "points",
+                    m.thesisName.empty() ? "" : ", thesis: ", m.thesisName, m.inputPoints,
+                    m.isMesh ? fmt::format(", {} faces", m.faces) : "", m.loadSeconds,
+                    m.isMesh ? "" : fmt::format(", geometry {:.2f} s", m.geometrySeconds)));
+    for (const MethodResult& r : m.methods)
+      say(fmt::format("  {:<18} {:>8} pts {:>7} segs{} reduction {:>6}  mse {:.4f}  nccm {:.4f}  |A-B| {:.2f} ± {:.2f}"
+                      "  render {:.1f} -> {:.1f} ms (speedup {})  extract {:.2f} s",
+                      experimentMethodName(r.method), r.points, r.segments,
+                      r.clusters ? fmt::format(" {:>6} clusters", r.clusters) : "", pct(r.dataReduction), r.mse,
+                      r.nccm, r.meanAbsDiff.mean, r.stdAbsDiff.mean, 1000 * r.referenceRenderMedian,
+                      1000 * r.candidateRenderMedian, pct(r.speedup), r.extractSeconds));
+  }
+  const size_t failed = res.failedCount();
+  say(fmt::format("{} models ({} failed) in {:.1f} s on {} threads; wrote {}, {}, {}", res.models.size(), failed,
+                  res.totalSeconds, res.threads, (out / "results.json").string(), (out / "results.md").string(),
+                  (out / "index.html").string()));
+  if (failed)
+    throw Error(Error::Kind::BadInput, a.dataDir, "",
+                fmt::format("{} of {} models failed (see above and results.json)", failed, res.models.size()));
+}
+
+RegisterCommand reg(70, [](CLI::App& app) {
+  auto a = std::make_shared<ExperimentArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "experiment", "Run the thesis's §7 experiments (Tables 1-5) on every model of a folder: counts, data reduction, "
+                    "image quality and render speedup; writes results.json, results.md and index.html");
+  sub->add_option("DATA_DIR", a->dataDir, "Folder of models (.ply/.obj/.xyz; a PLY with faces is a mesh)")
+      ->required()->check(CLI::ExistingDirectory);
+  sub->add_option("-o,--output", a->outDir, "Output folder")->required();
+  sub->add_option("--views", a->views, "Views per point cloud, spread over the sphere (thesis: 50)")
+      ->capture_default_str()->check(CLI::Range(1, 100000));
+  sub->add_option("--mesh-views", a->meshViews, "Views per mesh (thesis: 20)")->capture_default_str()->check(CLI::Range(1, 100000));
+  sub->add_option("--size", a->size, "Square image side in pixels (thesis: 512)")->capture_default_str()->check(CLI::Range(16, 8192));
+  sub->add_option("--methods", a->methods, "Comma-separated subset of eps-delta, shape-greedy, shape-hierarchical, contour (default: all)");
+  sub->add_option("--only", a->only, "Only models whose file name contains one of these (comma-separated)");
+  sub->add_option("--image-views", a->imageViews, "Views whose images go to the HTML page")->capture_default_str()->check(CLI::Range(0, 100000));
+  sub->add_flag("--no-images", a->noImages, "Write no images (numbers only)");
+  sub->add_option("--k", a->k, "Neighbours of the §6.1 geometry")->capture_default_str()->check(CLI::Range(3, 200));
+  sub->add_option("--epsilon", a->epsilonRelative, "eps-delta: epsilon as a fraction of the average spacing (§7.2: 0.05)")->capture_default_str();
+  sub->add_option("--delta", a->delta, "eps-delta: normal tolerance 1 - n.n (§7.2: 0.004)")->capture_default_str();
+  sub->add_option("--delta-n", a->deltaN, "shape approximation: normal variation tolerance (§7.2: 0.008)")->capture_default_str();
+  sub->callback([a] { run(*a); });
+});
+
+}  // namespace
+}  // namespace linesurf::cli

@@ -1,0 +1,175 @@
+#pragma once
+/// The experiments of thesis §7, reproducible on any folder of models.
+///
+///  - Point clouds (§7.2, Tables 1-4): the §6.1 geometry is computed once; each extraction method
+///    (eps-delta §3.1, shape approximation with greedy §3.2.3.1 or hierarchical §3.2.3.2
+///    clustering) runs with the §7.2 defaults; the point model and every hybrid model are rendered
+///    from the same N views spread over the sphere (Camera::spreadViews, deterministic, no prior
+///    knowledge of the model) and compared image by image (eval/image_metrics.h). Counts, the
+///    §7.2.2 data-reduction ratio, extraction time, render times and the §7.2.3 speedup are kept.
+///  - Meshes (§7.3, Table 5): contour-plane extraction (§3.3) to a pure line-segment model and,
+///    with the same planes, to a pure point model (every segment sampled into points); both are
+///    rendered from N views (20 in the thesis) and compared by the mean and standard deviation
+///    of the absolute differences.
+///
+/// Definitions of every figure are in docs/metrics.md; the protocol and our choices in
+/// docs/experiments.md and docs/decisions.md ("Experiments and metrics (§7)").
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "linesurf/core/progress.h"
+#include "linesurf/eval/image_metrics.h"
+#include "linesurf/extract/contour.h"
+#include "linesurf/extract/eps_delta.h"
+#include "linesurf/extract/shape_approx.h"
+#include "linesurf/geometry/point_geometry.h"
+#include "linesurf/render/render_options.h"
+
+namespace linesurf {
+
+/// The extraction methods of the experiments. The first three apply to point clouds, Contour
+/// to meshes.
+enum class ExperimentMethod { EpsDelta, ShapeGreedy, ShapeHierarchical, Contour };
+
+/// "eps-delta", "shape-greedy", "shape-hierarchical", "contour".
+const char* experimentMethodName(ExperimentMethod m);
+/// Inverse of experimentMethodName (also accepts "greedy", "hierarchical"); throws
+/// linesurf::Error (BadParameter) naming the accepted values otherwise.
+ExperimentMethod parseExperimentMethod(const std::string& name);
+/// The thesis table a method's results belong to: 1, 2, 3 or 5.
+int thesisTableOf(ExperimentMethod m);
+
+struct ExperimentOptions {
+  std::filesystem::path dataDir;  ///< folder of models (.ply, .obj, .xyz), not recursive
+  /// Where images go (per model: a few point / hybrid / difference images and the clusters
+  /// picture). Empty: no images are written (the numbers are the same).
+  std::filesystem::path outDir;
+  int views = 50;       ///< point-cloud views per model (§7.2: 50), >= 1
+  int meshViews = 20;   ///< mesh views per model (§7.3: 20), >= 1
+  int size = 512;       ///< square image side in pixels (§7: 512), [16, 8192]
+  /// Methods to run; empty = all four. Point methods are skipped on meshes and vice versa.
+  std::vector<ExperimentMethod> methods;
+  int imageViews = 3;   ///< views whose images are written for the HTML page, >= 0
+  /// Only models whose file stem contains one of these substrings; empty = every model.
+  std::vector<std::string> only;
+
+  GeometryOptions geometry;       ///< §6.1 stages (k = 12); progress is set by the harness
+  EpsDeltaOptions epsDelta;       ///< §7.2 defaults: epsilon = 5% of the average spacing, delta 0.004
+  ShapeApproxOptions shapeApprox; ///< §7.2 defaults: delta_n = 0.008; method is set per run
+  ContourOptions contour;         ///< §3.3 defaults (d = mean edge length, seed 1)
+  RenderOptions render;           ///< renderer defaults; the same for every image
+
+  std::vector<ExperimentMethod> effectiveMethods() const;
+  /// Throws linesurf::Error (BadParameter) naming the first absurd field.
+  void validate() const;
+};
+
+/// Image comparison and timing of one view.
+struct ExperimentView {
+  ImageMetrics metrics;          ///< reference (point model) vs. candidate (hybrid / line model)
+  double referenceSeconds = 0;   ///< wall time to render the reference
+  double candidateSeconds = 0;   ///< wall time to render the candidate
+};
+
+/// Mean and standard deviation of a per-view quantity.
+struct MeanStd {
+  double mean = 0, std = 0;
+};
+
+/// One extraction method on one model.
+struct MethodResult {
+  ExperimentMethod method = ExperimentMethod::EpsDelta;
+  size_t referencePoints = 0;  ///< primitives of the reference: input points (clouds) or the
+                               ///< contour point model's points (meshes)
+  size_t points = 0;           ///< points of the hybrid / line model
+  size_t segments = 0;         ///< segments of the hybrid / line model
+  size_t clusters = 0;         ///< shape approximation: clusters (Table 4); else 0
+  size_t largeClusters = 0;    ///< shape approximation: clusters of > 100 points (§7.2.1)
+  size_t largeClusterPoints = 0;
+  double dataReduction = 0;    ///< §7.2.2: 1 - (6 points + 9 segments) / (6 reference points)
+  double extractSeconds = 0;   ///< wall time of the extraction (clustering included)
+
+  // Quality: means over the views (docs/metrics.md).
+  double mse = 0, nccm = 0, ssim = 0;
+  double psnr = 0;             ///< 10 log10(1 / mean mse); +inf when every view is identical
+  MeanStd meanAbsDiff;         ///< Table 5 "Mean": per-view mean |A-B| (grey levels), over views
+  MeanStd stdAbsDiff;          ///< Table 5 "Standard deviation": per-view std of |A-B|, over views
+  double maxAbsDiff = 0;       ///< largest |A-B| of any view
+  double minNccm = 0;          ///< worst view
+
+  // Timing (§7.2.3): medians over the views, measured interleaved in the same run.
+  double referenceRenderMedian = 0, candidateRenderMedian = 0;
+  /// (T_ref - T_hybrid) / T_ref of the medians: the fraction of render time saved (thesis's
+  /// "speedup", in percent there). Negative when the hybrid is slower.
+  double speedup = 0;
+
+  std::vector<ExperimentView> views;
+  std::vector<std::string> images;      ///< candidate images, relative to outDir
+  std::vector<std::string> diffImages;  ///< difference heat-maps, relative to outDir
+  std::string clustersImage;            ///< shape approximation: clusters picture (§3.2.3, Fig. 22)
+  std::vector<std::string> notes;       ///< extraction diagnostics worth reading
+};
+
+/// One model of the folder.
+struct ModelResult {
+  std::string name;        ///< file stem, e.g. "santa_points"
+  std::string file;        ///< path as found
+  std::string thesisName;  ///< thesis model this file stands for ("" when none)
+  bool isMesh = false;
+  bool failed = false;
+  std::string error;       ///< what() of the failure when failed
+  size_t inputPoints = 0;  ///< vertices of the file
+  size_t faces = 0;        ///< meshes: faces
+  double loadSeconds = 0, geometrySeconds = 0;
+  double averageSpacing = 0;       ///< clouds: §6.1 stage 5
+  std::vector<std::string> referenceImages;  ///< point-model images, relative to outDir
+  std::vector<MethodResult> methods;
+};
+
+struct ExperimentResults {
+  ExperimentOptions options;  ///< as run (progress callbacks dropped)
+  std::vector<ModelResult> models;
+  double totalSeconds = 0;
+  int threads = 0;            ///< worker threads used
+  size_t failedCount() const;
+};
+
+/// Runs the §7 protocol on every model file of options.dataDir (sorted by name; a .ply with
+/// faces or an .obj is a mesh, anything else a point cloud). A model that cannot be read or
+/// processed is recorded as failed with its error message and the run continues. Progress goes
+/// to `progress` as (stage "MODEL: step", fraction of the whole run). Images go under
+/// options.outDir when set. Deterministic except for the timings.
+/// Throws linesurf::Error: BadParameter for absurd options, Io when the data folder cannot be
+/// listed or holds no model file.
+ExperimentResults runExperiment(const ExperimentOptions& options, const ProgressFn& progress = {});
+
+/// results.json: options, per model and method every count, metric, timing and per-view figure.
+void writeExperimentJson(const ExperimentResults& results, const std::filesystem::path& path);
+/// results.md: the thesis's Tables 1-5 with the thesis's figures beside ours.
+void writeExperimentMarkdown(const ExperimentResults& results, const std::filesystem::path& path);
+/// index.html: per model, a few reference / candidate / difference images side by side and the
+/// clusters picture (image paths relative to the page, which belongs in outDir).
+void writeExperimentHtml(const ExperimentResults& results, const std::filesystem::path& path);
+/// The markdown tables alone (what results.md holds), for docs and the CLI.
+std::string experimentMarkdown(const ExperimentResults& results);
+
+/// The thesis's published figures for one model and table (§7.2, §7.3), for side-by-side tables.
+struct ThesisFigures {
+  std::string model;
+  int table = 0;               ///< 1, 2, 3 (points/segments/mse/nccm/speedup) or 5
+  double inputPoints = 0;      ///< tables 1-3: # points of the point model; table 5: # points
+  double points = 0;           ///< tables 1-3: hybrid # points
+  double segments = 0;
+  double mse = -1, nccm = -1, speedup = -1;  ///< speedup as a fraction (0.0727 for 7.27%)
+  double meanAbsDiff = -1, stdAbsDiff = -1;  ///< table 5
+  double clusters = -1;        ///< Table 4 (tables 2 and 3)
+};
+/// The thesis model a file stem stands for (per the shared data README), or "" when none.
+std::string thesisModelFor(const std::string& fileStem);
+/// The thesis's figures for `thesisModel` in `table`, if it lists the model.
+std::optional<ThesisFigures> thesisFigures(const std::string& thesisModel, int table);
+
+}  // namespace linesurf

@@ -1,0 +1,402 @@
+// The experiment harness of thesis §7 (protocol in docs/experiments.md, figures in
+// docs/metrics.md): extraction, rendering from views spread over the sphere, image comparison.
+#include "linesurf/eval/experiment.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <system_error>
+
+#include "linesurf/core/error.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/core/timer.h"
+#include "linesurf/extract/clustering.h"
+#include "linesurf/io/image_io.h"
+#include "linesurf/io/model_io.h"
+#include "linesurf/render/camera.h"
+#include "linesurf/render/renderer.h"
+
+namespace linesurf {
+namespace fs = std::filesystem;
+
+const char* experimentMethodName(ExperimentMethod m) {
+  switch (m) {
+    case ExperimentMethod::EpsDelta: return "eps-delta";
+    case ExperimentMethod::ShapeGreedy: return "shape-greedy";
+    case ExperimentMethod::ShapeHierarchical: return "shape-hierarchical";
+    case ExperimentMethod::Contour: return "contour";
+  }
+  return "?";
+}
+
+ExperimentMethod parseExperimentMethod(const std::string& name) {
+  if (name == "eps-delta" || name == "epsdelta") return ExperimentMethod::EpsDelta;
+  if (name == "shape-greedy" || name == "greedy") return ExperimentMethod::ShapeGreedy;
+  if (name == "shape-hierarchical" || name == "hierarchical") return ExperimentMethod::ShapeHierarchical;
+  if (name == "contour") return ExperimentMethod::Contour;
+  throwBadParameter("methods", "unknown method '" + name +
+                                   "' (expected eps-delta, shape-greedy, shape-hierarchical or contour)");
+}
+
+int thesisTableOf(ExperimentMethod m) {
+  switch (m) {
+    case ExperimentMethod::EpsDelta: return 1;
+    case ExperimentMethod::ShapeGreedy: return 2;
+    case ExperimentMethod::ShapeHierarchical: return 3;
+    case ExperimentMethod::Contour: return 5;
+  }
+  return 0;
+}
+
+std::vector<ExperimentMethod> ExperimentOptions::effectiveMethods() const {
+  static const std::vector<ExperimentMethod> all = {ExperimentMethod::EpsDelta, ExperimentMethod::ShapeGreedy,
+                                                    ExperimentMethod::ShapeHierarchical, ExperimentMethod::Contour};
+  if (methods.empty()) return all;
+  // Keep the canonical order and drop repeats, so the output does not depend on how they were listed.
+  std::vector<ExperimentMethod> out;
+  for (ExperimentMethod m : all)
+    if (std::find(methods.begin(), methods.end(), m) != methods.end()) out.push_back(m);
+  return out;
+}
+
+void ExperimentOptions::validate() const {
+  if (views < 1 || views > 100000) throwBadParameter("views", "must be in [1, 100000], got " + std::to_string(views));
+  if (meshViews < 1 || meshViews > 100000)
+    throwBadParameter("mesh-views", "must be in [1, 100000], got " + std::to_string(meshViews));
+  if (size < 16 || size > 8192) throwBadParameter("size", "must be in [16, 8192] pixels, got " + std::to_string(size));
+  if (imageViews < 0) throwBadParameter("image-views", "must be >= 0");
+  linesurf::validate(render);
+}
+
+size_t ExperimentResults::failedCount() const {
+  return size_t(std::count_if(models.begin(), models.end(), [](const ModelResult& m) { return m.failed; }));
+}
+
+namespace {
+
+bool isModelFile(const fs::path& p) {
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".ply" || ext == ".obj" || ext == ".xyz";
+}
+
+std::vector<fs::path> listModels(const ExperimentOptions& o) {
+  std::error_code ec;
+  if (!fs::is_directory(o.dataDir, ec))
+    throw Error(Error::Kind::Io, o.dataDir.string(), "", "not a folder (expected a folder of .ply/.obj/.xyz models)");
+  std::vector<fs::path> files;
+  for (fs::directory_iterator it(o.dataDir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file(ec) || !isModelFile(it->path())) continue;
+    const std::string stem = it->path().stem().string();
+    if (!o.only.empty() &&
+        std::none_of(o.only.begin(), o.only.end(), [&](const std::string& s) { return stem.find(s) != std::string::npos; }))
+      continue;
+    files.push_back(it->path());
+  }
+  if (ec) throw Error(Error::Kind::Io, o.dataDir.string(), "", "cannot list the folder: " + ec.message());
+  if (files.empty())
+    throw Error(Error::Kind::Io, o.dataDir.string(), "",
+                o.only.empty() ? "holds no model file (.ply, .obj, .xyz)" : "no model file matches --only");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+MeanStd meanStd(const std::vector<double>& v) {
+  MeanStd r;
+  if (v.empty()) return r;
+  for (double x : v) r.mean += x;
+  r.mean /= double(v.size());
+  double s = 0;
+  for (double x : v) s += (x - r.mean) * (x - r.mean);
+  r.std = v.size() > 1 ? std::sqrt(s / double(v.size() - 1)) : 0.0;
+  return r;
+}
+
+/// Fills the per-method summaries from its per-view figures.
+void summarise(MethodResult& m) {
+  std::vector<double> mse, nccm, ssim, mad, sad, tr, tc;
+  m.maxAbsDiff = 0;
+  m.minNccm = std::numeric_limits<double>::infinity();
+  for (const ExperimentView& v : m.views) {
+    mse.push_back(v.metrics.mse);
+    nccm.push_back(v.metrics.nccm);
+    ssim.push_back(v.metrics.ssim);
+    mad.push_back(v.metrics.meanAbsDiff);
+    sad.push_back(v.metrics.stdAbsDiff);
+    tr.push_back(v.referenceSeconds);
+    tc.push_back(v.candidateSeconds);
+    m.maxAbsDiff = std::max(m.maxAbsDiff, v.metrics.maxAbsDiff);
+    m.minNccm = std::min(m.minNccm, v.metrics.nccm);
+  }
+  if (m.views.empty()) m.minNccm = 0;
+  m.mse = meanStd(mse).mean;
+  m.nccm = meanStd(nccm).mean;
+  m.ssim = meanStd(ssim).mean;
+  m.psnr = m.mse > 0 ? 10 * std::log10(1.0 / m.mse) : std::numeric_limits<double>::infinity();
+  m.meanAbsDiff = meanStd(mad);
+  m.stdAbsDiff = meanStd(sad);
+  m.referenceRenderMedian = median(tr);
+  m.candidateRenderMedian = median(tc);
+  m.speedup = m.referenceRenderMedian > 0 ? 1.0 - m.candidateRenderMedian / m.referenceRenderMedian : 0.0;
+}
+
+double dataReduction(size_t referencePoints, size_t points, size_t segments) {
+  return referencePoints ? 1.0 - (6.0 * double(points) + 9.0 * double(segments)) / (6.0 * double(referencePoints)) : 0.0;
+}
+
+/// Progress within one model, mapped onto the whole run.
+struct ModelProgress {
+  const ProgressFn* fn;
+  std::string name;
+  size_t index, count;
+  void operator()(const std::string& step, double local) const {
+    if (!*fn) return;
+    const double f = (double(index) + std::clamp(local, 0.0, 1.0)) / double(std::max<size_t>(count, 1));
+    (*fn)(name + ": " + step, f);
+  }
+  /// A ProgressFn for a library stage occupying [lo, hi) of this model's work.
+  ProgressFn sub(const std::string& step, double lo, double hi) const {
+    if (!*fn) return {};
+    ModelProgress self = *this;
+    return [self, step, lo, hi](std::string_view, double f) { self(step, lo + (hi - lo) * std::clamp(f, 0.0, 1.0)); };
+  }
+};
+
+/// One candidate model rendered against the reference.
+struct Candidate {
+  MethodResult* result;
+  std::unique_ptr<HybridModel> model;
+  std::unique_ptr<Renderer> renderer;
+};
+
+std::string viewName(int v) { return fmt::format("view_{:03d}", v); }
+
+/// Renders the reference and every candidate from the views, interleaved per view so that the
+/// timings see the same machine state; writes the first imageViews images when outDir is set.
+void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const HybridModel& reference,
+                      std::vector<Candidate>& candidates, int views, const ModelProgress& progress, double lo,
+                      double hi) {
+  const int size = o.size;
+  const BoundingSphere sphere = boundingSphere(reference);
+  const std::vector<Camera> cams = Camera::spreadViews(sphere, views, size, size);
+  Renderer ref(reference, o.render);
+  for (Candidate& c : candidates) c.renderer = std::make_unique<Renderer>(*c.model, o.render);
+  const bool images = !o.outDir.empty();
+  const fs::path modelDir = o.outDir / model.name;
+  if (images && o.imageViews > 0) {
+    fs::create_directories(modelDir);
+    for (Candidate& c : candidates) fs::create_directories(modelDir / experimentMethodName(c.result->method));
+  }
+  for (int v = 0; v < int(cams.size()); ++v) {
+    progress(fmt::format("rendering view {}/{}", v + 1, cams.size()), lo + (hi - lo) * double(v) / double(cams.size()));
+    Timer tr;
+    RenderResult rr = ref.render(cams[size_t(v)]);
+    const double refSeconds = tr.seconds();
+    const bool keep = images && v < o.imageViews;
+    if (keep) {
+      const std::string rel = model.name + "/" + viewName(v) + "_points.png";
+      writePng(o.outDir / rel, rr.color, false);
+      model.referenceImages.push_back(rel);
+    }
+    for (Candidate& c : candidates) {
+      Timer tc;
+      RenderResult rc = c.renderer->render(cams[size_t(v)]);
+      ExperimentView ev;
+      ev.candidateSeconds = tc.seconds();
+      ev.referenceSeconds = refSeconds;
+      ev.metrics = compareImages(rr.color, rc.color);
+      c.result->views.push_back(ev);
+      if (keep) {
+        const std::string base = model.name + "/" + experimentMethodName(c.result->method) + "/" + viewName(v);
+        writePng(o.outDir / (base + ".png"), rc.color, false);
+        writePng(o.outDir / (base + "_diff.png"), differenceHeatmap(rr.color, rc.color), false);
+        c.result->images.push_back(base + ".png");
+        c.result->diffImages.push_back(base + "_diff.png");
+      }
+    }
+  }
+  for (Candidate& c : candidates) {
+    c.renderer.reset();
+    summarise(*c.result);
+  }
+}
+
+bool isPointMethod(ExperimentMethod m) { return m != ExperimentMethod::Contour; }
+
+void runPointCloud(const ExperimentOptions& o, const fs::path& file, ModelResult& model, const ModelProgress& progress) {
+  progress("reading", 0);
+  Timer t;
+  HybridModel cloud = readModel(file);
+  model.loadSeconds = t.seconds();
+  cloud.segments.clear();  // a hybrid file is taken as the point cloud of its points
+  cloud.provenance.clear();
+  model.inputPoints = cloud.points.size();
+  if (cloud.points.size() < 4)
+    throwBadInput(file.string(), "", fmt::format("{} points: a point cloud needs at least 4", cloud.points.size()));
+
+  t.reset();
+  GeometryOptions go = o.geometry;
+  go.delaunayNeighbours = true;  // both extraction methods need stages 3 and 4
+  go.curvature = true;
+  go.progress = progress.sub("geometry (§6.1)", 0.02, 0.15);
+  const PointGeometry geo = computePointGeometry(cloud, go);
+  applyGeometry(cloud, geo);  // normals and radii for the point model (the reference)
+  model.geometrySeconds = t.seconds();
+  model.averageSpacing = geo.averageSpacing;
+
+  std::vector<ExperimentMethod> methods;
+  for (ExperimentMethod m : o.effectiveMethods())
+    if (isPointMethod(m)) methods.push_back(m);
+  model.methods.resize(methods.size());
+  std::vector<Candidate> candidates;
+  std::vector<std::pair<size_t, HybridModel>> clusterPictures;
+  for (size_t i = 0; i < methods.size(); ++i) {
+    MethodResult& r = model.methods[i];
+    r.method = methods[i];
+    r.referencePoints = cloud.points.size();
+    const double lo = 0.15 + 0.25 * double(i) / double(methods.size()), hi = 0.15 + 0.25 * double(i + 1) / double(methods.size());
+    auto hybrid = std::make_unique<HybridModel>();
+    Timer te;
+    if (r.method == ExperimentMethod::EpsDelta) {
+      EpsDeltaOptions eo = o.epsDelta;
+      eo.provenance = false;
+      eo.progress = progress.sub("eps-delta extraction (§3.1)", lo, hi);
+      EpsDeltaStats st;
+      *hybrid = extractEpsDelta(cloud, geo, eo, &st);
+      r.notes.push_back(fmt::format("epsilon = {:.4g} (object units), delta = {}", st.epsilon, st.delta));
+    } else {
+      ShapeApproxOptions so = o.shapeApprox;
+      so.provenance = false;
+      so.method = r.method == ExperimentMethod::ShapeGreedy ? ClusteringMethod::Greedy : ClusteringMethod::Hierarchical;
+      so.progress = progress.sub(std::string(experimentMethodName(r.method)) + " extraction (§3.2)", lo, hi);
+      so.clustering.progress = so.progress;
+      const Clustering clustering = clusterShapeApprox(geo, so);
+      ShapeApproxStats st;
+      *hybrid = extractShapeApprox(cloud, geo, clustering, so, &st);
+      r.clusters = clustering.size();
+      r.largeClusters = st.largeClusters;
+      r.largeClusterPoints = st.largeClusterPoints;
+      if (st.degenerateClusters) r.notes.push_back(fmt::format("{} degenerate clusters kept as points", st.degenerateClusters));
+      if (!o.outDir.empty() && o.imageViews > 0) clusterPictures.emplace_back(i, colorByCluster(cloud, geo, clustering));
+    }
+    r.extractSeconds = te.seconds();
+    r.points = hybrid->points.size();
+    r.segments = hybrid->segments.size();
+    r.dataReduction = dataReduction(r.referencePoints, r.points, r.segments);
+    candidates.push_back({&r, std::move(hybrid), nullptr});
+  }
+
+  renderAndCompare(o, model, cloud, candidates, o.views, progress, 0.4, 0.98);
+
+  // Clusters pictures (thesis Figure 22) from the first view, same camera as the comparisons.
+  if (!clusterPictures.empty()) {
+    const Camera cam = Camera::spreadViews(boundingSphere(cloud), 1, o.size, o.size).front();
+    for (auto& [i, picture] : clusterPictures) {
+      MethodResult& r = model.methods[i];
+      const std::string rel = model.name + "/" + experimentMethodName(r.method) + "/clusters.png";
+      fs::create_directories((o.outDir / rel).parent_path());
+      writePng(o.outDir / rel, renderImage(picture, cam, o.render).color, false);
+      r.clustersImage = rel;
+    }
+  }
+}
+
+void runMesh(const ExperimentOptions& o, const fs::path& file, ModelResult& model, const ModelProgress& progress) {
+  progress("reading", 0);
+  Timer t;
+  const TriangleMesh mesh = readMesh(file);
+  model.loadSeconds = t.seconds();
+  model.inputPoints = mesh.positions.size();
+  model.faces = mesh.faces.size();
+  if (mesh.faces.empty()) throwBadInput(file.string(), "", "the mesh has no faces");
+
+  model.methods.resize(1);
+  MethodResult& r = model.methods[0];
+  r.method = ExperimentMethod::Contour;
+  // The pure line model and the pure point model of Table 5, cut by the same planes.
+  ContourOptions co = o.contour;
+  co.recordFaces = false;
+  co.pointsBelow = 0;
+  co.allPoints = false;
+  co.progress = progress.sub("contour lines (§3.3)", 0.05, 0.2);
+  Timer te;
+  ContourStats lineStats;
+  auto lines = std::make_unique<HybridModel>(extractContour(mesh, co, &lineStats));
+  r.extractSeconds = te.seconds();
+  co.allPoints = true;
+  co.progress = progress.sub("contour points (§3.3)", 0.2, 0.3);
+  ContourStats pointStats;
+  const HybridModel points = extractContour(mesh, co, &pointStats);
+  r.referencePoints = points.points.size();
+  r.points = lines->points.size();
+  r.segments = lines->segments.size();
+  r.dataReduction = dataReduction(r.referencePoints, r.points, r.segments);
+  r.notes.push_back(fmt::format("plane spacing d = {:.4g} (mean edge {:.4g}), radius {:.4g}; {} degenerate faces",
+                                lineStats.spacing, lineStats.meanEdgeLength, lineStats.radius,
+                                lineStats.degenerateTriangles));
+  std::vector<Candidate> candidates;
+  candidates.push_back({&r, std::move(lines), nullptr});
+  renderAndCompare(o, model, points, candidates, o.meshViews, progress, 0.3, 0.98);
+}
+
+}  // namespace
+
+ExperimentResults runExperiment(const ExperimentOptions& options, const ProgressFn& progress) {
+  options.validate();
+  Timer total;
+  ExperimentResults results;
+  results.options = options;
+  results.options.geometry.progress = {};
+  results.options.epsDelta.progress = {};
+  results.options.shapeApprox.progress = {};
+  results.options.shapeApprox.clustering.progress = {};
+  results.options.contour.progress = {};
+  results.options.render.progress = {};
+  results.threads = currentThreadCount();
+  const std::vector<fs::path> files = listModels(options);
+  if (!options.outDir.empty()) fs::create_directories(options.outDir);
+
+  std::vector<ExperimentMethod> methods = options.effectiveMethods();
+  const bool anyPointMethod = std::any_of(methods.begin(), methods.end(), isPointMethod);
+  const bool meshMethod = std::find(methods.begin(), methods.end(), ExperimentMethod::Contour) != methods.end();
+
+  for (size_t i = 0; i < files.size(); ++i) {
+    ModelResult m;
+    m.file = files[i].string();
+    m.name = files[i].stem().string();
+    m.thesisName = thesisModelFor(m.name);
+    const ModelProgress mp{&progress, m.name, i, files.size()};
+    try {
+      m.isMesh = fileHoldsMesh(files[i]);
+      if (m.isMesh ? !meshMethod : !anyPointMethod) continue;  // no selected method applies
+      if (m.isMesh)
+        runMesh(options, files[i], m, mp);
+      else
+        runPointCloud(options, files[i], m, mp);
+    } catch (const std::bad_alloc&) {
+      m.failed = true;
+      m.error = m.file + ": out of memory";
+      m.methods.clear();
+    } catch (const std::exception& e) {
+      m.failed = true;
+      m.error = e.what();
+      m.methods.clear();
+    }
+    mp("done", 1);
+    results.models.push_back(std::move(m));
+  }
+  results.totalSeconds = total.seconds();
+  return results;
+}
+
+}  // namespace linesurf
