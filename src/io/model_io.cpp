@@ -1,14 +1,134 @@
-// Placeholder: the PLY/OBJ/XYZ readers and writers land with the foundation IO work.
+// Reading and writing models: dispatch on the file extension (see model_io.h).
 #include "linesurf/io/model_io.h"
 
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include "io/detail/readers.h"
 #include "linesurf/core/error.h"
 
 namespace linesurf {
 
-HybridModel readModel(const std::filesystem::path& path) { throwBadInput(path.string(), "", "reader not implemented yet"); }
-TriangleMesh readMesh(const std::filesystem::path& path) { throwBadInput(path.string(), "", "reader not implemented yet"); }
-bool fileHoldsMesh(const std::filesystem::path& path) { throwBadInput(path.string(), "", "reader not implemented yet"); }
-void writeModel(const std::filesystem::path& path, const HybridModel&, const WriteOptions&) { throwBadInput(path.string(), "", "writer not implemented yet"); }
-void writeMesh(const std::filesystem::path& path, const TriangleMesh&, const WriteOptions&) { throwBadInput(path.string(), "", "writer not implemented yet"); }
+namespace detail {
+
+std::string readFileBytes(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  auto st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st)) throwBadInput(name, "", "no such file");
+  if (std::filesystem::is_directory(st)) throwBadInput(name, "", "is a directory, not a file");
+  FILE* f = std::fopen(name.c_str(), "rb");
+  if (!f) throwBadInput(name, "", std::string("cannot open: ") + std::strerror(errno));
+  std::string bytes;
+  char buf[1 << 16];
+  // Size from the file system when it has one; read in chunks regardless (pipes, /proc).
+  uintmax_t size = std::filesystem::is_regular_file(st) ? std::filesystem::file_size(path, ec) : 0;
+  if (!ec && size > 0) bytes.reserve(size_t(size));
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.append(buf, n);
+  const bool failed = std::ferror(f);
+  std::fclose(f);
+  if (failed) throwBadInput(name, "", "read error");
+  return bytes;
+}
+
+}  // namespace detail
+
+namespace {
+
+enum class Kind { Ply, Obj, Xyz };
+
+Kind kindOf(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".ply") return Kind::Ply;
+  if (ext == ".obj") return Kind::Obj;
+  if (ext == ".xyz") return Kind::Xyz;
+  throwBadInput(path.string(), "", "unknown file extension '" + path.extension().string() +
+                                       "' (supported: .ply, .obj, .xyz)");
+}
+
+HybridModel meshVerticesAsPoints(const TriangleMesh& mesh) {
+  HybridModel m;
+  m.points.resize(mesh.positions.size());
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    m.points[i].position = mesh.positions[i];
+    if (!mesh.normals.empty()) m.points[i].normal = mesh.normals[i];
+    if (!mesh.colors.empty()) m.points[i].color = mesh.colors[i];
+  }
+  m.attributes.normals = !mesh.normals.empty();
+  m.attributes.colors = !mesh.colors.empty();
+  m.comments = mesh.comments;
+  return m;
+}
+
+}  // namespace
+
+HybridModel readModel(const std::filesystem::path& path) {
+  switch (kindOf(path)) {
+    case Kind::Ply: {
+      std::string bytes = detail::readFileBytes(path);
+      std::filesystem::path dir = path.parent_path();
+      return detail::plyToModel(bytes, path.string(), &dir);
+    }
+    case Kind::Obj: return meshVerticesAsPoints(detail::readObj(path));
+    case Kind::Xyz: return detail::xyzToModel(detail::readFileBytes(path), path.string());
+  }
+  return {};
+}
+
+TriangleMesh readMesh(const std::filesystem::path& path) {
+  switch (kindOf(path)) {
+    case Kind::Ply: {
+      std::string bytes = detail::readFileBytes(path);
+      std::filesystem::path dir = path.parent_path();
+      return detail::plyToMesh(bytes, path.string(), &dir);
+    }
+    case Kind::Obj: return detail::readObj(path);
+    case Kind::Xyz:
+      detail::readFileBytes(path);  // missing file / directory first
+      throwBadInput(path.string(), "", "an .xyz file holds points, not a mesh");
+  }
+  return {};
+}
+
+bool fileHoldsMesh(const std::filesystem::path& path) {
+  switch (kindOf(path)) {
+    case Kind::Obj: detail::readFileBytes(path); return true;
+    case Kind::Xyz: detail::readFileBytes(path); return false;
+    case Kind::Ply: break;
+  }
+  // Only the header is needed; it parses from the whole file too (a body never has to be read).
+  return detail::plyHoldsMesh(detail::readFileBytes(path), path.string());
+}
+
+void writeModel(const std::filesystem::path& path, const HybridModel& model, const WriteOptions& options) {
+  switch (kindOf(path)) {
+    case Kind::Ply: return detail::writePlyModel(path, model, options);
+    case Kind::Xyz:
+      if (!model.segments.empty())
+        throwBadParameter(path.string(), "an .xyz file cannot hold line segments (write .ply)");
+      return detail::writeXyz(path, model);
+    case Kind::Obj: throwBadParameter(path.string(), "points and segments are written as .ply or .xyz, not .obj");
+  }
+}
+
+void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options) {
+  switch (kindOf(path)) {
+    case Kind::Ply: return detail::writePlyMesh(path, mesh, options);
+    case Kind::Obj: return detail::writeObj(path, mesh);
+    case Kind::Xyz: throwBadParameter(path.string(), "a mesh is written as .ply or .obj, not .xyz");
+  }
+}
+
+HybridModel readPlyModelFromMemory(std::string_view bytes, const std::string& nameForMessages) {
+  return detail::plyToModel(bytes, nameForMessages, nullptr);
+}
+
+TriangleMesh readPlyMeshFromMemory(std::string_view bytes, const std::string& nameForMessages) {
+  return detail::plyToMesh(bytes, nameForMessages, nullptr);
+}
 
 }  // namespace linesurf

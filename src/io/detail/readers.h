@@ -1,0 +1,32 @@
+#pragma once
+// Per-format readers and writers behind model_io.h (private to src/io).
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "linesurf/core/model.h"
+#include "linesurf/io/model_io.h"
+
+namespace linesurf::detail {
+
+/// The whole file as bytes; throws BadInput for a missing file, a directory or a read error.
+std::string readFileBytes(const std::filesystem::path& path);
+
+/// PLY from bytes. `textureDir` is where a `comment TextureFile` is looked up; when null the
+/// texture is not loaded (in-memory reads).
+HybridModel plyToModel(std::string_view bytes, const std::string& name, const std::filesystem::path* textureDir);
+TriangleMesh plyToMesh(std::string_view bytes, const std::string& name, const std::filesystem::path* textureDir);
+bool plyHoldsMesh(std::string_view headerBytes, const std::string& name);
+void writePlyModel(const std::filesystem::path& path, const HybridModel& model, const WriteOptions& options);
+void writePlyMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options);
+
+TriangleMesh readObj(const std::filesystem::path& path);
+void writeObj(const std::filesystem::path& path, const TriangleMesh& mesh);
+
+HybridModel xyzToModel(std::string_view bytes, const std::string& name);
+void writeXyz(const std::filesystem::path& path, const HybridModel& model);
+
+/// Writes `image` as PNG beside `modelPath` (named <stem>_texture.png) and returns the file name.
+std::string writeTextureBeside(const std::filesystem::path& modelPath, const Image& image);
+
+}  // namespace linesurf::detail

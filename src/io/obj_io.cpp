@@ -1,0 +1,172 @@
+// Wavefront OBJ meshes (+ MTL diffuse texture) through tinyobjloader; per-corner UVs from `vt`.
+#include <tiny_obj_loader.h>
+
+#include <charconv>
+#include <cmath>
+
+#include "io/detail/readers.h"
+#include "linesurf/core/error.h"
+#include "linesurf/io/atomic_file.h"
+#include "linesurf/io/image_io.h"
+
+namespace linesurf::detail {
+
+namespace {
+std::string firstLine(std::string s) {
+  size_t e = s.find('\n');
+  if (e != std::string::npos) s.resize(e);
+  while (!s.empty() && (s.back() == '\r' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+}  // namespace
+
+TriangleMesh readObj(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::string text = readFileBytes(path);  // missing file, directory, unreadable: our messages
+  tinyobj::ObjReaderConfig cfg;
+  cfg.triangulate = true;
+  cfg.vertex_color = false;  // colours only when every vertex has them
+  cfg.mtl_search_path = path.parent_path().string();
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(name, cfg))
+    throwBadInput(name, "", "cannot parse OBJ: " + firstLine(reader.Error().empty() ? "unknown error" : reader.Error()));
+  const tinyobj::attrib_t& a = reader.GetAttrib();
+  const size_t nv = a.vertices.size() / 3, nn = a.normals.size() / 3, nt = a.texcoords.size() / 2;
+  if (nv == 0) throwBadInput(name, "", "no vertices ('v' lines) in the OBJ file");
+  TriangleMesh mesh;
+  mesh.positions.resize(nv);
+  for (size_t i = 0; i < nv; ++i) {
+    mesh.positions[i] = Vec3f(float(a.vertices[3 * i]), float(a.vertices[3 * i + 1]), float(a.vertices[3 * i + 2]));
+    if (!mesh.positions[i].allFinite())
+      throwBadInput(name, "vertex " + std::to_string(i + 1), "non-finite coordinate");
+  }
+  if (a.colors.size() == 3 * nv) {
+    mesh.colors.resize(nv);
+    for (size_t i = 0; i < nv; ++i)
+      mesh.colors[i] = Color(float(a.colors[3 * i]), float(a.colors[3 * i + 1]), float(a.colors[3 * i + 2]), 1.0f);
+  }
+  bool allNormals = true, anyUV = false;
+  std::vector<Vec3f> normalSum(nv, Vec3f::Zero());
+  size_t faceNo = 0;
+  for (const tinyobj::shape_t& s : reader.GetShapes()) {
+    size_t off = 0;
+    for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f, ++faceNo) {
+      const size_t n = s.mesh.num_face_vertices[f];
+      if (n != 3) {  // triangulation leaves only triangles; anything else is skipped
+        off += n;
+        continue;
+      }
+      std::array<uint32_t, 3> tri;
+      std::array<Vec2f, 3> uv;
+      for (size_t k = 0; k < 3; ++k) {
+        const tinyobj::index_t& ix = s.mesh.indices[off + k];
+        if (ix.vertex_index < 0 || size_t(ix.vertex_index) >= nv)
+          throwBadInput(name, "face " + std::to_string(faceNo + 1),
+                        "vertex index out of range (the file has " + std::to_string(nv) + " vertices)");
+        tri[k] = uint32_t(ix.vertex_index);
+        if (ix.texcoord_index >= 0) {
+          if (size_t(ix.texcoord_index) >= nt)
+            throwBadInput(name, "face " + std::to_string(faceNo + 1), "texture coordinate index out of range");
+          uv[k] = Vec2f(float(a.texcoords[2 * ix.texcoord_index]), float(a.texcoords[2 * ix.texcoord_index + 1]));
+          anyUV = true;
+        } else {
+          uv[k] = Vec2f::Zero();
+        }
+        if (ix.normal_index >= 0 && size_t(ix.normal_index) < nn) {
+          normalSum[tri[k]] += Vec3f(float(a.normals[3 * ix.normal_index]), float(a.normals[3 * ix.normal_index + 1]),
+                                     float(a.normals[3 * ix.normal_index + 2]));
+        } else {
+          allNormals = false;
+        }
+      }
+      mesh.faces.push_back(tri);
+      mesh.cornerUVs.push_back(uv);
+      off += 3;
+    }
+  }
+  if (!anyUV) mesh.cornerUVs.clear();
+  if (allNormals && nn > 0 && !mesh.faces.empty()) {
+    mesh.normals.resize(nv);
+    for (size_t i = 0; i < nv; ++i) {
+      float len = normalSum[i].norm();
+      mesh.normals[i] = len > 0 && std::isfinite(len) ? Vec3f(normalSum[i] / len) : Vec3f::Zero();
+    }
+  }
+  for (const tinyobj::material_t& m : reader.GetMaterials()) {
+    if (m.diffuse_texname.empty()) continue;
+    std::filesystem::path file = path.parent_path() / m.diffuse_texname;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec))
+      throwBadInput(name, "material " + m.name, "texture file '" + m.diffuse_texname + "' not found");
+    mesh.texture = std::make_shared<Image>(readImage(file));
+    break;
+  }
+  // Header comments are not kept for OBJ (tinyobjloader drops them).
+  return mesh;
+}
+
+namespace {
+void num(std::string& out, float v) {
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out += ' ';
+  out.append(buf, r.ptr);
+}
+}  // namespace
+
+void writeObj(const std::filesystem::path& path, const TriangleMesh& mesh) {
+  const size_t nv = mesh.positions.size();
+  const bool normals = mesh.normals.size() == nv && nv > 0, colors = mesh.colors.size() == nv && nv > 0;
+  const bool uvs = !mesh.cornerUVs.empty();
+  if (uvs && mesh.cornerUVs.size() != mesh.faces.size())
+    throwBadParameter("mesh.cornerUVs", "has " + std::to_string(mesh.cornerUVs.size()) + " entries for " +
+                                            std::to_string(mesh.faces.size()) + " faces");
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    for (uint32_t v : mesh.faces[f])
+      if (v >= nv) throwBadParameter("mesh.faces", "face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
+  std::string out = "# written by linesurf\n";
+  for (const std::string& c : mesh.comments) out += "# " + c + "\n";
+  const std::string stem = path.stem().string();
+  const bool textured = mesh.texture && !mesh.texture->empty();
+  if (textured) {
+    std::string tex = writeTextureBeside(path, *mesh.texture);
+    writeFileAtomically(path.parent_path() / (stem + ".mtl"),
+                        "newmtl textured\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nmap_Kd " + tex + "\n");
+    out += "mtllib " + stem + ".mtl\nusemtl textured\n";
+  }
+  out.reserve(out.size() + nv * 40 + mesh.faces.size() * (uvs ? 80 : 20));
+  for (size_t i = 0; i < nv; ++i) {
+    out += 'v';
+    for (int c = 0; c < 3; ++c) num(out, mesh.positions[i][c]);
+    if (colors)
+      for (int c = 0; c < 3; ++c) num(out, mesh.colors[i][c]);
+    out += '\n';
+  }
+  if (normals)
+    for (size_t i = 0; i < nv; ++i) {
+      out += "vn";
+      for (int c = 0; c < 3; ++c) num(out, mesh.normals[i][c]);
+      out += '\n';
+    }
+  if (uvs)
+    for (const auto& t : mesh.cornerUVs)
+      for (const Vec2f& uv : t) {
+        out += "vt";
+        num(out, uv.x());
+        num(out, uv.y());
+        out += '\n';
+      }
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    out += 'f';
+    for (int k = 0; k < 3; ++k) {
+      const std::string v = std::to_string(mesh.faces[f][k] + 1);
+      out += ' ' + v;
+      if (uvs) out += '/' + std::to_string(3 * f + k + 1);
+      if (normals) out += (uvs ? "/" : "//") + v;
+    }
+    out += '\n';
+  }
+  writeFileAtomically(path, out);
+}
+
+}  // namespace linesurf::detail
