@@ -1,0 +1,95 @@
+#pragma once
+/// Contour-plane extraction of line-segment models from triangle meshes, thesis §3.3.
+///
+/// The mesh is cut by two perpendicular families of parallel planes, P= and P‖, each the lattice
+/// n·x = offset + i·d (i integer). Every triangle is cut by one family only, at the spacing
+/// d / 2^m with m = ⌈log2(1 / sin θ)⌉ (θ: angle between the triangle and the family's planes), so
+/// that neighbouring segments on the triangle are at most d apart; the finer spacings are
+/// sub-lattices of the same family, so a plane of spacing d cuts every triangle that uses that
+/// family, and the pieces meet exactly on shared edges. Segments can be turned into points
+/// (hybrid model) or all of them into ⌈l/d⌉+1 points each (the pure point model of Table 5).
+/// The rules we chose where the thesis leaves room (family choice, default d, radius, plane
+/// through a vertex) are in docs/decisions.md, "Contour-plane extraction (§3.3)".
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "linesurf/core/model.h"
+#include "linesurf/core/progress.h"
+
+namespace linesurf {
+
+/// The two perpendicular plane families. Family 0 is P= (tried first), family 1 is P‖.
+/// Plane i of family f is {x : normal[f]·x = offset[f] + i·d}.
+struct ContourPlanes {
+  Vec3d normal[2] = {Vec3d(0, 0, 1), Vec3d(1, 0, 0)};  ///< unit, mutually perpendicular
+  double offset[2] = {0, 0};                           ///< object units
+};
+
+/// Plane families for a seed: a uniformly random rotation, redrawn while a plane normal is within
+/// ~25° of a coordinate axis (the thesis wants orientations "not aligned with the bases of the
+/// coordinate system"), and offsets uniform in [0, spacing). Deterministic and platform-independent.
+ContourPlanes randomContourPlanes(uint64_t seed, double spacing);
+
+struct ContourOptions {
+  /// d: the largest distance between neighbouring segments on a triangle, object units.
+  /// 0 (default) = spacingScale × the mesh's mean edge length. Must stay below twice the cutoff
+  /// radius of the rendering kernel (§3.3); the output radius below is derived from it.
+  float spacing = 0;
+  float spacingScale = 1.0f;  ///< used when spacing == 0; > 0
+  uint64_t seed = 1;          ///< orientation and offsets of the planes
+  std::optional<ContourPlanes> planes;  ///< explicit plane families (overrides seed)
+  /// Family choice per triangle: P= is used unless its sin θ is below this value and P‖ cuts at a
+  /// larger angle. 1 (default): always the family with the larger sin θ (fewest segments, spacing
+  /// d or d/2 only); 0: P= wherever it cuts at all (one family: closed contours).
+  float familySwitchSine = 1.0f;
+  /// Radius of every output segment and point = radiusScale × d. The thesis's constraint
+  /// d < 2R (R: kernel cutoff radius) needs radiusScale > 0.5 for a hole-free rendering.
+  float radiusScale = 0.75f;
+  /// Segment normal from the vertex normals interpolated at the midpoint (made perpendicular to
+  /// the segment) instead of the triangle's normal (thesis). Ignored when the mesh has none.
+  bool vertexNormals = false;
+  /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.
+  float pointsBelow = 0;
+  /// Every segment becomes ⌈l/d⌉+1 points at regular intervals: pure point model (Table 5).
+  bool allPoints = false;
+  /// Fill ContourStats::segmentFaces / pointFaces (source triangle of each primitive).
+  bool recordFaces = false;
+  /// Refuse to produce more primitives than this (protects against a tiny --spacing).
+  size_t maxPrimitives = size_t(1) << 31;
+  ProgressFn progress;  ///< optional, stage "contour planes"
+};
+
+struct ContourStats {
+  size_t triangles = 0;            ///< faces in the mesh
+  size_t degenerateTriangles = 0;  ///< zero-area or non-finite faces, skipped
+  size_t cutByFamily[2] = {0, 0};  ///< non-degenerate faces cut (or not) with P= / P‖
+  size_t halvedSpacing = 0;        ///< faces that needed a finer level (m >= 1)
+  size_t uncutTriangles = 0;       ///< faces that no plane of their lattice crosses
+  size_t vertexTouches = 0;        ///< planes touching a face only at a vertex (no segment)
+  size_t segments = 0;             ///< segments in the output
+  size_t points = 0;               ///< points in the output
+  size_t convertedSegments = 0;    ///< segments turned into points
+  double spacing = 0;              ///< d used
+  double meanEdgeLength = 0;       ///< over non-degenerate faces (each face's three edges)
+  double radius = 0;               ///< primitive radius written
+  double seconds = 0;              ///< wall time of extractContour
+  ContourPlanes planes;            ///< the plane families used
+  std::vector<uint32_t> segmentFaces;  ///< with recordFaces: source face of each segment
+  std::vector<uint32_t> pointFaces;    ///< with recordFaces: source face of each point
+};
+
+/// Cuts `mesh` into a line-segment (or hybrid, or point) model, thesis §3.3.
+/// Segments carry the triangle's unit normal (or interpolated vertex normals), a colour (texture
+/// sampled at the midpoint's uv when the mesh has a texture and per-corner uvs, else interpolated
+/// vertex colours, else white) and, with per-corner uvs, the barycentrically interpolated uvs of
+/// their endpoints; the model shares the mesh's texture. Output order is deterministic (by face,
+/// then plane) for any thread count.
+/// Throws linesurf::Error: BadParameter for a negative/non-finite spacing, conflicting point
+/// options, radiusScale <= 0 or an output above maxPrimitives; BadInput for a face index out of
+/// range. Degenerate faces are counted in stats, never an error.
+HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& options = {},
+                           ContourStats* stats = nullptr);
+
+}  // namespace linesurf

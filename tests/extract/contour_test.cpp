@@ -1,0 +1,480 @@
+// Tests of contour-plane extraction (thesis §3.3).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+#include <tuple>
+
+#include "linesurf/core/error.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/core/shapes.h"
+#include "linesurf/extract/contour.h"
+
+using namespace linesurf;
+
+namespace {
+
+// Barycentric coordinates of p with respect to triangle (a, b, c), from the projection onto its
+// plane; also returns the distance of p from the plane.
+Vec3d barycentric(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& p, double* planeDistance = nullptr) {
+  Vec3d n = (b - a).cross(c - a);
+  double area2 = n.squaredNorm();
+  if (planeDistance) *planeDistance = std::abs((p - a).dot(n)) / std::sqrt(area2);
+  double wa = (c - b).cross(p - b).dot(n) / area2;
+  double wb = (a - c).cross(p - c).dot(n) / area2;
+  return Vec3d(wa, wb, 1 - wa - wb);
+}
+
+struct Tri {
+  Vec3d a, b, c;
+};
+Tri triangle(const TriangleMesh& m, size_t f) {
+  const auto& F = m.faces[f];
+  return {m.positions[F[0]].cast<double>(), m.positions[F[1]].cast<double>(), m.positions[F[2]].cast<double>()};
+}
+
+// Every endpoint lies on its source triangle: within `tol` of its plane, barycentric >= -tol.
+void expectEndpointsOnTriangles(const TriangleMesh& mesh, const HybridModel& model, const ContourStats& st, double tol) {
+  ASSERT_EQ(st.segmentFaces.size(), model.segments.size());
+  size_t bad = 0;
+  for (size_t i = 0; i < model.segments.size(); ++i) {
+    Tri t = triangle(mesh, st.segmentFaces[i]);
+    double scale = std::max({(t.b - t.a).norm(), (t.c - t.b).norm(), (t.a - t.c).norm()});
+    for (const Vec3f& p : {model.segments[i].p0, model.segments[i].p1}) {
+      double dist;
+      Vec3d w = barycentric(t.a, t.b, t.c, p.cast<double>(), &dist);
+      bool ok = dist <= tol * scale + 1e-6 * p.norm() && w.minCoeff() >= -tol && w.maxCoeff() <= 1 + tol;
+      if (!ok && ++bad <= 5) ADD_FAILURE() << "segment " << i << " endpoint off its face: dist " << dist << " w " << w.transpose();
+    }
+  }
+  EXPECT_EQ(bad, 0u);
+}
+
+// On every face, neighbouring (parallel) segments are at most d apart, and every vertex of a cut
+// face is within d of one of its segment lines (measured in the face, across the lines).
+void expectSpacingAtMostD(const TriangleMesh& mesh, const HybridModel& model, const ContourStats& st) {
+  std::map<uint32_t, std::vector<size_t>> byFace;
+  for (size_t i = 0; i < model.segments.size(); ++i) byFace[st.segmentFaces[i]].push_back(i);
+  const double d = st.spacing, tol = 1e-4 * d;
+  double worst = 0;
+  for (auto& [f, segs] : byFace) {
+    Tri t = triangle(mesh, f);
+    Vec3d n = (t.b - t.a).cross(t.c - t.a).normalized();
+    Vec3d dir = (model.segments[segs[0]].p1 - model.segments[segs[0]].p0).cast<double>().normalized();
+    Vec3d across = n.cross(dir).normalized();
+    std::vector<double> pos;
+    for (size_t i : segs) {
+      const Segment& s = model.segments[i];
+      // All segments of a face are parallel (one family per face).
+      Vec3d di = (s.p1 - s.p0).cast<double>();
+      // Float endpoints: the direction of a segment of length l is good to ~1e-7 |p| / l.
+      double angleTol = 1e-5 + 4e-7 * (s.p0.norm() + 1) * (1 / di.norm() + 1 / (model.segments[segs[0]].p1 - model.segments[segs[0]].p0).norm());
+      EXPECT_LT(di.normalized().cross(dir).norm(), angleTol) << "face " << f;
+      pos.push_back(0.5 * (s.p0 + s.p1).cast<double>().dot(across));
+    }
+    std::sort(pos.begin(), pos.end());
+    for (size_t j = 1; j < pos.size(); ++j) worst = std::max(worst, pos[j] - pos[j - 1]);
+    for (const Vec3d& v : {t.a, t.b, t.c}) {
+      double x = v.dot(across), nearest = 1e300;
+      for (double p : pos) nearest = std::min(nearest, std::abs(x - p));
+      EXPECT_LE(nearest, d + tol) << "face " << f;
+    }
+  }
+  EXPECT_LE(worst, d + tol);
+}
+
+ContourOptions withFaces(ContourOptions o = {}) {
+  o.recordFaces = true;
+  return o;
+}
+
+// Open cylinder of radius r, height h along z, with a seam (duplicated vertices) and per-corner
+// uv = (angle / 2π, z / h + 1/2).
+TriangleMesh cylinderMesh(float r, float h, int nAround, int nAlong) {
+  TriangleMesh m;
+  for (int j = 0; j <= nAlong; ++j)
+    for (int i = 0; i <= nAround; ++i) {
+      double a = 2 * std::numbers::pi * i / nAround;
+      m.positions.emplace_back(float(r * std::cos(a)), float(r * std::sin(a)), h * (float(j) / nAlong - 0.5f));
+    }
+  auto id = [&](int i, int j) { return uint32_t(j * (nAround + 1) + i); };
+  auto uv = [&](int i, int j) { return Vec2f(float(i) / nAround, float(j) / nAlong); };
+  for (int j = 0; j < nAlong; ++j)
+    for (int i = 0; i < nAround; ++i) {
+      m.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.cornerUVs.push_back({uv(i, j), uv(i + 1, j), uv(i + 1, j + 1)});
+      m.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      m.cornerUVs.push_back({uv(i, j), uv(i + 1, j + 1), uv(i, j + 1)});
+    }
+  return m;
+}
+
+// A smooth colourful texture (so that bilinear sampling differences show uv errors).
+std::shared_ptr<Image> testTexture(int w, int h) {
+  auto img = std::make_shared<Image>(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      img->at(x, y) = Color(0.5f + 0.5f * std::sin(0.3f * x), 0.5f + 0.5f * std::cos(0.2f * y), float(x + y) / float(w + h), 1);
+  return img;
+}
+
+}  // namespace
+
+TEST(Contour, SphereEndpointsLieOnTheirSourceTriangles) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
+  ContourStats st;
+  HybridModel model = extractContour(mesh, withFaces(), &st);
+  ASSERT_GT(model.segments.size(), mesh.faces.size() / 4);
+  EXPECT_EQ(st.degenerateTriangles, 0u);
+  EXPECT_EQ(st.cutByFamily[0] + st.cutByFamily[1], mesh.faces.size());
+  EXPECT_GT(st.cutByFamily[0], 0u);
+  EXPECT_GT(st.cutByFamily[1], 0u);
+  expectEndpointsOnTriangles(mesh, model, st, 1e-5);
+  for (const Segment& s : model.segments) {
+    EXPECT_NEAR(s.normal.norm(), 1.0f, 1e-5f);
+    EXPECT_LT(std::abs(s.normal.dot((s.p1 - s.p0).normalized())), 1e-5f + 4e-7f / s.length());
+    EXPECT_GT(s.normal.dot(s.p0), 0.0f);  // outward, like the faces
+    EXPECT_GT(s.length(), 0.0f);
+    EXPECT_FLOAT_EQ(s.radius, float(0.75 * st.spacing));
+  }
+  EXPECT_TRUE(model.points.empty());
+  EXPECT_FALSE(model.attributes.texcoords);
+}
+
+TEST(Contour, SphereNeighbouringSegmentsAtMostDApart) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
+  for (float scale : {0.5f, 1.0f, 2.5f}) {
+    ContourStats st;
+    ContourOptions o = withFaces();
+    o.spacingScale = scale;
+    o.seed = 7;
+    HybridModel model = extractContour(mesh, o, &st);
+    EXPECT_NEAR(st.spacing, scale * st.meanEdgeLength, 1e-9);
+    expectSpacingAtMostD(mesh, model, st);
+    // Larger-sine family choice: max(sin θ) >= 1/√2, so the level is 0 or 1 (spacing d or d/2).
+    EXPECT_LE(st.halvedSpacing, mesh.faces.size());
+  }
+}
+
+TEST(Contour, SphereSurfaceCoveredWithinD) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
+  ContourStats st;
+  HybridModel model = extractContour(mesh, {}, &st);
+  // Random surface points: the nearest segment is within d (strips of radius >= d/2 overlap).
+  uint64_t state = 12345;
+  auto rnd = [&] { state = state * 6364136223846793005ull + 1442695040888963407ull; return double(state >> 11) * 0x1.0p-53; };
+  double worst = 0;
+  for (int i = 0; i < 1500; ++i) {
+    Tri t = triangle(mesh, size_t(rnd() * double(mesh.faces.size())) % mesh.faces.size());
+    double u = rnd(), v = rnd();
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    Vec3d x = t.a + u * (t.b - t.a) + v * (t.c - t.a);
+    double best = 1e300;
+    for (const Segment& s : model.segments) {
+      Vec3d p0 = s.p0.cast<double>(), e = (s.p1 - s.p0).cast<double>();
+      double tau = std::clamp((x - p0).dot(e) / e.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (p0 + tau * e - x).norm());
+    }
+    worst = std::max(worst, best);
+  }
+  EXPECT_LE(worst, st.spacing) << "d = " << st.spacing;
+}
+
+TEST(Contour, PlanesThroughVerticesAndEdgesGiveEachSegmentOnce) {
+  // Grid in [0,1]^2 with planes x = k/8 through every column of vertices and along the grid's
+  // vertical edges: each vertical edge must come out exactly once, nothing else.
+  TriangleMesh mesh = shapes::gridMesh(8, 5);
+  ContourOptions o = withFaces();
+  o.spacing = 0.125f;
+  o.planes = ContourPlanes{{Vec3d(1, 0, 0), Vec3d(0, 1, 0)}, {0.0, 0.0}};
+  ContourStats st;
+  HybridModel model = extractContour(mesh, o, &st);
+  EXPECT_EQ(model.segments.size(), 8u * 5u);
+  std::set<std::tuple<float, float, float, float>> seen;
+  for (const Segment& s : model.segments) {
+    EXPECT_EQ(s.p0.x(), s.p1.x());
+    float k = s.p0.x() * 8;
+    EXPECT_EQ(k, std::round(k));
+    EXPECT_GE(k, 1.0f);
+    EXPECT_NEAR(s.length(), 0.2f, 1e-6f);
+    float y0 = std::min(s.p0.y(), s.p1.y()), y1 = std::max(s.p0.y(), s.p1.y());
+    EXPECT_TRUE(seen.insert({s.p0.x(), y0, y1, 0}).second) << "duplicate segment";
+  }
+  EXPECT_GT(st.vertexTouches, 0u);
+  expectEndpointsOnTriangles(mesh, model, st, 1e-6);
+}
+
+TEST(Contour, SingleFamilyContoursAreClosedOnAClosedMesh) {
+  // With one family and planes through vertices and along edges (x = 0 on the icosphere), every
+  // coarse plane's contour is a set of closed polygons: each endpoint is shared by exactly two
+  // segments. A lost or duplicated segment breaks this.
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
+  for (int variant = 0; variant < 2; ++variant) {
+    ContourOptions o = withFaces();
+    o.spacing = 0.25f;
+    o.familySwitchSine = 0;
+    if (variant == 0) o.planes = ContourPlanes{{Vec3d(1, 0, 0), Vec3d(0, 1, 0)}, {0.0, 0.0}};
+    ContourStats st;
+    HybridModel model = extractContour(mesh, o, &st);
+    EXPECT_EQ(st.cutByFamily[0], mesh.faces.size());
+    const Vec3d n = st.planes.normal[0];
+    std::map<std::tuple<float, float, float>, int> ends;
+    size_t coarse = 0;
+    for (const Segment& s : model.segments) {
+      double v = (n.dot(s.p0.cast<double>()) - st.planes.offset[0]) / st.spacing;
+      if (std::abs(v - std::round(v)) > 1e-5) continue;  // a finer plane: ends at a T-junction
+      ++coarse;
+      for (const Vec3f& p : {s.p0, s.p1}) ++ends[{p.x(), p.y(), p.z()}];
+    }
+    EXPECT_GT(coarse, 50u);
+    size_t open = 0;
+    for (auto& [p, count] : ends) open += count != 2;
+    EXPECT_EQ(open, 0u) << "variant " << variant;
+  }
+}
+
+TEST(Contour, DeterministicForAnyThreadCount) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 4);
+  ContourOptions o;
+  o.pointsBelow = 0.3f * 0.05f;
+  HybridModel a = extractContour(mesh, o);
+  HybridModel b;
+  {
+    ThreadLimit one(1);
+    b = extractContour(mesh, o);
+  }
+  ASSERT_EQ(a.segments.size(), b.segments.size());
+  ASSERT_EQ(a.points.size(), b.points.size());
+  for (size_t i = 0; i < a.segments.size(); ++i) {
+    ASSERT_EQ(a.segments[i].p0, b.segments[i].p0);
+    ASSERT_EQ(a.segments[i].p1, b.segments[i].p1);
+    ASSERT_EQ(a.segments[i].normal, b.segments[i].normal);
+  }
+  for (size_t i = 0; i < a.points.size(); ++i) ASSERT_EQ(a.points[i].position, b.points[i].position);
+  // A different seed gives different planes.
+  o.seed = 2;
+  HybridModel c = extractContour(mesh, o);
+  EXPECT_TRUE(c.segments.size() != a.segments.size() || c.segments[0].p0 != a.segments[0].p0);
+}
+
+TEST(Contour, RandomPlanesArePerpendicularAndNotAxisAligned) {
+  for (uint64_t seed = 0; seed < 50; ++seed) {
+    ContourPlanes p = randomContourPlanes(seed, 0.1);
+    EXPECT_NEAR(p.normal[0].norm(), 1.0, 1e-12);
+    EXPECT_NEAR(p.normal[1].norm(), 1.0, 1e-12);
+    EXPECT_NEAR(p.normal[0].dot(p.normal[1]), 0.0, 1e-12);
+    EXPECT_LT(p.normal[0].cwiseAbs().maxCoeff(), 0.9);
+    EXPECT_LT(p.normal[1].cwiseAbs().maxCoeff(), 0.9);
+    for (double off : p.offset) EXPECT_TRUE(off >= 0 && off < 0.1);
+  }
+}
+
+TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 2);
+  ContourStats segSt, ptSt;
+  HybridModel segs = extractContour(mesh, {}, &segSt);
+  ContourOptions o = withFaces();
+  o.allPoints = true;
+  HybridModel pts = extractContour(mesh, o, &ptSt);
+  EXPECT_TRUE(pts.segments.empty());
+  size_t expected = 0;
+  for (const Segment& s : segs.segments) expected += size_t(std::ceil(s.length() / segSt.spacing)) + 1;
+  EXPECT_EQ(pts.points.size(), expected);
+  EXPECT_EQ(ptSt.convertedSegments, segs.segments.size());
+  // Points of one segment are consecutive in the output: neighbours at most d apart.
+  size_t i = 0;
+  for (const Segment& s : segs.segments) {
+    size_t n = size_t(std::ceil(s.length() / segSt.spacing)) + 1;
+    EXPECT_EQ(pts.points[i].position, s.p0);
+    EXPECT_NEAR((pts.points[i + n - 1].position - s.p1).norm(), 0.0f, 1e-6f);
+    for (size_t j = 1; j < n; ++j)
+      EXPECT_LE((pts.points[i + j].position - pts.points[i + j - 1].position).norm(), segSt.spacing * (1 + 1e-5));
+    for (size_t j = 0; j < n; ++j) {
+      EXPECT_EQ(pts.points[i + j].normal, s.normal);
+      EXPECT_FLOAT_EQ(pts.points[i + j].radius, s.radius);
+    }
+    i += n;
+  }
+}
+
+TEST(Contour, PointsBelowMakesAHybridModel) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
+  ContourStats all;
+  HybridModel segs = extractContour(mesh, {}, &all);
+  ContourOptions o;
+  o.pointsBelow = float(0.5 * all.spacing);
+  ContourStats st;
+  HybridModel hybrid = extractContour(mesh, o, &st);
+  size_t shortOnes = 0, shortPoints = 0;
+  for (const Segment& s : segs.segments)
+    if (s.length() < o.pointsBelow) ++shortOnes, shortPoints += size_t(std::ceil(s.length() / all.spacing)) + 1;
+  ASSERT_GT(shortOnes, 0u);
+  EXPECT_EQ(st.convertedSegments, shortOnes);
+  EXPECT_EQ(hybrid.segments.size(), segs.segments.size() - shortOnes);
+  EXPECT_EQ(hybrid.points.size(), shortPoints);
+  for (const Segment& s : hybrid.segments) EXPECT_GE(s.length(), o.pointsBelow);
+}
+
+TEST(Contour, TexturedGridUvsReproduceTheTexture) {
+  // gridMesh has uv = (x, y), so the uv of a segment endpoint must equal its position, and the
+  // texture sampled at the segment's uv equals the texture at the mesh surface point.
+  TriangleMesh mesh = shapes::gridMesh(6, 6);
+  mesh.texture = testTexture(64, 48);
+  ContourOptions o = withFaces();
+  o.spacing = 0.05f;
+  ContourStats st;
+  HybridModel model = extractContour(mesh, o, &st);
+  ASSERT_GT(model.segments.size(), 100u);
+  EXPECT_TRUE(model.attributes.texcoords);
+  EXPECT_TRUE(model.attributes.colors);
+  EXPECT_EQ(model.texture.get(), mesh.texture.get());
+  for (const Segment& s : model.segments) {
+    EXPECT_NEAR(s.uv0.x(), s.p0.x(), 1e-6f);
+    EXPECT_NEAR(s.uv0.y(), s.p0.y(), 1e-6f);
+    EXPECT_NEAR(s.uv1.x(), s.p1.x(), 1e-6f);
+    EXPECT_NEAR(s.uv1.y(), s.p1.y(), 1e-6f);
+    Vec3f mid = 0.5f * (s.p0 + s.p1);
+    Color expected = mesh.texture->sampleBilinear(mid.x(), mid.y());
+    EXPECT_LT((s.color - expected).cwiseAbs().maxCoeff(), 1e-4f);
+    for (float tau : {0.0f, 0.3f, 1.0f}) {  // the renderer interpolates uv linearly (§5.2.4)
+      Vec2f uv = s.uv0 + tau * (s.uv1 - s.uv0);
+      Vec3f p = s.p0 + tau * (s.p1 - s.p0);
+      EXPECT_LT((mesh.texture->sampleBilinear(uv.x(), uv.y()) - mesh.texture->sampleBilinear(p.x(), p.y())).cwiseAbs().maxCoeff(), 1e-3f);
+    }
+  }
+}
+
+TEST(Contour, TexturedCylinderUvsAreTheBarycentricInterpolation) {
+  TriangleMesh mesh = cylinderMesh(1.0f, 2.0f, 40, 10);
+  mesh.texture = testTexture(80, 40);
+  ContourStats st;
+  HybridModel model = extractContour(mesh, withFaces(), &st);
+  ASSERT_GT(model.segments.size(), 200u);
+  expectEndpointsOnTriangles(mesh, model, st, 1e-5);
+  for (size_t i = 0; i < model.segments.size(); ++i) {
+    const Segment& s = model.segments[i];
+    size_t f = st.segmentFaces[i];
+    Tri t = triangle(mesh, f);
+    const auto& c = mesh.cornerUVs[f];
+    for (int e = 0; e < 2; ++e) {
+      Vec3d w = barycentric(t.a, t.b, t.c, (e ? s.p1 : s.p0).cast<double>());
+      Vec2d uv = w[0] * c[0].cast<double>() + w[1] * c[1].cast<double>() + w[2] * c[2].cast<double>();
+      Vec2f got = e ? s.uv1 : s.uv0;
+      EXPECT_NEAR(got.x(), uv.x(), 2e-5);
+      EXPECT_NEAR(got.y(), uv.y(), 2e-5);
+    }
+    // Independent check against the surface parameterisation: u = angle / 2π, v = z / h + 1/2.
+    Vec3f mid = 0.5f * (s.p0 + s.p1);
+    Vec2f uvMid = 0.5f * (s.uv0 + s.uv1);
+    EXPECT_NEAR(uvMid.y(), mid.z() / 2.0f + 0.5f, 1e-5f);
+    double angle = std::atan2(double(mid.y()), double(mid.x()));
+    if (angle < 0) angle += 2 * std::numbers::pi;
+    double du = std::abs(uvMid.x() - angle / (2 * std::numbers::pi));
+    EXPECT_LT(std::min(du, 1 - du), 0.5 / 40) << "within one column";
+    Color expected = mesh.texture->sampleBilinear(uvMid.x(), uvMid.y());
+    EXPECT_LT((s.color - expected).cwiseAbs().maxCoeff(), 1e-4f);
+  }
+}
+
+TEST(Contour, VertexColoursAndNormalsAreInterpolated) {
+  TriangleMesh mesh = shapes::gridMesh(4, 4);
+  for (const Vec3f& p : mesh.positions) mesh.colors.emplace_back(p.x(), p.y(), 0.25f, 1.0f);
+  mesh.normals.clear();
+  for (const Vec3f& p : mesh.positions) mesh.normals.push_back(Vec3f(p.x() - 0.5f, 0, 2).normalized() * 3.0f);
+  ContourOptions o;
+  o.spacing = 0.1f;
+  o.vertexNormals = true;
+  HybridModel model = extractContour(mesh, o);
+  ASSERT_FALSE(model.segments.empty());
+  EXPECT_TRUE(model.attributes.colors);
+  for (const Segment& s : model.segments) {
+    Vec3f mid = 0.5f * (s.p0 + s.p1);
+    EXPECT_NEAR(s.color.x(), mid.x(), 1e-5f);
+    EXPECT_NEAR(s.color.y(), mid.y(), 1e-5f);
+    EXPECT_NEAR(s.color.z(), 0.25f, 1e-6f);
+    EXPECT_NEAR(s.normal.norm(), 1.0f, 1e-5f);
+    EXPECT_LT(std::abs(s.normal.dot((s.p1 - s.p0).normalized())), 1e-4f);
+    EXPECT_GT(s.normal.z(), 0.9f);
+  }
+  // Without the option, the face normal (+z) is used.
+  o.vertexNormals = false;
+  for (const Segment& s : extractContour(mesh, o).segments) EXPECT_EQ(s.normal, Vec3f(0, 0, 1));
+}
+
+TEST(Contour, DegenerateAndNonManifoldInputIsCountedNotFatal) {
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0.5f},   // 0..3
+                    {0, 0, 0}, {1, 0, 0},                            // 4, 5: duplicates of 0, 1
+                    {2, 0, 0},                                       // 6: collinear with 0, 1
+                    {0.5f, -1, 0.3f},                                // 7: third face on edge 0-1
+                    {NAN, 0, 0},                                     // 8
+                    {0.5f, 1e-7f, 0}};                               // 9: sliver apex
+  mesh.faces = {{0, 1, 2}, {1, 3, 2}, {4, 5, 2} /* duplicate face via duplicate vertices */,
+                {0, 1, 6} /* collinear */, {0, 0, 2} /* repeated index */, {0, 1, 7} /* non-manifold */,
+                {0, 8, 2} /* NaN */, {0, 1, 9} /* sliver */};
+  ContourOptions o = withFaces();
+  o.spacing = 0.05f;
+  ContourStats st;
+  HybridModel model = extractContour(mesh, o, &st);
+  EXPECT_EQ(st.degenerateTriangles, 3u);
+  EXPECT_GT(model.segments.size(), 10u);
+  for (const Segment& s : model.segments) {
+    EXPECT_TRUE(s.p0.allFinite() && s.p1.allFinite() && s.normal.allFinite() && s.color.allFinite());
+    EXPECT_GT(s.length(), 0.0f);
+  }
+  expectEndpointsOnTriangles(mesh, model, st, 1e-4);
+  // Faces 0 and 2 are the same triangle (duplicate vertices): identical cuts.
+  std::vector<const Segment*> f0, f2;
+  for (size_t i = 0; i < model.segments.size(); ++i) {
+    if (st.segmentFaces[i] == 0) f0.push_back(&model.segments[i]);
+    if (st.segmentFaces[i] == 2) f2.push_back(&model.segments[i]);
+  }
+  ASSERT_EQ(f0.size(), f2.size());
+  for (size_t i = 0; i < f0.size(); ++i) EXPECT_EQ(f0[i]->p0, f2[i]->p0);
+  // An all-degenerate mesh gives an empty model, and an empty mesh too.
+  TriangleMesh flat;
+  flat.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  flat.faces = {{0, 1, 2}};
+  EXPECT_TRUE(extractContour(flat).empty());
+  EXPECT_TRUE(extractContour(TriangleMesh{}).empty());
+}
+
+TEST(Contour, BadParametersAndIndicesThrow) {
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 1);
+  auto kindOf = [&](const ContourOptions& o, const TriangleMesh& m) {
+    try {
+      extractContour(m, o);
+    } catch (const Error& e) {
+      return int(e.kind());
+    }
+    return -1;
+  };
+  const int badParameter = int(Error::Kind::BadParameter), badInput = int(Error::Kind::BadInput);
+  ContourOptions o;
+  o.spacing = -1;
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  o = {};
+  o.spacing = NAN;
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  o = {};
+  o.allPoints = true;
+  o.pointsBelow = 0.1f;
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  o = {};
+  o.radiusScale = 0;
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  o = {};
+  o.spacing = 1e-6f;  // would be billions of segments
+  o.maxPrimitives = 1000000;
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  o = {};
+  o.planes = ContourPlanes{{Vec3d(1, 0, 0), Vec3d(1, 0, 0)}, {0, 0}};
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  TriangleMesh broken = mesh;
+  broken.faces.push_back({0, 1, uint32_t(broken.positions.size())});
+  EXPECT_EQ(kindOf({}, broken), badInput);
+  EXPECT_EQ(kindOf({}, mesh), -1);
+}
