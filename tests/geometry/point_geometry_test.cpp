@@ -135,6 +135,29 @@ TEST(PointGeometry, SphereCurvatureIsInverseRadius) {
   }
 }
 
+TEST(PointGeometry, QuadricCurvatureAccurateOnIrregularSamples) {
+  GeometryOptions o = recompute();
+  o.curvatureFit = CurvatureFit::Quadric;
+  const float r = 2;
+  auto sphere = shapes::sphere(r, 4000, {.irregular = true, .seed = 4});
+  auto g = computePointGeometry(sphere, o);
+  std::vector<float> kmin = g.kMin, kmax = g.kMax;
+  std::nth_element(kmin.begin(), kmin.begin() + kmin.size() / 2, kmin.end());
+  std::nth_element(kmax.begin(), kmax.begin() + kmax.size() / 2, kmax.end());
+  EXPECT_NEAR(kmin[kmin.size() / 2], 1 / r, 0.05 / r);
+  EXPECT_NEAR(kmax[kmax.size() / 2], 1 / r, 0.05 / r);
+  expectAllFinite(g);
+  auto cyl = shapes::cylinder(1, 4, 60, 40, {.irregular = true, .seed = 11});
+  auto gc = computePointGeometry(cyl, o);
+  size_t aligned = 0, interior = 0;
+  for (size_t i = 0; i < gc.size(); ++i) {
+    if (std::abs(cyl.points[i].position.z()) > 1.6f) continue;
+    ++interior;
+    if (std::abs(gc.minCurvatureDir[i].z()) >= std::cos(10.0 / kDeg)) ++aligned;
+  }
+  EXPECT_GE(double(aligned), 0.9 * double(interior));
+}
+
 TEST(PointGeometry, GridPointDelaunayNeighboursAreGridNeighbours) {
   const int nx = 9;
   auto cloud = shapes::plane(1, 1, nx, nx);
@@ -224,8 +247,12 @@ TEST(PointGeometry, TinyCollinearAndCoincidentClouds) {
     auto g = computePointGeometry(cloud, recompute());
     ASSERT_EQ(g.size(), n);
     expectAllFinite(g);
-    if (n < 13) EXPECT_EQ(g.neighbours[(n - 1) * 12 + 11], PointGeometry::kNoNeighbour);
-    if (n == 1) EXPECT_EQ(g.countFlag(kPointIsolated), 1u);
+    if (n < 13) {
+      EXPECT_EQ(g.neighbours[(n - 1) * 12 + 11], PointGeometry::kNoNeighbour);
+    }
+    if (n == 1) {
+      EXPECT_EQ(g.countFlag(kPointIsolated), 1u);
+    }
   }
   HybridModel line;
   for (int i = 0; i < 100; ++i) line.points.push_back({.position = Vec3f(0.1f * float(i), 0.2f * float(i), -0.05f * float(i))});

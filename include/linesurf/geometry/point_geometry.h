@@ -16,12 +16,26 @@
 
 namespace linesurf {
 
+/// How stage 4 turns the directional curvatures kappa_j of the local Delaunay star into
+/// principal curvatures.
+enum class CurvatureFit {
+  /// Taubin 1995 / thesis §6.1.2: eigenvalues m1 >= m2 of M = sum w_j kappa_j T_j T_j^T give
+  /// kappa_max = 3 m1 - m2, kappa_min = 3 m2 - m1 (exact only for evenly spread directions).
+  Taubin,
+  /// Least-squares fit of the height function h = (a u^2 + 2b uv + c v^2)/2 + e u + f v over the k
+  /// nearest neighbours in the tangent frame (an osculating quadric); the linear terms absorb the
+  /// error of the estimated normal, which dominates Taubin's kappa_j on irregular samples. Falls
+  /// back to Taubin when the fit is ill-conditioned.
+  Quadric,
+};
+
 struct GeometryOptions {
   int k = 12;                      ///< neighbours per point (stage 1), >= 3
   bool recomputeNormals = false;   ///< recompute even when the cloud has normals
   bool orientNormals = true;       ///< MST orientation of computed normals (stage 2)
   bool delaunayNeighbours = true;  ///< stage 3
   bool curvature = true;           ///< stage 4 (needs stage 3)
+  CurvatureFit curvatureFit = CurvatureFit::Taubin;  ///< stage 4 formula
   /// Stage 3 with CGAL::Delaunay_triangulation_2 per point instead of the default star by
   /// inversion (same neighbours except on co-circular sets; see docs/decisions.md). For comparison.
   bool cgalDelaunay = false;
