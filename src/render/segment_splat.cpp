@@ -1,0 +1,772 @@
+// Object-space EWA splatting of line segments, thesis §5 (see segment_splat.h and
+// docs/segment-splatting.md). Three evaluations of the same filter: the thesis's weight-texture
+// quadrilaterals (§5.2.3, Approx), a per-pixel closed form in erf over sub-segments (after §9.3,
+// ScreenSpace) and per-pixel quadrature (Reference).
+#include "linesurf/render/segment_splat.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include <Eigen/Eigenvalues>
+
+namespace linesurf {
+
+namespace {
+
+using Mat2d = Eigen::Matrix2d;
+using Vec2dd = Eigen::Vector2d;
+constexpr double kPi = 3.14159265358979323846;
+
+// Same limits as point splats (point_splat.cpp) so that points and segments of one model are cut
+// and culled alike: the resampling filter is never stretched beyond 24 sigma_r, and strips seen
+// closer to edge-on than |cos| = 2e-3 everywhere are culled.
+constexpr double kMaxStretch = 24.0;
+constexpr double kMinFacing = 2e-3;
+// ScreenSpace subdivision: a new sub-segment wherever M changes by more than this (relative
+// Frobenius norm) from one end of the sub-segment to the other.
+constexpr double kPieceTolerance = 0.04;
+// Reference quadrature: node spacing sigma_r / kNodesPerSigma, at most kMaxNodes nodes.
+constexpr double kNodesPerSigma = 32.0;
+constexpr int kMaxNodes = 1 << 16;
+
+// --- the resampling covariance along the segment (§5.1.2) -------------------------------------
+
+// Symmetric 2x2 with eigenvalues clamped to [lo, hi].
+Mat2d clampEigen(const Mat2d& M, double lo, double hi) {
+  const double a = M(0, 0), b = M(0, 1), c = M(1, 1);
+  const double mean = 0.5 * (a + c), diff = 0.5 * (a - c);
+  const double rad = std::sqrt(diff * diff + b * b);
+  double l0 = mean + rad, l1 = mean - rad;
+  if (l0 <= hi && l1 >= lo) return M;
+  Vec2dd e0 = rad > 0 ? (std::abs(b) > 0 ? Vec2dd(l0 - c, b).normalized() : (a >= c ? Vec2dd(1, 0) : Vec2dd(0, 1)))
+                      : Vec2dd(1, 0);
+  if (!e0.allFinite()) e0 = Vec2dd(1, 0);
+  const Vec2dd e1(-e0.y(), e0.x());
+  l0 = std::clamp(l0, lo, hi);
+  l1 = std::clamp(l1, lo, hi);
+  return l0 * e0 * e0.transpose() + l1 * e1 * e1.transpose();
+}
+
+// Object-space resampling covariance M = sigma_r^2 I + V_h J^-1 J^-T of the point p (camera
+// space) of a strip with unit axes e (a, along) and s (b, across), in (a, b) coordinates. J is
+// the Jacobian of the perspective projection restricted to the strip's plane at p (§5.1.2, RPZ02).
+// Behind the eye the prefilter is dropped, as for point splats.
+Mat2d resamplingCovariance(const Vec3d& p, const Vec3d& e, const Vec3d& s, double sigmaR, double Vh, double f) {
+  Mat2d M = Mat2d::Identity() * (sigmaR * sigmaR);
+  const double d = -p.z();
+  const double hi = (kMaxStretch * sigmaR) * (kMaxStretch * sigmaR);
+  if (d > 0 && Vh > 0) {
+    const Vec3d gx(f / d, 0, f * p.x() / (d * d));
+    const Vec3d gy(0, -f / d, -f * p.y() / (d * d));
+    Mat2d J;
+    J << gx.dot(e), gx.dot(s), gy.dot(e), gy.dot(s);
+    const Mat2d JtJ = J.transpose() * J;
+    const double det = JtJ.determinant();
+    if (det > 0 && std::isfinite(det)) {
+      Mat2d adj;
+      adj << JtJ(1, 1), -JtJ(0, 1), -JtJ(1, 0), JtJ(0, 0);
+      M += (Vh / det) * adj;
+    } else {
+      return Mat2d::Identity() * hi;  // edge-on here: as stretched as allowed
+    }
+  }
+  return clampEigen(M, sigmaR * sigmaR, hi);
+}
+
+Mat2d inverse2(const Mat2d& M) {
+  const double det = M.determinant();
+  Mat2d inv;
+  inv << M(1, 1), -M(0, 1), -M(1, 0), M(0, 0);
+  return inv / det;
+}
+
+// --- weight textures (§5.2.3.2) --------------------------------------------------------------
+
+// Closed forms, in this project's weight units (no 1/(2 pi)): the cut-off unit Gaussian
+// integrated over t in [0, inf) at (x - t, y), and over all t.
+double t1Exact(double R, double x, double y) {
+  if (std::abs(y) >= R) return 0;
+  const double w = std::sqrt(R * R - y * y);
+  const double xc = std::clamp(x, -w, w);
+  return std::sqrt(kPi / 2) * std::exp(-0.5 * y * y) * (std::erf(w / std::sqrt(2.0)) + std::erf(xc / std::sqrt(2.0)));
+}
+double t2Exact(double R, double y) {
+  if (std::abs(y) >= R) return 0;
+  const double w = std::sqrt(R * R - y * y);
+  return std::sqrt(2 * kPi) * std::exp(-0.5 * y * y) * std::erf(w / std::sqrt(2.0));
+}
+
+}  // namespace
+
+/// §5.2.3.2 tables for one cutoff radius: T1 on a (N+1) x (N/2+1) grid over [-R, R] x [0, R],
+/// T2 on N/2+1 samples over [0, R]; bilinear lookups, symmetric in y.
+struct WeightTextures {
+  float R = 0;
+  static constexpr int nx = kWeightTextureSize, ny = kWeightTextureSize / 2;
+  std::vector<float> t1, t2;
+  explicit WeightTextures(float cutoff) : R(cutoff), t1(size_t(nx + 1) * (ny + 1)), t2(ny + 1) {
+    for (int j = 0; j <= ny; ++j) {
+      const double y = double(R) * j / ny;
+      t2[j] = float(t2Exact(R, y));
+      for (int i = 0; i <= nx; ++i) t1[size_t(j) * (nx + 1) + i] = float(t1Exact(R, -double(R) + 2.0 * R * i / nx, y));
+    }
+  }
+  float lookupT1(float x, float y) const {
+    y = std::abs(y);
+    if (y >= R || x <= -R) return 0;
+    if (x >= R) return lookupT2(y);
+    const float fx = (x + R) / (2 * R) * nx, fy = y / R * ny;
+    const int i = std::min(int(fx), nx - 1), j = std::min(int(fy), ny - 1);
+    const float u = fx - i, v = fy - j;
+    const float* r0 = t1.data() + size_t(j) * (nx + 1) + i;
+    const float* r1 = r0 + (nx + 1);
+    return (1 - v) * ((1 - u) * r0[0] + u * r0[1]) + v * ((1 - u) * r1[0] + u * r1[1]);
+  }
+  float lookupT2(float y) const {
+    y = std::abs(y);
+    if (y >= R) return 0;
+    const float fy = y / R * ny;
+    const int j = std::min(int(fy), ny - 1);
+    const float v = fy - j;
+    return (1 - v) * t2[j] + v * t2[j + 1];
+  }
+};
+
+namespace {
+
+// One table per cutoff radius for the life of the program (a handful at most).
+const WeightTextures* weightTextures(float R) {
+  thread_local const WeightTextures* last = nullptr;
+  if (last && last->R == R) return last;
+  static std::mutex mutex;
+  static std::map<float, std::unique_ptr<WeightTextures>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[R];
+  if (!slot) slot = std::make_unique<WeightTextures>(R);
+  last = slot.get();
+  return last;
+}
+
+// --- the Approx construction (§5.2.3.1) ------------------------------------------------------
+
+double cross2(const Vec2dd& a, const Vec2dd& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Intersection of the lines n1.u = k1 and n2.u = k2; false when (nearly) parallel.
+bool intersectLines(const Vec2dd& n1, double k1, const Vec2dd& n2, double k2, Vec2dd& out) {
+  const double det = cross2(n1, n2);
+  if (!(std::abs(det) > 1e-9 * n1.norm() * n2.norm())) return false;
+  out = Vec2dd((k1 * n2.y() - k2 * n1.y()) / det, (n1.x() * k2 - n2.x() * k1) / det);
+  return out.allFinite();
+}
+
+struct ApproxInput {
+  Mat2d A0, A1;  // cutoff ellipses R^2 M_k, (a, b) coordinates, centres (0,0) and (L,0)
+  Mat2d M0, M1;
+  double L = 0, R = 0, h = 0;
+};
+
+// Root of f on [lo, hi] with f(lo), f(hi) of opposite signs (Illinois false position).
+template <class F>
+double bracketRoot(F&& f, double lo, double hi, double flo, double fhi) {
+  int side = 0;
+  double x = lo;
+  for (int it = 0; it < 80; ++it) {
+    x = (lo * fhi - hi * flo) / (fhi - flo);
+    if (!(x > std::min(lo, hi) && x < std::max(lo, hi))) x = 0.5 * (lo + hi);
+    const double fx = f(x);
+    if (fx == 0 || std::abs(hi - lo) < 1e-13) break;
+    if ((fx > 0) == (fhi > 0)) {
+      hi = x;
+      fhi = fx;
+      if (side == -1) flo *= 0.5;
+      side = -1;
+    } else {
+      lo = x;
+      flo = fx;
+      if (side == 1) fhi *= 0.5;
+      side = 1;
+    }
+  }
+  return x;
+}
+
+// Builds the 10 (long) or 8 (short) quadrilaterals; false when the construction is unsound
+// (the caller then falls back to the ScreenSpace evaluation and counts it).
+bool buildApprox(const ApproxInput& in, std::vector<SegmentQuad>& quads, bool& longCase) {
+  const double L = in.L, R = in.R;
+  const Vec2dd c0(0, 0), c1(L, 0);
+  auto support = [&](const Mat2d& A, const Vec2dd& n) { return std::sqrt(std::max(0.0, n.dot(A * n))); };
+  // Outer common tangents (points 1-4): lines n.u = k supporting both ellipses, both on the
+  // side n.u <= k: f(phi) = h1(n) - h0(n) = L cos(phi) + s1(n) - s0(n) = 0 (n = (cos, sin)).
+  auto f = [&](double phi) {
+    const Vec2dd n(std::cos(phi), std::sin(phi));
+    return L * n.x() + support(in.A1, n) - support(in.A0, n);
+  };
+  const double f0 = f(0), fpi = f(kPi);
+  // One ellipse reaches past the other at both ends of the axis (nested along the axis).
+  if (!(f0 > 1e-9 * L && fpi < -1e-9 * L)) return false;
+  const double phiT = bracketRoot(f, 0.0, kPi, f0, fpi);
+  const double phiB = bracketRoot(f, kPi, 2 * kPi, fpi, f0);
+  const Vec2dd nT(std::cos(phiT), std::sin(phiT)), nB(std::cos(phiB), std::sin(phiB));
+  const double kT = support(in.A0, nT), kB = support(in.A0, nB);
+  auto touch = [&](const Mat2d& A, const Vec2dd& c, const Vec2dd& n) -> Vec2dd { return c + A * n / support(A, n); };
+  const Vec2dd p1 = touch(in.A0, c0, nT), p2 = touch(in.A1, c1, nT), p3 = touch(in.A1, c1, nB), p4 = touch(in.A0, c0, nB);
+  if (!(p1.y() > 0 && p2.y() > 0 && p3.y() < 0 && p4.y() < 0)) return false;
+  // Points 9, 10: the crossing lines 1-4 and 2-3 meet the axis b = 0.
+  const double a9 = p1.x() + (p4.x() - p1.x()) * p1.y() / (p1.y() - p4.y());
+  const double a10 = p2.x() + (p3.x() - p2.x()) * p2.y() / (p2.y() - p3.y());
+  // Points 5-8: the axis meets the ellipses at c_k +- rho_k, rho_k = 1 / sqrt((A_k^-1)_aa).
+  const Mat2d A0i = inverse2(in.A0), A1i = inverse2(in.A1);
+  const double rho0 = 1 / std::sqrt(A0i(0, 0)), rho1 = 1 / std::sqrt(A1i(0, 0));
+  const double a5 = -rho0, a6 = rho0, a7 = L - rho1, a8 = L + rho1;
+  if (!(a5 < a9 && a9 < a6 && a7 < a10 && a10 < a8 && a9 < a10)) return false;
+  // Tangent lines at the axis points (11-18): normal A^-1 (P - c) = +-(A^-1)_{.,0}.
+  const Vec2dd t0(A0i(0, 0), A0i(1, 0)), t1(A1i(0, 0), A1i(1, 0));
+  Vec2dd q11, q12, q13, q14, q15, q16, q17, q18;
+  auto meet = [&](const Vec2dd& tn, double a, Vec2dd& top, Vec2dd& bottom) {
+    const double k = tn.x() * a;  // the tangent line passes through (a, 0)
+    return intersectLines(tn, k, nT, kT, top) && intersectLines(tn, k, nB, kB, bottom);
+  };
+  if (!meet(t0, a5, q11, q18) || !meet(t0, a6, q12, q17) || !meet(t1, a7, q13, q16) || !meet(t1, a8, q14, q15))
+    return false;
+  // Order along the top line (direction (sin, -cos) of nT) and the bottom one.
+  const Vec2dd dT(nT.y(), -nT.x()), dB(-nB.y(), nB.x());
+  auto ordered = [](std::initializer_list<double> v) {
+    double prev = -std::numeric_limits<double>::infinity();
+    for (double x : v) {
+      if (!(x >= prev)) return false;
+      prev = x;
+    }
+    return true;
+  };
+  if (!ordered({dT.dot(q11), dT.dot(p1), dT.dot(q12)}) || !ordered({dT.dot(q13), dT.dot(p2), dT.dot(q14)}) ||
+      !ordered({dB.dot(q18), dB.dot(p4), dB.dot(q17)}) || !ordered({dB.dot(q16), dB.dot(p3), dB.dot(q15)}))
+    return false;
+  longCase = a6 < a7 && dT.dot(q12) <= dT.dot(q13) && dB.dot(q17) <= dB.dot(q16);
+  double am = 0;  // short case: where the separating line meets the axis
+  if (!longCase) {
+    // The line through the ellipses' intersection points: walk E0's boundary from point 6
+    // (inside E1 in the short case) up to 5 and down to 5, finding where it leaves E1.
+    const Mat2d M0h = [&] {  // A0^(1/2): the boundary is c0 + A0^(1/2) (cos, sin)
+      Eigen::SelfAdjointEigenSolver<Mat2d> es(in.A0);
+      return Mat2d(es.eigenvectors() * es.eigenvalues().cwiseMax(0).cwiseSqrt().asDiagonal() *
+                   es.eigenvectors().transpose());
+    }();
+    const Mat2d M0hi = inverse2(M0h);
+    auto g = [&](double th) {
+      const Vec2dd u = M0h * Vec2dd(std::cos(th), std::sin(th)) - c1;
+      return u.dot(A1i * u) - 1;
+    };
+    const Vec2dd y6 = M0hi * Vec2dd(a6, 0);
+    const double th6 = std::atan2(y6.y(), y6.x());
+    const double g6 = g(th6), g5 = g(th6 + kPi);
+    if (!(g6 < 0 && g5 > 0)) return false;
+    const double thT = bracketRoot(g, th6, th6 + kPi, g6, g5);
+    const double thB = bracketRoot(g, th6, th6 - kPi, g6, g5);
+    const Vec2dd xT = M0h * Vec2dd(std::cos(thT), std::sin(thT)), xB = M0h * Vec2dd(std::cos(thB), std::sin(thB));
+    if (!(xT.y() > 0 && xB.y() < 0)) return false;
+    const Vec2dd dir = xT - xB;
+    const Vec2dd sn(dir.y(), -dir.x());  // separating line sn.u = sn.xT
+    const double ks = sn.dot(xT);
+    Vec2dd m;
+    if (!intersectLines(sn, ks, Vec2dd(0, 1), 0, m) || !intersectLines(sn, ks, nT, kT, q12) ||
+        !intersectLines(sn, ks, nB, kB, q17))
+      return false;
+    am = m.x();
+    q13 = q12;
+    q16 = q17;
+    if (!(a9 < am && am < a10)) return false;
+    if (!ordered({dT.dot(q11), dT.dot(p1), dT.dot(q12), dT.dot(p2), dT.dot(q14)}) ||
+        !ordered({dB.dot(q18), dB.dot(p4), dB.dot(q17), dB.dot(p3), dB.dot(q15)}))
+      return false;
+  }
+  const double a6m = longCase ? a6 : am, a7m = longCase ? a7 : am;
+  // Weight scaling (§5.2.3.3, Figure 19): 1 / (h r0 r1 lambda) at points 9 and 10, lambda the
+  // texture units per object length along the axis (the thesis omits it: docs/decisions.md),
+  // linear along the axis and constant across it.
+  const double lam0 = R / (a6 - a9), lam1 = R / (a10 - a7);
+  const double s9 = 1 / (in.h * std::sqrt(in.M0.determinant()) * lam0);
+  const double s10 = 1 / (in.h * std::sqrt(in.M1.determinant()) * lam1);
+  const double sMin = 0.25 * std::min(s9, s10);
+  auto scaleAt = [&](double a) { return float(std::max(sMin, s9 + (s10 - s9) * (a - a9) / (a10 - a9))); };
+  // Texture coordinates: x inward from the endpoint (9 -> 0, 6 -> R; 10 -> 0, 7 -> R), y across.
+  const float Rf = float(R);
+  const float xs0 = float(R * (a6m - a9) / (a6 - a9)), xs1 = float(R * (a10 - a7m) / (a10 - a7));
+  const float tail0 = float(R * (a10 - a9) / (a6 - a9)), tail1 = float(R * (a10 - a9) / (a10 - a7));
+  const Vec2dd p5(a5, 0), p6(a6m, 0), p7(a7m, 0), p8(a8, 0), p9(a9, 0), p10(a10, 0);
+  const float s5 = scaleAt(a5), s6 = scaleAt(a6m), s7 = scaleAt(a7m), s8 = scaleAt(a8), sc9 = scaleAt(a9),
+              sc10 = scaleAt(a10);
+  quads.clear();
+  auto add = [&](std::array<Vec2dd, 4> c, std::array<Vec2f, 4> t, std::array<float, 4> s, bool middle, float tail) {
+    SegmentQuad q;
+    for (int i = 0; i < 4; ++i) {
+      q.corner[i] = c[i].cast<float>();
+      q.tex[i] = t[i];
+      q.scale[i] = s[i];
+    }
+    q.middle = middle;
+    q.tail = tail;
+    quads.push_back(q);
+  };
+  // endpoint 0 (quads 11-1-9-5, 1-12-6-9, 5-9-4-18, 9-6-17-4)
+  add({p5, p9, p1, q11}, {Vec2f(-Rf, 0), Vec2f(0, 0), Vec2f(0, Rf), Vec2f(-Rf, Rf)}, {s5, sc9, sc9, s5}, false, tail0);
+  add({p9, p6, q12, p1}, {Vec2f(0, 0), Vec2f(xs0, 0), Vec2f(xs0, Rf), Vec2f(0, Rf)}, {sc9, s6, s6, sc9}, false, tail0);
+  add({q18, p4, p9, p5}, {Vec2f(-Rf, -Rf), Vec2f(0, -Rf), Vec2f(0, 0), Vec2f(-Rf, 0)}, {s5, sc9, sc9, s5}, false, tail0);
+  add({p4, q17, p6, p9}, {Vec2f(0, -Rf), Vec2f(xs0, -Rf), Vec2f(xs0, 0), Vec2f(0, 0)}, {sc9, s6, s6, sc9}, false, tail0);
+  // endpoint 1 (mirrored: x grows towards endpoint 0)
+  add({p7, p10, p2, q13}, {Vec2f(xs1, 0), Vec2f(0, 0), Vec2f(0, Rf), Vec2f(xs1, Rf)}, {s7, sc10, sc10, s7}, false, tail1);
+  add({p10, p8, q14, p2}, {Vec2f(0, 0), Vec2f(-Rf, 0), Vec2f(-Rf, Rf), Vec2f(0, Rf)}, {sc10, s8, s8, sc10}, false, tail1);
+  add({q16, p3, p10, p7}, {Vec2f(xs1, -Rf), Vec2f(0, -Rf), Vec2f(0, 0), Vec2f(xs1, 0)}, {s7, sc10, sc10, s7}, false, tail1);
+  add({p3, q15, p8, p10}, {Vec2f(0, -Rf), Vec2f(-Rf, -Rf), Vec2f(-Rf, 0), Vec2f(0, 0)}, {sc10, s8, s8, sc10}, false, tail1);
+  if (longCase) {  // middle portion 12-13-16-17, split by the axis
+    add({p6, p7, q13, q12}, {Vec2f(0, 0), Vec2f(0, 0), Vec2f(0, Rf), Vec2f(0, Rf)}, {s6, s7, s7, s6}, true, 1e30f);
+    add({q17, q16, p7, p6}, {Vec2f(0, -Rf), Vec2f(0, -Rf), Vec2f(0, 0), Vec2f(0, 0)}, {s6, s7, s7, s6}, true, 1e30f);
+  }
+  // Sanity: finite, inside a generous box, each quad convex and consistently oriented (or flat).
+  const double box = L + 4 * (rho0 + rho1) + 4 * (kT + kB);
+  for (const SegmentQuad& q : quads) {
+    double signs = 0;
+    for (int i = 0; i < 4; ++i) {
+      const Vec2f& c = q.corner[i];
+      if (!c.allFinite() || std::abs(c.x()) > box + L || std::abs(c.y()) > box) return false;
+      const Vec2f e1 = q.corner[(i + 1) % 4] - c, e2 = q.corner[(i + 2) % 4] - q.corner[(i + 1) % 4];
+      const double cr = double(e1.x()) * e2.y() - double(e1.y()) * e2.x();
+      if (cr * signs < -1e-9 * box * box) return false;
+      if (std::abs(cr) > 1e-12 * box * box) signs = cr;
+    }
+  }
+  return true;
+}
+
+// Inverse of the bilinear map of a quad (corners 00, 10, 11, 01): (alpha, beta) in [0, 1]^2
+// with P = bilinear(alpha, beta); false when p is outside.
+bool inverseBilinear(const SegmentQuad& q, const Vec2f& p, float& alpha, float& beta) {
+  const Vec2f& a = q.corner[0];
+  const Vec2f e = q.corner[1] - a, f = q.corner[3] - a, g = a - q.corner[1] + q.corner[2] - q.corner[3], h = p - a;
+  auto cr = [](const Vec2f& u, const Vec2f& v) { return u.x() * v.y() - u.y() * v.x(); };
+  const float k2 = cr(g, f), k1 = cr(e, f) + cr(h, g), k0 = cr(h, e);
+  const float tol = 1e-4f;
+  auto tryV = [&](float v) {
+    if (!(v >= -tol && v <= 1 + tol)) return false;
+    const Vec2f den = e + g * v;
+    const float dd = den.squaredNorm();
+    if (!(dd > 0)) return false;
+    const float u = (h - f * v).dot(den) / dd;
+    if (!(u >= -tol && u <= 1 + tol)) return false;
+    alpha = std::clamp(u, 0.0f, 1.0f);
+    beta = std::clamp(v, 0.0f, 1.0f);
+    return true;
+  };
+  const float scale = std::abs(k1) + std::abs(k0) + 1e-30f;
+  if (std::abs(k2) < 1e-6f * scale) {  // parallelogram-like: linear in v
+    if (k1 == 0) return false;
+    return tryV(-k0 / k1);
+  }
+  float w = k1 * k1 - 4 * k0 * k2;
+  if (w < 0) return false;
+  w = std::sqrt(w);
+  const float ik2 = 0.5f / k2;
+  return tryV((-k1 - w) * ik2) || tryV((-k1 + w) * ik2);
+}
+
+// Clips a convex camera-space polygon against near/far and returns the screen box of the rest.
+bool clippedScreenBox(const Camera& cam, const Vec3f* poly, int n, float& x0, float& y0, float& x1, float& y1,
+                      bool& clipped) {
+  Vec3f a[16], b[16];
+  int na = n;
+  for (int i = 0; i < n; ++i) a[i] = poly[i];
+  clipped = false;
+  for (int plane = 0; plane < 2; ++plane) {
+    auto dist = [&](const Vec3f& p) { return plane == 0 ? -p.z() - cam.nearDepth() : cam.farDepth() + p.z(); };
+    int nb = 0;
+    for (int i = 0; i < na; ++i) {
+      const Vec3f& p = a[i];
+      const Vec3f& q = a[(i + 1) % na];
+      const float dp = dist(p), dq = dist(q);
+      if (dp >= 0) b[nb++] = p;
+      if ((dp >= 0) != (dq >= 0)) {
+        b[nb++] = p + (dp / (dp - dq)) * (q - p);
+        clipped = true;
+      }
+    }
+    if (nb == 0) return false;
+    na = nb;
+    for (int i = 0; i < na; ++i) a[i] = b[i];
+  }
+  x0 = y0 = INFINITY;
+  x1 = y1 = -INFINITY;
+  for (int i = 0; i < na; ++i) {
+    const Vec3f s = cam.project(a[i]);
+    x0 = std::min(x0, s.x());
+    x1 = std::max(x1, s.x());
+    y0 = std::min(y0, s.y());
+    y1 = std::max(y1, s.y());
+  }
+  return true;
+}
+
+}  // namespace
+
+float weightTextureT1(float cutoffRadius, float x, float y) { return weightTextures(cutoffRadius)->lookupT1(x, y); }
+float weightTextureT2(float cutoffRadius, float y) { return weightTextures(cutoffRadius)->lookupT2(y); }
+
+PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameContext& frame, PreparedSegment& out) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  out.index = index;
+  out.bounds = {};
+  out.fallback = false;
+  out.pieces.clear();
+  out.nodes.clear();
+  out.quads.clear();
+  out.diffuse.clear();
+  out.specular.clear();
+  if (!(seg.radius > 0) || !std::isfinite(seg.radius) || !seg.p0.allFinite() || !seg.p1.allFinite() ||
+      !seg.normal.allFinite())
+    return PrimitiveStatus::Degenerate;
+  // model-view transform (double: the construction below must not lose the short segments)
+  const Vec3d c0 = cam.toCamera(seg.p0).cast<double>(), c1 = cam.toCamera(seg.p1).cast<double>();
+  const double L = (c1 - c0).norm();
+  if (!(L > 1e-6 * seg.radius) || !std::isfinite(L)) return PrimitiveStatus::Degenerate;
+  const Vec3d e = (c1 - c0) / L;
+  // local parameterisation (§6.2.2): b axis s = e x n, the normal made perpendicular to e
+  Vec3d n = (cam.rotation() * seg.normal).cast<double>();
+  n -= n.dot(e) * e;
+  if (!(n.norm() > 1e-3)) {  // no (usable) normal: the strip through the segment facing the viewer
+    const Vec3d toEye = -(c0 + 0.5 * L * e);
+    n = toEye - toEye.dot(e) * e;
+    if (!(n.norm() > 0)) n = std::abs(e.x()) < 0.9 ? Vec3d(Vec3d::UnitX().cross(e)) : Vec3d(Vec3d::UnitY().cross(e));
+  }
+  n.normalize();
+  // back-face culling: the strip's plane faces the eye on one side only (sign constant along it)
+  double D = -n.dot(c0);
+  if (D < 0) {
+    if (opt.backfaceCulling) return PrimitiveStatus::Culled;
+    n = -n;
+    D = -D;
+  }
+  {  // grazing everywhere: the largest |cos| is at the point nearest to the eye
+    const double t = std::clamp(-c0.dot(e), 0.0, L);
+    const double dist = (c0 + t * e).norm();
+    if (!(dist > 0) || D / dist < kMinFacing) return PrimitiveStatus::Culled;
+  }
+  const Vec3d s = e.cross(n);
+  const double R = opt.cutoffRadius;
+  const double sigmaR = double(opt.reconstructionScale) * seg.radius;
+  const double h = seg.radius;  // density: a segment of radius r replaces points at spacing r
+  const double Vh = opt.prefilterVariance, f = cam.focalPixels();
+  {  // cheap rejection by depth with the largest possible footprint
+    const double reach = R * sigmaR * kMaxStretch;
+    const double dmin = std::min(-c0.z(), -c1.z()) - reach, dmax = std::max(-c0.z(), -c1.z()) + reach;
+    if (dmax < cam.nearDepth() || dmin > cam.farDepth()) return PrimitiveStatus::Outside;
+  }
+  auto covAt = [&](double a) { return resamplingCovariance(c0 + a * e, e, s, sigmaR, Vh, f); };
+
+  // ScreenSpace sub-segments (also the Approx fallback and the lighting stations).
+  const Mat2d M0 = covAt(0), M1 = covAt(L), Mmid = covAt(0.5 * L);
+  int K = 1;
+  {
+    const double scale = std::min(M0.norm(), M1.norm());
+    const double change = std::max((M1 - M0).norm(), 4 * (Mmid - 0.5 * (M0 + M1)).norm());
+    K = int(std::clamp(std::ceil(change / (kPieceTolerance * scale)), 1.0, double(kMaxSegmentPieces)));
+  }
+  double aMin = 0, aMax = L, bMax = 0;
+  {
+    std::vector<Mat2d> station(K + 1);
+    station[0] = M0;
+    station[K] = M1;
+    for (int k = 1; k < K; ++k) station[k] = (2 * k == K) ? Mmid : covAt(L * k / K);
+    out.pieces.resize(K);
+    for (int k = 0; k < K; ++k) {
+      const double a0 = L * k / K, a1 = L * (k + 1) / K;
+      const Mat2d M = K == 1 ? Mmid : covAt(0.5 * (a0 + a1));
+      const Mat2d Mi = inverse2(M);
+      SegmentPiece& p = out.pieces[k];
+      p.a0 = float(a0);
+      p.a1 = float(a1);
+      p.m00 = float(Mi(0, 0));
+      p.m01 = float(Mi(0, 1));
+      p.m11 = float(Mi(1, 1));
+      p.scale0 = float(1 / (h * std::sqrt(station[k].determinant())));
+      p.scale1 = float(1 / (h * std::sqrt(station[k + 1].determinant())));
+      p.reach = float(R * std::sqrt(M(0, 0)));
+      aMin = std::min(aMin, a0 - double(p.reach));
+      aMax = std::max(aMax, a1 + double(p.reach));
+      bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
+    }
+  }
+  SegmentMethod method = opt.segmentMethod;
+  if (method == SegmentMethod::Reference) {
+    const double step0 = sigmaR / kNodesPerSigma;
+    const int N = int(std::clamp(std::ceil(L / step0), 1.0, double(kMaxNodes)));
+    const double step = L / N;
+    out.nodes.resize(N);
+    double maxEig = 0;
+    for (int k = 0; k < N; ++k) {
+      const Mat2d M = covAt((k + 0.5) * step);
+      const Mat2d Mi = inverse2(M);
+      SegmentNode& nd = out.nodes[k];
+      nd.m00 = float(Mi(0, 0));
+      nd.m01 = float(Mi(0, 1));
+      nd.m11 = float(Mi(1, 1));
+      nd.scale = float(step / (h * std::sqrt(M.determinant())));
+      maxEig = std::max(maxEig, 0.5 * (M.trace() + std::sqrt(std::pow(M(0, 0) - M(1, 1), 2) + 4 * M(0, 1) * M(0, 1))));
+      aMin = std::min(aMin, (k + 0.5) * step - R * std::sqrt(M(0, 0)));
+      aMax = std::max(aMax, (k + 0.5) * step + R * std::sqrt(M(0, 0)));
+      bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
+    }
+    out.nodeStep = float(step);
+    out.nodeReach = float(R * std::sqrt(maxEig));
+  } else if (method == SegmentMethod::Approx) {
+    ApproxInput in;
+    in.M0 = M0;
+    in.M1 = M1;
+    in.A0 = R * R * M0;
+    in.A1 = R * R * M1;
+    in.L = L;
+    in.R = R;
+    in.h = h;
+    bool longCase = true;
+    if (buildApprox(in, out.quads, longCase)) {
+      out.longCase = longCase;
+      out.textures = weightTextures(float(R));
+      double qa0 = 0, qa1 = L, qb = 0;
+      for (const SegmentQuad& q : out.quads)
+        for (const Vec2f& c : q.corner) {
+          qa0 = std::min(qa0, double(c.x()));
+          qa1 = std::max(qa1, double(c.x()));
+          qb = std::max(qb, double(std::abs(c.y())));
+        }
+      aMin = qa0;
+      aMax = qa1;
+      bMax = qb;
+    } else {
+      out.quads.clear();
+      out.fallback = true;
+      method = SegmentMethod::ScreenSpace;
+    }
+  }
+  out.method = method;
+
+  // Screen bounds of the footprint box (a in [aMin, aMax], b in [-bMax, bMax]) and frustum clipping.
+  const Vec3d box[4] = {c0 + aMin * e - bMax * s, c0 + aMax * e - bMax * s, c0 + aMax * e + bMax * s,
+                        c0 + aMin * e + bMax * s};
+  Vec3f boxf[4];
+  for (int i = 0; i < 4; ++i) boxf[i] = box[i].cast<float>();
+  for (const Vec4f& pl : cam.frustumPlanes()) {
+    bool allOut = true;
+    for (const Vec3f& q : boxf)
+      if (pl.head<3>().dot(q) + pl.w() >= 0) {
+        allOut = false;
+        break;
+      }
+    if (allOut) return PrimitiveStatus::Outside;
+  }
+  float x0, y0, x1, y1;
+  bool depthClipped = false;
+  if (!clippedScreenBox(cam, boxf, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
+  const PixelRect view{0, 0, cam.width(), cam.height()};
+  auto pix = [](float v) { return int(std::floor(std::clamp(v, -1e8f, 1e8f) - 0.5f)) + 1; };
+  const PixelRect bb{pix(x0), pix(y0), pix(x1), pix(y1)};
+  out.bounds = bb.intersect(view);
+  if (out.bounds.empty()) return PrimitiveStatus::Outside;
+  const bool sideClipped = out.bounds.x0 != bb.x0 || out.bounds.y0 != bb.y0 || out.bounds.x1 != bb.x1 ||
+                           out.bounds.y1 != bb.y1;
+
+  out.origin = c0.cast<float>();
+  out.along = e.cast<float>();
+  out.across = s.cast<float>();
+  out.normal = n.cast<float>();
+  out.length = float(L);
+  out.aMin = float(aMin);
+  out.aMax = float(aMax);
+  out.bMax = float(bMax);
+  out.clipped = depthClipped;
+  // Z^3 threshold: depth half-extent of the endpoint cutoff ellipses plus the radius (§6.2.3.2)
+  const Vec2dd g(e.z(), s.z());
+  out.zThreshold0 = frame.zThreshold(float(R * std::sqrt(g.dot(M0 * g)) + seg.radius));
+  out.zThreshold1 = frame.zThreshold(float(R * std::sqrt(g.dot(M1 * g)) + seg.radius));
+  const Color col = frame.primitiveColor(seg.color);
+  out.albedo = col.head<3>();
+  out.alpha = std::clamp(col.w(), 0.0f, 1.0f);
+  out.textured = frame.texture != nullptr;
+  out.uv0 = seg.uv0;
+  out.uv1 = seg.uv1;
+  if (!opt.perPixelLighting) {  // Gouraud along the segment at K + 1 stations (§6.2.2)
+    const Vec3f nf = n.cast<float>();
+    out.diffuse.resize(K + 1);
+    out.specular.resize(K + 1);
+    for (int k = 0; k <= K; ++k) {
+      const Vec3f p = (c0 + (L * k / K) * e).cast<float>();
+      out.specular[k] = frame.shade(Vec3f::Zero(), nf, p);
+      out.diffuse[k] = frame.shade(Vec3f::Ones(), nf, p) - out.specular[k];
+    }
+  }
+  return depthClipped || sideClipped ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
+}
+
+namespace {
+
+// ScreenSpace: the cut-off Gaussian integrated along each sub-segment in closed form. With
+// x = a - a0 - tau along and b across, q(tau) = m00 (x - tau)^2 + 2 m01 (x - tau) b + m11 b^2
+// = m00 (tau - tau*)^2 + qmin; each kernel counts where q <= R^2, i.e. |tau - tau*| <= delta.
+float screenSpaceWeight(const PreparedSegment& sp, float a, float b, float R2) {
+  float w = 0;
+  for (const SegmentPiece& p : sp.pieces) {
+    if (a < p.a0 - p.reach || a > p.a1 + p.reach) continue;
+    const float len = p.a1 - p.a0;
+    const float x = a - p.a0;
+    const float tauStar = x + p.m01 * b / p.m00;
+    const float qmin = b * b * (p.m11 - p.m01 * p.m01 / p.m00);
+    if (!(qmin < R2)) continue;
+    const float delta = std::sqrt((R2 - qmin) / p.m00);
+    const float t0 = std::max(0.0f, tauStar - delta), t1 = std::min(len, tauStar + delta);
+    if (!(t1 > t0)) continue;
+    const float k = std::sqrt(0.5f * p.m00);
+    const float u0 = k * (t0 - tauStar), u1 = k * (t1 - tauStar);
+    // integral of exp(-m00 (tau - tau*)^2 / 2) and of (tau - tau*) times it
+    const float i0 = 0.886226925f / k * (std::erf(u1) - std::erf(u0));  // sqrt(pi)/2 / k
+    const float i1 = (std::exp(-u0 * u0) - std::exp(-u1 * u1)) / p.m00;
+    const float slope = (p.scale1 - p.scale0) / len;
+    const float sStar = p.scale0 + slope * tauStar;
+    w += std::exp(-0.5f * qmin) * (sStar * i0 + slope * i1);
+  }
+  return w;
+}
+
+float referenceWeight(const PreparedSegment& sp, float a, float b, float R2) {
+  const int N = int(sp.nodes.size());
+  const float step = sp.nodeStep;
+  const int k0 = std::max(0, int(std::floor((a - sp.nodeReach) / step - 0.5f)));
+  const int k1 = std::min(N - 1, int(std::ceil((a + sp.nodeReach) / step - 0.5f)));
+  double w = 0;
+  for (int k = k0; k <= k1; ++k) {
+    const SegmentNode& nd = sp.nodes[k];
+    const float x = a - (float(k) + 0.5f) * step;
+    const float q = nd.m00 * x * x + 2 * nd.m01 * x * b + nd.m11 * b * b;
+    if (q <= R2) w += double(std::exp(-0.5f * q) * nd.scale);
+  }
+  return float(w);
+}
+
+float approxWeight(const PreparedSegment& sp, float a, float b) {
+  const Vec2f p(a, b);
+  for (const SegmentQuad& q : sp.quads) {
+    float lo = q.corner[0].x(), hi = lo, blo = q.corner[0].y(), bhi = blo;
+    for (int i = 1; i < 4; ++i) {
+      lo = std::min(lo, q.corner[i].x());
+      hi = std::max(hi, q.corner[i].x());
+      blo = std::min(blo, q.corner[i].y());
+      bhi = std::max(bhi, q.corner[i].y());
+    }
+    if (a < lo || a > hi || b < blo || b > bhi) continue;
+    float al, be;
+    if (!inverseBilinear(q, p, al, be)) continue;
+    auto bil = [&](auto v0, auto v1, auto v2, auto v3) {
+      return (1 - be) * ((1 - al) * v0 + al * v1) + be * ((1 - al) * v3 + al * v2);
+    };
+    const Vec2f t = bil(q.tex[0], q.tex[1], q.tex[2], q.tex[3]);
+    const float scale = bil(q.scale[0], q.scale[1], q.scale[2], q.scale[3]);
+    const WeightTextures& T = *sp.textures;
+    const float tw = q.middle ? T.lookupT2(t.y()) : T.lookupT1(t.x(), t.y()) - T.lookupT1(t.x() - q.tail, t.y());
+    return std::max(0.0f, tw) * scale;
+  }
+  return 0;
+}
+
+float weightAt(const PreparedSegment& sp, float a, float b, float R2) {
+  if (std::abs(b) > sp.bMax || a < sp.aMin || a > sp.aMax) return 0;
+  switch (sp.method) {
+    case SegmentMethod::ScreenSpace: return screenSpaceWeight(sp, a, b, R2);
+    case SegmentMethod::Reference: return referenceWeight(sp, a, b, R2);
+    case SegmentMethod::Approx: return approxWeight(sp, a, b);
+  }
+  return 0;
+}
+
+}  // namespace
+
+float segmentWeightAt(const PreparedSegment& sp, const FrameContext& frame, const Vec2f& pixel) {
+  if (sp.length <= 0) return 0;
+  const Vec3f ray = frame.cam().rayThrough(pixel.x(), pixel.y());
+  const float nr = sp.normal.dot(ray);
+  if (!(nr < 0)) return 0;
+  const float t = sp.normal.dot(sp.origin) / nr;
+  const Vec3f P = t * ray - sp.origin;
+  const float R = frame.opt().cutoffRadius;
+  return weightAt(sp, sp.along.dot(P), sp.across.dot(P), R * R);
+}
+
+void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
+  const PixelRect r = sp.bounds.intersect(ctx.rect);
+  if (r.empty()) return;
+  const FrameContext& frame = ctx.frame;
+  const Camera& cam = frame.cam();
+  const float f = cam.focalPixels();
+  const Vec2f pp = cam.principalPoint();
+  const float R = frame.opt().cutoffRadius;
+  const float R2 = R * R;
+  const bool perPixel = frame.opt().perPixelLighting;
+  const float nearD = cam.nearDepth(), farD = cam.farDepth();
+  // Ray through pixel (px, py) at depth 1: r = ((px - cx)/f, -(py - cy)/f, -1); the plane
+  // n.(P - o) = 0 is hit at depth t = (n.o)/(n.r), a = t (e.r) - e.o, b = t (s.r) - s.o.
+  const Vec3f& n = sp.normal;
+  const float no = n.dot(sp.origin), eo = sp.along.dot(sp.origin), so = sp.across.dot(sp.origin);
+  auto lin = [&](const Vec3f& k, float& dx, float& dy, float& c0) {
+    dx = k.x() / f;
+    dy = -k.y() / f;
+    c0 = -k.x() * pp.x() / f + k.y() * pp.y() / f - k.z();
+  };
+  float ndx, ndy, nc0, edx, edy, ec0, sdx, sdy, sc0;
+  lin(n, ndx, ndy, nc0);
+  lin(sp.along, edx, edy, ec0);
+  lin(sp.across, sdx, sdy, sc0);
+  Fragment fr;
+  fr.alpha = sp.alpha;
+  fr.normal = n;
+  const float L = sp.length;
+  const int stations = int(sp.diffuse.size());
+  for (int y = r.y0; y < r.y1; ++y) {
+    const float py = float(y) + 0.5f;
+    for (int x = r.x0; x < r.x1; ++x) {
+      const float px = float(x) + 0.5f;
+      const float nr = ndx * px + ndy * py + nc0;
+      if (!(nr < 0)) continue;  // ray parallel to or leaving the facing plane
+      const float t = no / nr;
+      const float b = t * (sdx * px + sdy * py + sc0) - so;
+      if (std::abs(b) > sp.bMax) continue;
+      const float a = t * (edx * px + edy * py + ec0) - eo;
+      if (a < sp.aMin || a > sp.aMax) continue;
+      if (sp.clipped && (t < nearD || t > farD)) continue;
+      const float w = weightAt(sp, a, b, R2);
+      if (!(w > 0)) continue;
+      const float u = std::clamp(a / L, 0.0f, 1.0f);
+      fr.depth = t;
+      fr.weight = w;
+      fr.zThreshold = sp.zThreshold0 + u * (sp.zThreshold1 - sp.zThreshold0);
+      Vec3f albedo = sp.albedo;
+      if (sp.textured) {  // §5.2.4: interpolated between the endpoints, constant beyond
+        const Vec2f uv = sp.uv0 + u * (sp.uv1 - sp.uv0);
+        albedo = frame.texture->sampleBilinear(uv.x(), uv.y()).head<3>();
+      }
+      if (perPixel) {
+        const Vec3f P = t * Vec3f((px - pp.x()) / f, -(py - pp.y()) / f, -1.0f);
+        fr.color = frame.shade(albedo, n, P);
+      } else {
+        const float fs = u * float(stations - 1);
+        const int k = std::min(int(fs), stations - 2);
+        const float v = fs - float(k);
+        const Vec3f dif = (1 - v) * sp.diffuse[k] + v * sp.diffuse[k + 1];
+        const Vec3f spec = (1 - v) * sp.specular[k] + v * sp.specular[k + 1];
+        fr.color = albedo.cwiseProduct(dif) + spec;
+      }
+      ctx.tile.insert(x, y, fr);
+    }
+  }
+}
+
+}  // namespace linesurf
