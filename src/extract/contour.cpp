@@ -59,7 +59,8 @@ class Cutter {
     const auto& F = mesh_.faces[f];
     const std::vector<double>& val = values_[info.family];
     Sorted s;
-    for (int c = 0; c < 3; ++c) s.t[c] = std::ldexp(val[F[c]], info.level);  // exact: sub-lattice
+    const double scale = double(uint64_t(1) << info.level);  // 2^m: exact, so levels nest
+    for (int c = 0; c < 3; ++c) s.t[c] = val[F[c]] * scale;
     int* o = s.o;
     const double* t = s.t;
     // Stable 3-sort by plane value (ties keep corner order; the results do not depend on it).
@@ -308,7 +309,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
       double s = first ? s0 : s1;
       fi.family = first ? 0 : 1;
       int m = 0;  // smallest m with 2^m sin θ >= 1 (tolerance: sin θ = 1 up to rounding keeps d)
-      while (m < 60 && std::ldexp(s, m) < 1 - 1e-12) ++m;
+      for (double scaled = s; m < 60 && scaled < 1 - 1e-12; scaled *= 2) ++m;
       fi.level = uint8_t(m);
       Cutter::Sorted sf = cutter.sorted(f, fi);
       fi.touches = sf.topTouch;

@@ -1,0 +1,99 @@
+// linesurf extract contour MESH -o OUT: contour-plane extraction of a line-segment (or hybrid, or
+// point) model from a triangle mesh, thesis §3.3.
+#include <fmt/format.h>
+
+#include "command.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/timer.h"
+#include "linesurf/extract/contour.h"
+#include "linesurf/io/model_io.h"
+
+namespace linesurf::cli {
+namespace {
+
+struct ContourArgs {
+  std::string mesh, output;
+  float spacing = 0, spacingScale = 1.0f, radiusScale = 0.75f, pointsBelow = 0, familySwitchSine = 1.0f;
+  uint64_t seed = 1;
+  bool allPoints = false, vertexNormals = false, ascii = false;
+};
+
+void run(const ContourArgs& a) {
+  Timer total, t;
+  const TriangleMesh mesh = readMesh(a.mesh);
+  const double readSeconds = t.seconds();
+  say(fmt::format("{}: {} vertices, {} faces{}{} ({:.2f} s)", a.mesh, mesh.positions.size(), mesh.faces.size(),
+                  mesh.cornerUVs.empty() ? "" : ", per-corner uvs", mesh.texture ? ", texture" : "", readSeconds));
+  if (mesh.faces.empty()) throwBadInput(a.mesh, "", "the file holds no faces: contour extraction needs a triangle mesh");
+
+  ContourOptions o;
+  o.spacing = a.spacing;
+  o.spacingScale = a.spacingScale;
+  o.seed = a.seed;
+  o.radiusScale = a.radiusScale;
+  o.pointsBelow = a.pointsBelow;
+  o.allPoints = a.allPoints;
+  o.vertexNormals = a.vertexNormals;
+  o.familySwitchSine = a.familySwitchSine;
+  o.progress = progressBar();
+  ContourStats s;
+  HybridModel model = extractContour(mesh, o, &s);
+  endProgress();
+  if (a.radiusScale <= 0.5f)
+    say(fmt::format("warning: --radius-scale {} <= 0.5: d >= 2R, the model may render with holes (§3.3)", a.radiusScale));
+
+  t.reset();
+  WriteOptions w;
+  w.encoding = a.ascii ? PlyEncoding::Ascii : PlyEncoding::BinaryLittleEndian;
+  writeModel(a.output, model, w);
+  const double writeSeconds = t.seconds();
+
+  say(fmt::format("contour planes (§3.3): d = {:.6g}{}, radius {:.6g}, seed {}", s.spacing,
+                  a.spacing > 0 ? "" : fmt::format(" ({} x mean edge {:.6g})", a.spacingScale, s.meanEdgeLength),
+                  s.radius, a.seed));
+  say(fmt::format("faces: {} cut by P=, {} by P|| ({} at d/2 or finer), {} between planes, {} degenerate skipped",
+                  s.cutByFamily[0], s.cutByFamily[1], s.halvedSpacing, s.uncutTriangles, s.degenerateTriangles));
+  say(fmt::format("output: {} segments, {} points{}", s.segments, s.points,
+                  s.convertedSegments ? fmt::format(" (from {} segments)", s.convertedSegments) : std::string()));
+  say(fmt::format("time: read {:.2f} s, extract {:.3f} s, write {:.2f} s, total {:.2f} s", readSeconds, s.seconds,
+                  writeSeconds, total.seconds()));
+  say("wrote " + a.output);
+}
+
+RegisterCommand reg(33, [](CLI::App& app) {
+  // `extract` is shared by the three extraction methods; whichever registers first creates it.
+  auto found = app.get_subcommands([](CLI::App* sub) { return sub->get_name() == "extract"; });
+  CLI::App* extract = found.empty()
+                          ? app.add_subcommand("extract", "Extract a line-segment or hybrid model")->require_subcommand(1)
+                          : found.front();
+  auto a = std::make_shared<ContourArgs>();
+  CLI::App* sub = extract->add_subcommand(
+      "contour", "Cut a triangle mesh with two perpendicular families of contour planes (thesis §3.3)");
+  sub->add_option("MESH", a->mesh, "Triangle mesh (.ply, or .obj with .mtl and texture image)")->required();
+  sub->add_option("-o,--output", a->output, "Output model (.ply)")->required();
+  sub->add_option("--spacing", a->spacing,
+                  "Largest distance d between neighbouring segments, object units (default: --spacing-scale x mean edge length)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--spacing-scale", a->spacingScale, "d as a multiple of the mesh's mean edge length, when --spacing is not given")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--seed", a->seed, "Seed of the random plane orientation and offsets")->capture_default_str();
+  auto below = sub->add_option("--points-below", a->pointsBelow,
+                               "Turn segments shorter than LEN (object units) into points: hybrid model")
+                   ->check(CLI::PositiveNumber);
+  sub->add_flag("--all-points", a->allPoints, "Turn every segment into ceil(l/d)+1 points: pure point model (Table 5)")
+      ->excludes(below);
+  sub->add_option("--radius-scale", a->radiusScale, "Segment/point radius as a multiple of d (> 0.5 for a hole-free model)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_flag("--vertex-normals", a->vertexNormals, "Interpolate the mesh's vertex normals instead of the face normal");
+  sub->add_option("--family-switch-sine", a->familySwitchSine,
+                  "Use P= unless its sin(theta) is below this and P|| cuts steeper (1: steeper family always; 0: P= only)")
+      ->check(CLI::Range(0.0f, 1.0f))
+      ->capture_default_str();
+  sub->add_flag("--ascii", a->ascii, "Write ASCII PLY instead of binary");
+  sub->callback([a] { run(*a); });
+});
+
+}  // namespace
+}  // namespace linesurf::cli
