@@ -155,14 +155,17 @@ double dataReduction(size_t referencePoints, size_t points, size_t segments) {
 }
 
 /// Progress within one model, mapped onto the whole run.
+/// Never goes backwards: library stages that share a range (clustering, then extraction) restart at 0.
 struct ModelProgress {
   const ProgressFn* fn;
   std::string name;
   size_t index, count;
+  std::shared_ptr<double> last = std::make_shared<double>(0.0);
   void operator()(const std::string& step, double local) const {
     if (!*fn) return;
     const double f = (double(index) + std::clamp(local, 0.0, 1.0)) / double(std::max<size_t>(count, 1));
-    (*fn)(name + ": " + step, f);
+    *last = std::max(*last, f);
+    (*fn)(name + ": " + step, *last);
   }
   /// A ProgressFn for a library stage occupying [lo, hi) of this model's work.
   ProgressFn sub(const std::string& step, double lo, double hi) const {
@@ -278,8 +281,9 @@ void runPointCloud(const ExperimentOptions& o, const fs::path& file, ModelResult
       ShapeApproxOptions so = o.shapeApprox;
       so.provenance = false;
       so.method = r.method == ExperimentMethod::ShapeGreedy ? ClusteringMethod::Greedy : ClusteringMethod::Hierarchical;
-      so.progress = progress.sub(std::string(experimentMethodName(r.method)) + " extraction (§3.2)", lo, hi);
-      so.clustering.progress = so.progress;
+      const double mid = 0.5 * (lo + hi);
+      so.clustering.progress = progress.sub(std::string(experimentMethodName(r.method)) + " clustering (§3.2.3)", lo, mid);
+      so.progress = progress.sub(std::string(experimentMethodName(r.method)) + " extraction (§3.2.4)", mid, hi);
       const Clustering clustering = clusterShapeApprox(geo, so);
       ShapeApproxStats st;
       *hybrid = extractShapeApprox(cloud, geo, clustering, so, &st);
@@ -375,7 +379,7 @@ ExperimentResults runExperiment(const ExperimentOptions& options, const Progress
     m.file = files[i].string();
     m.name = files[i].stem().string();
     m.thesisName = thesisModelFor(m.name);
-    const ModelProgress mp{&progress, m.name, i, files.size()};
+    const ModelProgress mp{&progress, m.name, i, files.size(), std::make_shared<double>(0.0)};
     try {
       m.isMesh = fileHoldsMesh(files[i]);
       if (m.isMesh ? !meshMethod : !anyPointMethod) continue;  // no selected method applies
