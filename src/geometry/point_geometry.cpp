@@ -75,11 +75,15 @@ void computeNeighbours(const HybridModel& cloud, int k, PointGeometry& g, const 
   KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   tree.buildIndex();
   const size_t want = std::min(n, size_t(k) + 1);
+  // Query in the tree's leaf order: consecutive queries touch the same nodes (cache locality).
+  // Each query writes only its own row, so the order does not change the result.
+  const std::vector<uint32_t>& order = tree.vAcc;
   forBlocks(n, progress, "neighbours", 512, [&](size_t b, size_t e) {
     std::vector<uint32_t> idx(want);
     std::vector<float> d2(want);
     std::vector<std::pair<float, uint32_t>> row;
-    for (size_t i = b; i < e; ++i) {
+    for (size_t o = b; o < e; ++o) {
+      const size_t i = order.size() == n ? order[o] : o;
       nanoflann::KNNResultSet<float, uint32_t> rs(want);
       rs.init(idx.data(), d2.data());
       tree.findNeighbors(rs, cloud.points[i].position.data(), nanoflann::SearchParams());
@@ -223,6 +227,9 @@ void orientNormals(const HybridModel& cloud, int k, PointGeometry& g, const std:
   using Item = std::tuple<float, uint32_t, uint32_t>;  // weight, node, parent
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
   std::vector<uint8_t> done(n, 0);
+  // Best known connection weight per node: an edge is pushed only when it improves it, which
+  // keeps the heap small (lazy deletion of the superseded entries).
+  std::vector<float> key(n, kInf);
   size_t flips = 0;
   for (size_t c = 0; c + 1 < compStart.size(); ++c) {
     const uint32_t* members = order.data() + compStart[c];
@@ -274,7 +281,11 @@ void orientNormals(const HybridModel& cloud, int k, PointGeometry& g, const std:
       for (uint32_t e = off[u]; e < off[u + 1]; ++e) {
         const uint32_t v = adj[e];
         if (done[v]) continue;
-        heap.emplace(1.0f - std::abs(nu.dot(g.normals[v])), v, u);
+        const float w = 1.0f - std::abs(nu.dot(g.normals[v]));
+        if (w < key[v]) {
+          key[v] = w;
+          heap.emplace(w, v, u);
+        }
       }
     }
   }
