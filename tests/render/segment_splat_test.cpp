@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "linesurf/eval/image_metrics.h"
 #include "linesurf/render/renderer.h"
@@ -145,6 +146,235 @@ TEST(SegmentSplat, HybridRowsBlendWithPoints) {
     const ImageMetrics im = compareImages(ref, renderImage(hybrid, cam, optionsFor(m)).color);
     EXPECT_LT(im.meanAbsDiff, 1.0) << name(m);
   }
+}
+
+}  // namespace
+}  // namespace linesurf
+
+namespace linesurf {
+namespace {
+
+// Weight image of one segment under one method, via segmentWeightAt.
+struct WeightImage {
+  std::vector<float> w;
+  float peak = 0;
+  PrimitiveStatus status{};
+  bool fallback = false, longCase = true;
+  size_t quads = 0;
+};
+
+WeightImage weightImage(const Segment& s, const Camera& cam, SegmentMethod m) {
+  RenderOptions o = optionsFor(m);
+  o.backfaceCulling = false;
+  const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+  PreparedSegment ps;
+  WeightImage out;
+  out.status = prepareSegment(s, 0, frame, ps);
+  out.fallback = ps.fallback;
+  out.longCase = ps.longCase;
+  out.quads = ps.quads.size();
+  out.w.assign(size_t(cam.width()) * cam.height(), 0.0f);
+  if (out.status != PrimitiveStatus::Drawn && out.status != PrimitiveStatus::Clipped) return out;
+  for (int y = ps.bounds.y0; y < ps.bounds.y1; ++y)
+    for (int x = ps.bounds.x0; x < ps.bounds.x1; ++x) {
+      const float w = segmentWeightAt(ps, frame, Vec2f(x + 0.5f, y + 0.5f));
+      EXPECT_TRUE(std::isfinite(w));
+      out.w[size_t(y) * cam.width() + x] = w;
+      out.peak = std::max(out.peak, w);
+    }
+  return out;
+}
+
+// Error of `a` against the reference `r`, relative to the reference's peak weight.
+struct WeightError {
+  double psnr = 0, maxRel = 0;
+};
+WeightError weightError(const WeightImage& a, const WeightImage& r) {
+  double se = 0, mx = 0;
+  for (size_t i = 0; i < a.w.size(); ++i) {
+    const double d = (a.w[i] - r.w[i]) / r.peak;
+    se += d * d;
+    mx = std::max(mx, std::abs(d));
+  }
+  const double mse = se / double(a.w.size());
+  return {mse > 0 ? 10 * std::log10(1 / mse) : 999, mx};
+}
+
+Segment unitSegment(float length, float radius) {
+  Segment s;
+  s.p0 = Vec3f(-0.5f * length, 0, 0);
+  s.p1 = Vec3f(0.5f * length, 0, 0);
+  s.normal = Vec3f(0, 0, 1);
+  s.radius = radius;
+  return s;
+}
+
+TEST(SegmentSplat, MethodsAgreeWithReferenceOnSimpleViews) {
+  struct View {
+    const char* name;
+    Vec3f eye;
+    float length;
+  };
+  const View views[] = {
+      {"front long", Vec3f(0.1f, -0.2f, 3.0f), 1.0f},      {"front short", Vec3f(0.1f, -0.2f, 3.0f), 0.08f},
+      {"oblique long", Vec3f(0.5f, -2.0f, 1.5f), 1.0f},    {"grazing", Vec3f(0.3f, -3.0f, 0.15f), 1.0f},
+      {"close-up", Vec3f(0.05f, -0.3f, 0.35f), 1.0f},      {"along the axis", Vec3f(2.5f, -0.3f, 1.0f), 1.0f},
+      {"minified", Vec3f(0.2f, -4.0f, 25.0f), 1.0f},
+  };
+  for (const View& v : views) {
+    const Segment s = unitSegment(v.length, 0.05f);
+    const Camera cam = Camera::lookAt(v.eye, Vec3f(0, 0, 0), Vec3f(0, 0, 1), 40, 96, 96, 0.01f, 100);
+    const WeightImage ref = weightImage(s, cam, SegmentMethod::Reference);
+    ASSERT_GT(ref.peak, 0) << v.name;
+    for (SegmentMethod m : {SegmentMethod::ScreenSpace, SegmentMethod::Approx}) {
+      const WeightImage img = weightImage(s, cam, m);
+      const WeightError e = weightError(img, ref);
+      std::printf("%-16s %-12s psnr %6.1f dB  max %.4f  fallback %d long %d quads %zu\n", v.name, name(m), e.psnr,
+                  e.maxRel, int(img.fallback), int(img.longCase), img.quads);
+      if (m == SegmentMethod::ScreenSpace) {
+        EXPECT_GT(e.psnr, 45) << v.name;
+        EXPECT_LT(e.maxRel, 0.05) << v.name;
+      } else {
+        EXPECT_GT(e.psnr, 25) << v.name;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace linesurf
+
+namespace linesurf {
+namespace {
+
+PrimitiveStatus prepareWith(const Segment& s, const Camera& cam, SegmentMethod m, PreparedSegment& ps,
+                            bool culling = true) {
+  static RenderOptions o;  // FrameContext keeps a pointer to it
+  o = optionsFor(m);
+  o.backfaceCulling = culling;
+  const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+  return prepareSegment(s, 0, frame, ps);
+}
+
+TEST(SegmentSplat, ApproxLongAndShortCases) {
+  const Camera cam = Camera::lookAt(Vec3f(0.1f, -0.2f, 3.0f), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 96, 96);
+  PreparedSegment ps;
+  ASSERT_EQ(prepareWith(unitSegment(1.0f, 0.05f), cam, SegmentMethod::Approx, ps), PrimitiveStatus::Drawn);
+  EXPECT_FALSE(ps.fallback);
+  EXPECT_TRUE(ps.longCase);
+  EXPECT_EQ(ps.quads.size(), 10u);
+  // shorter than the cutoff diameter: the endpoint ellipses overlap
+  ASSERT_EQ(prepareWith(unitSegment(0.05f, 0.05f), cam, SegmentMethod::Approx, ps), PrimitiveStatus::Drawn);
+  EXPECT_FALSE(ps.fallback);
+  EXPECT_FALSE(ps.longCase);
+  EXPECT_EQ(ps.quads.size(), 8u);
+  // No seam between portions: along the axis the weight has no jump larger than its slope allows.
+  ASSERT_EQ(prepareWith(unitSegment(1.0f, 0.05f), cam, SegmentMethod::Approx, ps), PrimitiveStatus::Drawn);
+  RenderOptions o = optionsFor(SegmentMethod::Approx);
+  const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+  const Vec3f a = cam.project(cam.toCamera(Vec3f(-0.7f, 0.01f, 0))), b = cam.project(cam.toCamera(Vec3f(0.7f, 0.01f, 0)));
+  float prev = -1, maxJump = 0, peak = 0;
+  for (int i = 0; i <= 2000; ++i) {
+    const Vec2f p = a.head<2>() + (b.head<2>() - a.head<2>()) * (i / 2000.0f);
+    const float w = segmentWeightAt(ps, frame, p);
+    ASSERT_TRUE(std::isfinite(w));
+    if (prev >= 0) maxJump = std::max(maxJump, std::abs(w - prev));
+    prev = w;
+    peak = std::max(peak, w);
+  }
+  EXPECT_GT(peak, 0);
+  EXPECT_LT(maxJump, 0.02f * peak);
+}
+
+TEST(SegmentSplat, DegenerateSegmentsAreCountedNotDrawn) {
+  const Camera cam = Camera::lookAt(Vec3f(0, -0.5f, 3.0f), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 64, 64, 0.1f, 100);
+  PreparedSegment ps;
+  Segment s = unitSegment(0.0f, 0.05f);  // zero length: zero weight
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::ScreenSpace, ps), PrimitiveStatus::Degenerate);
+  s = unitSegment(1.0f, 0.0f);
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::ScreenSpace, ps), PrimitiveStatus::Degenerate);
+  s = unitSegment(1.0f, 0.05f);
+  s.p1.x() = NAN;
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::Approx, ps), PrimitiveStatus::Degenerate);
+  // behind the camera
+  s = unitSegment(1.0f, 0.05f);
+  s.p0.z() = s.p1.z() = 10;
+  s.normal = Vec3f(0, 1, 0);
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::ScreenSpace, ps, false), PrimitiveStatus::Outside);
+  // edge-on: the eye lies in the strip's plane
+  s = unitSegment(1.0f, 0.05f);
+  s.p0 += Vec3f(0, -0.5f, 3.0f) * 0;
+  s.normal = Vec3f(1, 0, 0).cross(Vec3f(0, -0.5f, 3.0f)).normalized();
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::Approx, ps, false), PrimitiveStatus::Culled);
+  // back-facing
+  s = unitSegment(1.0f, 0.05f);
+  s.normal = Vec3f(0, 0, -1);
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::ScreenSpace, ps), PrimitiveStatus::Culled);
+  // normal along the segment and zero normal: the strip facing the viewer is drawn
+  s.normal = Vec3f::Zero();
+  EXPECT_EQ(prepareWith(s, cam, SegmentMethod::ScreenSpace, ps), PrimitiveStatus::Drawn);
+}
+
+TEST(SegmentSplat, CrossingTheNearPlaneIsClippedAndFinite) {
+  // a floor segment running from behind the eye to far ahead
+  Segment s;
+  s.p0 = Vec3f(0, -2, 0);
+  s.p1 = Vec3f(0, 6, 0);
+  s.normal = Vec3f(0, 0, 1);
+  s.radius = 0.05f;
+  const Camera cam = Camera::lookAt(Vec3f(0, -1, 0.3f), Vec3f(0, 1, 0), Vec3f(0, 0, 1), 60, 64, 64, 0.1f, 100);
+  HybridModel m;
+  m.segments.push_back(s);
+  for (SegmentMethod meth : kMethods) {
+    PreparedSegment ps;
+    EXPECT_EQ(prepareWith(s, cam, meth, ps), PrimitiveStatus::Clipped) << name(meth);
+    RenderOptions o = optionsFor(meth);
+    o.alphaBuffer = true;
+    const RenderResult r = renderImage(m, cam, o);
+    double covered = 0;
+    for (const Color& c : r.color.pixels) ASSERT_TRUE(c.allFinite());
+    for (const Color& c : r.alpha->pixels) covered += c.x();
+    EXPECT_GT(covered, 20) << name(meth);
+  }
+}
+
+// Random segments and views (fixed seed), grazing and close ones included: every method gives a
+// finite splat whose screen box is never wildly larger than the ScreenSpace one; Approx falls
+// back (counted) rather than drawing a wild quad.
+TEST(SegmentSplat, RandomViewsGiveSaneSplats) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> U(-1, 1);
+  int fallbacks = 0, drawn = 0;
+  for (int it = 0; it < 300; ++it) {
+    Segment s;
+    s.p0 = Vec3f(U(rng), U(rng), U(rng)) * 0.5f;
+    const Vec3f dir = Vec3f(U(rng), U(rng), U(rng)).normalized();
+    s.p1 = s.p0 + dir * (std::pow(10.0f, 2 * U(rng) - 1.5f));
+    Vec3f n = Vec3f(U(rng), U(rng), U(rng)).cross(dir);
+    if (n.norm() < 1e-3f) continue;
+    s.normal = n.normalized();
+    s.radius = std::pow(10.0f, U(rng) - 1.5f);
+    const Vec3f eye = Vec3f(U(rng), U(rng), U(rng)).normalized() * std::pow(10.0f, U(rng) + 0.2f);
+    const Camera cam = Camera::lookAt(eye, Vec3f::Zero(), Vec3f(0, 0, 1), 40, 64, 64, 0.01f, 100);
+    PreparedSegment ss, ap;
+    const PrimitiveStatus st = prepareWith(s, cam, SegmentMethod::ScreenSpace, ss, false);
+    const PrimitiveStatus sa = prepareWith(s, cam, SegmentMethod::Approx, ap, false);
+    EXPECT_EQ(st, sa);
+    if (sa != PrimitiveStatus::Drawn && sa != PrimitiveStatus::Clipped) continue;
+    ++drawn;
+    fallbacks += ap.fallback;
+    for (const SegmentQuad& q : ap.quads)
+      for (const Vec2f& c : q.corner) ASSERT_TRUE(c.allFinite());
+    const RenderOptions o = optionsFor(SegmentMethod::Approx);
+    const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+    for (int y = ap.bounds.y0; y < ap.bounds.y1; y += 3)
+      for (int x = ap.bounds.x0; x < ap.bounds.x1; x += 3)
+        ASSERT_TRUE(std::isfinite(segmentWeightAt(ap, frame, Vec2f(x + 0.5f, y + 0.5f))));
+    const auto area = [](const PixelRect& r) { return double(r.width()) * r.height(); };
+    EXPECT_LE(area(ap.bounds), 4 * area(ss.bounds) + 64) << it;
+  }
+  EXPECT_GT(drawn, 100);
+  std::printf("random views: %d drawn, %d Approx fallbacks\n", drawn, fallbacks);
 }
 
 }  // namespace
