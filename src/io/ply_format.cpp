@@ -1,6 +1,7 @@
 // Low-level PLY reader: header parsing and body decoding into columns (see detail/ply_format.h).
 #include "io/detail/ply_format.h"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -178,6 +179,8 @@ Header parseHeader(std::string_view bytes, const std::string& path) {
       if (e.find(p.name) >= 0)
         throwBadInput(path, where, "property " + quoted(p.name) + " declared twice in element " + quoted(e.name));
       e.properties.push_back(std::move(p));
+    } else if (std::isdigit((unsigned char)key[0]) || key[0] == '-' || key[0] == '+' || key[0] == '.') {
+      throwBadInput(path, where, "missing end_header (body data " + quoted(text) + " found in the header)");
     } else {
       throwBadInput(path, where, "unknown header keyword " + quoted(key));
     }
@@ -316,9 +319,10 @@ class BodyDecoder {
   void checkCountFits(const Element& e) {
     const size_t rest = remaining();
     if (h_.format == Format::Ascii) {
-      // Every value is a token of at least one character followed by a separator.
-      const uint64_t perRow = 2 * e.properties.size();
-      if (e.count > (rest + 1) / perRow)
+      // Every value is a token of at least one character (a loose bound on purpose: a file that
+      // is merely short gets the precise row-level message from the row parser).
+      const uint64_t perRow = e.properties.size();
+      if (e.count > rest / perRow)
         throwBadInput(path_, lineAt(e.line),
                       "element " + e.name + " count " + std::to_string(e.count) +
                           " is larger than the file could hold (" + std::to_string(rest) + " bytes of body left)");
@@ -344,8 +348,8 @@ class BodyDecoder {
   void checkFinite(double v, const Element& e, uint64_t row, const Property& p, const std::string* where = nullptr) {
     if (!std::isfinite(v))
       throwBadInput(path_, where ? *where : "element " + e.name + " " + std::to_string(row),
-                    std::string(std::isnan(v) ? "NaN" : "infinite") + " value in property '" + p.name + "' of element " +
-                        e.name + " " + std::to_string(row));
+                    std::string(std::isnan(v) ? "NaN" : "infinite") + " value in property '" + p.name + "'" +
+                        (where ? " of element " + e.name + " " + std::to_string(row) : std::string()));
   }
 
   void binaryElement(const Element& e, ElementData& d, const std::vector<char>& kept, bool any) {
