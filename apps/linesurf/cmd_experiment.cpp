@@ -19,6 +19,8 @@ struct ExperimentArgs {
   std::vector<std::string> methods, only;
   double epsilonRelative = 0.05, delta = 0.004;
   float deltaN = 0.008f;
+  float contourScale = 1.0f;
+  float contourSpacing = 0;
   bool noImages = false;
 };
 
@@ -49,6 +51,8 @@ void run(const ExperimentArgs& a) {
   o.epsDelta.epsilonRelative = a.epsilonRelative;
   o.epsDelta.delta = a.delta;
   o.shapeApprox.clustering.deltaN = a.deltaN;
+  o.contour.spacingScale = a.contourScale;
+  o.contour.spacing = a.contourSpacing;
 
   ExperimentResults res = runExperiment(o, progressBar());
   endProgress();
@@ -105,6 +109,10 @@ RegisterCommand reg(70, [](CLI::App& app) {
   sub->add_option("--epsilon", a->epsilonRelative, "eps-delta: epsilon as a fraction of the average spacing (§7.2: 0.05)")->capture_default_str();
   sub->add_option("--delta", a->delta, "eps-delta: normal tolerance 1 - n.n (§7.2: 0.004)")->capture_default_str();
   sub->add_option("--delta-n", a->deltaN, "shape approximation: normal variation tolerance (§7.2: 0.008)")->capture_default_str();
+  sub->add_option("--contour-scale", a->contourScale, "contour: plane spacing d as a multiple of the mean edge length")
+      ->capture_default_str()->check(CLI::Range(1e-3, 1e3));
+  sub->add_option("--contour-spacing", a->contourSpacing, "contour: plane spacing d in object units (0 = --contour-scale)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1e30));
   sub->callback([a] { run(*a); });
 });
 

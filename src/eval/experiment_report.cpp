@@ -196,7 +196,7 @@ void meshTable(std::string& md, const ExperimentResults& results) {
   md += fmt::format("### {}\n\n", tableCaption(5));
   md += "Each cell: ours / thesis. Image differences: mean and standard deviation of |A - B| over the R, G, B composite "
         "in grey levels (0-255), averaged over the views.\n\n";
-  md += "| Model | Thesis model | # Points | # Line segments | Mean | Standard deviation | max |A-B| | nccm | Speedup | "
+  md += "| Model | Thesis model | # Points | # Line segments | Mean | Standard deviation | Max abs diff | nccm | Speedup | "
         "Extraction (s) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   double sMean = 0, sStd = 0, mMean = 0, mStd = 0, tMean = 0, tStd = 0, tmMean = 0, tmStd = 0;
   int nThesis = 0;
