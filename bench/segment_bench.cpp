@@ -1,0 +1,147 @@
+// Line-segment splatting (thesis §5) timings.
+//  - BM_SegmentRate/<method>: a 512^2 frame of a plane made of segments only: segments per
+//    second for each segment method.
+//  - BM_HybridFrame/<model>/<kind>/<method>: frame time at 512^2 on 2 threads of a shared point
+//    model (../shared/data) as pure points (kind 0) and as the hybrid models of the extraction
+//    methods: (eps, delta) (1, Table 1), shape approximation with greedy (2, Table 2) and
+//    hierarchical (3, Table 3) clustering. Eight orbit views cycled; the thesis's "speedup" is
+//    1 - t_hybrid / t_points (docs/results.md "Rendering speedups").
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "linesurf/core/parallel.h"
+#include "linesurf/extract/eps_delta.h"
+#include "linesurf/extract/shape_approx.h"
+#include "linesurf/geometry/point_geometry.h"
+#include "linesurf/io/model_io.h"
+#include "linesurf/render/renderer.h"
+#include "linesurf/render/segment_splat.h"
+
+namespace {
+
+using namespace linesurf;
+
+std::filesystem::path sharedData() {
+  auto p = std::filesystem::path(LINESURF_SOURCE_DIR) / ".." / "shared" / "data";
+  if (const char* env = std::getenv("LINESURF_SHARED_DATA")) p = env;
+  return p;
+}
+
+const char* kModels[] = {"screwdriver", "rockerarm", "santa", "armadillo", "igea"};
+const SegmentMethod kMethods[] = {SegmentMethod::ScreenSpace, SegmentMethod::Approx, SegmentMethod::Reference};
+
+// A plane of rows of segments (10 point spacings each) filling the 512^2 view.
+HybridModel segmentPlane(int rows, int cols, float h) {
+  HybridModel m;
+  m.attributes.normals = m.attributes.radii = true;
+  for (int j = 0; j < rows; ++j)
+    for (int k = 0; k < cols; ++k) {
+      Segment s;
+      const float y = (j - 0.5f * rows) * h, x0 = (k - 0.5f * cols) * 10 * h;
+      s.p0 = Vec3f(x0, y, 0);
+      s.p1 = Vec3f(x0 + 10 * h, y, 0);
+      s.normal = Vec3f(0, 0, 1);
+      s.radius = h;
+      m.segments.push_back(s);
+    }
+  return m;
+}
+
+void BM_SegmentRate(benchmark::State& state) {
+  ThreadLimit limit(2);
+  static const HybridModel plane = segmentPlane(200, 20, 0.01f);  // 4000 segments, ~2.5 px spacing
+  RenderOptions o;
+  o.segmentMethod = kMethods[state.range(0)];
+  const Renderer r(plane, o);
+  const Camera cam = Camera::lookAt(Vec3f(0.1f, -1.0f, 2.6f), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 512, 512);
+  RenderStats st;
+  for (auto _ : state) st = r.render(cam).stats;
+  state.counters["segments/s"] =
+      benchmark::Counter(double(plane.segments.size()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["drawn"] = double(st.segmentsDrawn);
+  state.counters["fragments"] = double(st.fragments);
+}
+BENCHMARK(BM_SegmentRate)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same plane as points (10 per segment): the pure point model the segments replace.
+void BM_PointRate(benchmark::State& state) {
+  ThreadLimit limit(2);
+  static const HybridModel plane = [] {
+    HybridModel m;
+    m.attributes.normals = m.attributes.radii = true;
+    for (const Segment& s : segmentPlane(200, 20, 0.01f).segments)
+      for (int i = 0; i < 10; ++i) m.points.push_back({s.p0 + (i + 0.5f) / 10 * (s.p1 - s.p0), s.normal, Color(1, 1, 1, 1), s.radius});
+    return m;
+  }();
+  const Renderer r(plane, RenderOptions{});
+  const Camera cam = Camera::lookAt(Vec3f(0.1f, -1.0f, 2.6f), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 512, 512);
+  RenderStats st;
+  for (auto _ : state) st = r.render(cam).stats;
+  state.counters["points/s"] = benchmark::Counter(double(plane.points.size()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["fragments"] = double(st.fragments);
+}
+BENCHMARK(BM_PointRate)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// kind 0: points; 1: eps-delta; 2: shape approx greedy; 3: shape approx hierarchical.
+const HybridModel* model(int m, int kind, std::string& error) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, int>, std::unique_ptr<HybridModel>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto key = std::make_pair(m, kind);
+  if (cache.count(key)) return cache[key].get();
+  const auto path = sharedData() / (std::string(kModels[m]) + "_points.ply");
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    error = "shared data absent: " + path.string();
+    return nullptr;
+  }
+  static std::map<int, std::pair<HybridModel, PointGeometry>> clouds;
+  if (!clouds.count(m)) {
+    HybridModel cloud = readModel(path);
+    PointGeometry geo = computePointGeometry(cloud);
+    applyGeometry(cloud, geo);
+    clouds.emplace(m, std::make_pair(std::move(cloud), std::move(geo)));
+  }
+  const auto& [cloud, geo] = clouds.at(m);
+  HybridModel out;
+  if (kind == 0) {
+    out = cloud;
+  } else if (kind == 1) {
+    out = extractEpsDelta(cloud, geo);
+  } else {
+    ShapeApproxOptions o;
+    o.method = kind == 2 ? ClusteringMethod::Greedy : ClusteringMethod::Hierarchical;
+    out = extractShapeApprox(cloud, geo, o);
+  }
+  auto& slot = cache[key];
+  slot = std::make_unique<HybridModel>(std::move(out));
+  return slot.get();
+}
+
+void BM_HybridFrame(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = model(int(state.range(0)), int(state.range(1)), error);
+  if (!m) return state.SkipWithError(error.c_str());
+  ThreadLimit limit(2);
+  RenderOptions o;
+  o.segmentMethod = kMethods[state.range(2)];
+  const Renderer r(*m, o);
+  const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
+  size_t v = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(r.render(views[v++ % views.size()]).color.pixels.data());
+  state.SetLabel(std::string(kModels[state.range(0)]) + (state.range(1) == 0 ? " points" : state.range(1) == 1 ? " eps-delta" : state.range(1) == 2 ? " greedy" : " hierarchical"));
+  state.counters["points"] = double(m->points.size());
+  state.counters["segments"] = double(m->segments.size());
+}
+BENCHMARK(BM_HybridFrame)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1, 2, 3}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+
+}  // namespace
