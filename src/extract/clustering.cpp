@@ -400,19 +400,23 @@ Clustering clusterHierarchical(const PointGeometry& geometry, const ClusteringOp
     }
   }
 
+  // workOf holds ids unique over all levels (levelBase + index), so stale entries of points in
+  // clusters accepted earlier never match a current work item.
   std::vector<uint32_t> workOf(n, kNone), slot(n, 0);
+  uint32_t levelBase = 0;
   Clustering stats;
   size_t acceptedPoints = 0;
   for (auto& f : finished) acceptedPoints += f.members.size();
   while (!level.empty()) {
     parallelFor(0, level.size(), [&](size_t w) {
       const auto& members = level[w].members;
-      for (size_t i = 0; i < members.size(); ++i) workOf[members[i]] = uint32_t(w), slot[members[i]] = uint32_t(i);
+      for (size_t i = 0; i < members.size(); ++i) workOf[members[i]] = levelBase + uint32_t(w), slot[members[i]] = uint32_t(i);
     }, 16);
     std::vector<WorkResult> results(level.size());
     SplitContext ctx{graph, normals, workOf, slot, options.deltaN, options.maxIterations, options.seed};
     // Large clusters first in each chunk is not needed: grain 1 lets TBB balance uneven splits.
-    parallelFor(0, level.size(), [&](size_t w) { results[w] = processWork(level[w], uint32_t(w), ctx); }, 1);
+    parallelFor(0, level.size(), [&](size_t w) { results[w] = processWork(level[w], levelBase + uint32_t(w), ctx); }, 1);
+    levelBase += uint32_t(level.size());
     std::vector<Work> next;
     for (auto& r : results) {
       stats.iterations += r.iterations;
