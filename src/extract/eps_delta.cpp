@@ -124,8 +124,11 @@ bool growDirection(const Context& c, uint32_t i, uint32_t k, Grower& g, bool& de
     g.stamp[j] = g.epoch;
     Vec3d w = c.pos[j] - line.origin;
     double t = w.dot(line.dir);
-    double dist = (w - t * line.dir).norm();
-    g.heap.push_back({dist, t, j});
+    double dist2 = (w - t * line.dir).squaredNorm();
+    // A candidate beyond epsilon is never taken, and it is popped only once no candidate within
+    // epsilon is left (the heap is ordered by distance), when growth is over anyway: skip it.
+    if (dist2 > c.eps * c.eps) return;
+    g.heap.push_back({std::sqrt(dist2), t, j});
     std::push_heap(g.heap.begin(), g.heap.end(), CandGreater{});
   };
   auto take = [&](uint32_t j, double t) {
@@ -144,9 +147,6 @@ bool growDirection(const Context& c, uint32_t i, uint32_t k, Grower& g, bool& de
     g.heap.pop_back();
     const int side = cand.t < tmin ? -1 : (cand.t > tmax ? 1 : 0);
     if ((side < 0 && stopLo) || (side > 0 && stopHi)) continue;
-    // Every later candidate is at least as far from the line: once one is beyond epsilon, no
-    // further point can be taken, so growth is over.
-    if (cand.dist > c.eps) break;
     if (normalOk(ni, c.geo.normals[cand.idx], c.delta)) {
       take(cand.idx, cand.t);
     } else {
