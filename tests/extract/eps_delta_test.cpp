@@ -10,6 +10,8 @@
 #include "linesurf/core/shapes.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/verify.h"
+#include "linesurf/geometry/point_geometry.h"
+#include "linesurf/io/model_io.h"
 #include "test_util.h"
 
 using namespace linesurf;
@@ -259,5 +261,64 @@ TEST(EpsDeltaVerify, CatchesViolations) {
     HybridModel bad = out;
     bad.provenance.clear();
     EXPECT_THROW(verifyExtraction(cloud, &g, bad, st.epsilon, st.delta), Error);
+  }
+}
+
+// With the real §6.1 pipeline (PCA normals, local Delaunay neighbours) instead of exact normals.
+TEST(EpsDelta, GeometryPipelineOnRegularPlaneAndCylinder) {
+  GeometryOptions go;
+  go.curvature = false;
+  for (const HybridModel& given : {shapes::plane(2.0f, 1.0f, 60, 30), shapes::cylinder(1.0f, 2.0f, 48, 24)}) {
+    HybridModel cloud = given;
+    cloud.attributes.normals = false;  // normals come from PCA + MST orientation
+    for (Point& p : cloud.points) p.normal = Vec3f::Zero();
+    PointGeometry g = computePointGeometry(cloud, go);
+    EpsDeltaStats st;
+    HybridModel out = extractEpsDelta(cloud, g, {.provenance = true}, &st);
+    EXPECT_GE(st.replacedFraction(), 0.9) << cloud.points.size();
+    expectVerified(cloud, g, out, st.epsilon, st.delta);
+  }
+}
+
+TEST(EpsDelta, CliExtractThenVerify) {
+  auto dir = test::scratchDir("eps_delta_cli");
+  HybridModel cloud = shapes::cylinder(1.0f, 2.0f, 40, 20, {.noise = 0.01f, .seed = 3});
+  writeModel(dir / "in.ply", cloud);
+  auto r = test::runCli("extract eps-delta " + (dir / "in.ply").string() + " -o " + (dir / "out.ply").string() +
+                        " --provenance --epsilon-rel 0.1");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("reduction"), std::string::npos) << r.out;
+  HybridModel out = readModel(dir / "out.ply");
+  EXPECT_GT(out.segments.size(), 0u);
+  EXPECT_EQ(out.provenance.size(), out.segments.size());
+  r = test::runCli("verify-extraction " + (dir / "in.ply").string() + " " + (dir / "out.ply").string());
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("ok"), std::string::npos) << r.out;
+  // A tighter epsilon than the one used must fail the check, with exit code 3.
+  r = test::runCli("verify-extraction " + (dir / "in.ply").string() + " " + (dir / "out.ply").string() +
+                   " --epsilon 1e-9");
+  EXPECT_EQ(r.exitCode, 3) << r.out;
+  // Bad parameters are usage errors (exit 1).
+  r = test::runCli("extract eps-delta " + (dir / "in.ply").string() + " -o " + (dir / "x.ply").string() +
+                   " --delta 5");
+  EXPECT_EQ(r.exitCode, 1) << r.out;
+  r = test::runCli("extract eps-delta " + (dir / "in.ply").string() + " -o " + (dir / "x.ply").string() +
+                   " --epsilon 0.1 --epsilon-rel 0.1");
+  EXPECT_EQ(r.exitCode, 1) << r.out;
+}
+
+TEST(SharedEpsDelta, SmallModelsVerify) {
+  LINESURF_REQUIRE_SHARED_DATA();
+  GeometryOptions go;
+  go.curvature = false;
+  for (const char* name : {"screwdriver_points.ply", "rockerarm_points.ply", "santa_points.ply"}) {
+    HybridModel cloud = readModel(test::sharedData() / name);
+    PointGeometry g = computePointGeometry(cloud, go);
+    EpsDeltaStats st;
+    HybridModel out = extractEpsDelta(cloud, g, {.provenance = true}, &st);
+    EXPECT_GT(st.segments, 0u) << name;
+    EXPECT_EQ(st.keptPoints + st.replacedPoints, cloud.points.size());
+    EXPECT_NEAR(st.epsilon, 0.05 * g.averageSpacing, 1e-12) << name;
+    expectVerified(cloud, g, out, st.epsilon, st.delta);
   }
 }
