@@ -232,6 +232,18 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
     c.renderer.reset();
     summarise(*c.result);
   }
+  // Which primitives are segments: the candidate from the first view, points grey, segments orange.
+  if (images && o.imageViews > 0 && !cams.empty())
+    for (Candidate& c : candidates) {
+      HybridModel painted = *c.model;
+      painted.texture.reset();
+      painted.attributes.colors = true;
+      for (Point& p : painted.points) p.color = Color(0.75f, 0.75f, 0.75f, 1);
+      for (Segment& s : painted.segments) s.color = Color(1.0f, 0.45f, 0.1f, 1);
+      const std::string rel = model.name + "/" + experimentMethodName(c.result->method) + "/structure.png";
+      writePng(o.outDir / rel, renderImage(painted, cams.front(), o.render).color, false);
+      c.result->structureImage = rel;
+    }
 }
 
 bool isPointMethod(ExperimentMethod m) { return m != ExperimentMethod::Contour; }

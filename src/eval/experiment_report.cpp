@@ -63,6 +63,7 @@ json methodJson(const MethodResult& r) {
     j["large_cluster_points"] = r.largeClusterPoints;
     j["clusters_image"] = r.clustersImage;
   }
+  j["structure_image"] = r.structureImage;
   return j;
 }
 
@@ -364,7 +365,7 @@ void writeExperimentHtml(const ExperimentResults& results, const std::filesystem
          "<th>data reduction</th><th>mse</th><th>nccm</th><th>SSIM</th><th>mean |A-B|</th><th>std |A-B|</th>"
          "<th>speedup</th></tr>\n";
     for (const MethodResult& r : m.methods)
-      h += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.4f}</td><td>{:.4f}"
+      h += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.6f}</td><td>{:.4f}"
                        "</td><td>{:.4f}</td><td>{:.2f}</td><td>{:.2f}</td><td>{}</td></tr>\n",
                        experimentMethodName(r.method), r.referencePoints, r.points, r.segments,
                        r.clusters ? std::to_string(r.clusters) : "", pct(r.dataReduction), r.mse, r.nccm, r.ssim,
@@ -379,6 +380,8 @@ void writeExperimentHtml(const ExperimentResults& results, const std::filesystem
         if (v < r.diffImages.size())
           h += figure(r.diffImages[v], fmt::format("view {}: difference (mean {:.2f})", v, r.views[v].metrics.meanAbsDiff));
       }
+      if (!r.structureImage.empty())
+        h += figure(r.structureImage, fmt::format("{} segments (orange), {} points (grey)", r.segments, r.points));
       if (!r.clustersImage.empty()) h += figure(r.clustersImage, fmt::format("{} clusters", r.clusters));
       h += "</div>\n";
     }

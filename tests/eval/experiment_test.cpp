@@ -100,6 +100,8 @@ TEST(Experiment, SmokeRunOnBundledModels) {
         ASSERT_FALSE(mr.clustersImage.empty());
         EXPECT_TRUE(fs::exists(o.outDir / mr.clustersImage));
       }
+      ASSERT_FALSE(mr.structureImage.empty());
+      EXPECT_TRUE(fs::exists(o.outDir / mr.structureImage));
       ASSERT_EQ(mr.images.size(), 1u);
       EXPECT_TRUE(fs::exists(o.outDir / mr.images[0]));
       EXPECT_TRUE(fs::exists(o.outDir / mr.diffImages[0]));
@@ -209,4 +211,24 @@ TEST(Experiment, CliExitsNonZeroWhenAModelFails) {
   EXPECT_NE(r.out.find("ball_points"), std::string::npos) << r.out;
   r = test::runCli("experiment " + good.string() + " -o " + out.string() + " --methods nonsense");
   EXPECT_EQ(r.exitCode, 1) << r.out;
+}
+
+// The shared models are found and mapped to the thesis's names; one small cloud runs end to end.
+TEST(SharedExperiment, ScrewdriverMapsToTheThesisAndRuns) {
+  LINESURF_REQUIRE_SHARED_DATA();
+  ExperimentOptions o = fastOptions(test::sharedData());
+  o.only = {"screwdriver"};
+  o.methods = {ExperimentMethod::EpsDelta, ExperimentMethod::ShapeGreedy};
+  const ExperimentResults r = runExperiment(o);
+  ASSERT_EQ(r.models.size(), 1u);
+  const ModelResult& m = r.models[0];
+  ASSERT_FALSE(m.failed) << m.error;
+  EXPECT_EQ(m.thesisName, "Screwdriver");
+  EXPECT_EQ(m.inputPoints, 3395u);
+  ASSERT_EQ(m.methods.size(), 2u);
+  for (const MethodResult& mr : m.methods) {
+    EXPECT_LE(mr.points + mr.segments, mr.referencePoints);
+    EXPECT_NEAR(mr.nccm, 1.0, 0.01);
+  }
+  EXPECT_TRUE(thesisFigures(m.thesisName, 1));
 }

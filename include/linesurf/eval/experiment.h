@@ -110,6 +110,8 @@ struct MethodResult {
   std::vector<std::string> images;      ///< candidate images, relative to outDir
   std::vector<std::string> diffImages;  ///< difference heat-maps, relative to outDir
   std::string clustersImage;            ///< shape approximation: clusters picture (§3.2.3, Fig. 22)
+  /// The candidate from the first view with points grey and segments orange (thesis Figs. 23-26).
+  std::string structureImage;
   std::vector<std::string> notes;       ///< extraction diagnostics worth reading
 };
 
