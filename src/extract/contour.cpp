@@ -38,7 +38,7 @@ struct FaceInfo {
   uint8_t family = 0;
   uint8_t level = 0;
   bool degenerate = false;
-  uint32_t touches = 0;
+  bool touch = false;      // a plane touches only the face's top vertex
   uint32_t converted = 0;  // segments of this face turned into points
 };
 
@@ -298,7 +298,10 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   Cutter cutter(mesh, options, d, values);
 
   // Pass B: family and level per face (§3.3: d(P) = d / 2^⌈log2(1/sin θ)⌉), output counts.
-  std::vector<size_t> segCount(nf, 0), ptCount(nf, 0);
+  // Counts go to offset[f + 1] and become offsets by an in-place prefix sum below.
+  std::vector<size_t> segOffset(nf + 1, 0), ptOffset(convert ? nf + 1 : 0, 0);
+  auto segCount = [&](size_t f) { return segOffset[f + 1] - segOffset[f]; };
+  auto ptCount = [&](size_t f) { return convert ? ptOffset[f + 1] - ptOffset[f] : 0; };
   blockedWithProgress(nf, options.progress, 0.0, 0.5, [&](size_t begin, size_t end) {
     for (size_t f = begin; f < end; ++f) {
       FaceInfo& fi = info[f];
@@ -312,20 +315,20 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
       for (double scaled = s; m < 60 && scaled < 1 - 1e-12; scaled *= 2) ++m;
       fi.level = uint8_t(m);
       Cutter::Sorted sf = cutter.sorted(f, fi);
-      fi.touches = sf.topTouch;
-      segCount[f] = sf.cuts();
+      fi.touch = sf.topTouch;
+      segOffset[f + 1] = sf.cuts();
     }
   });
   // Every cut is at least one primitive: refuse an absurd spacing before cutting anything.
   size_t cuts = 0;
-  for (size_t f = 0; f < nf; ++f) cuts += segCount[f];
+  for (size_t f = 0; f < nf; ++f) cuts += segOffset[f + 1];
   if (cuts > options.maxPrimitives)
     throwBadParameter("spacing", fmt::format("d = {:.6g} would cut {} segments (limit {}); use a larger spacing",
                                              d, cuts, options.maxPrimitives));
   if (convert) {
     parallelFor(0, nf, [&](size_t f) {
       FaceInfo& fi = info[f];
-      if (fi.degenerate || segCount[f] == 0) return;
+      if (fi.degenerate || segOffset[f + 1] == 0) return;
       size_t segs = 0, pts = 0;
       cutter.cut(f, fi, [&](const EdgePoint&, const EdgePoint&, const Vec3f& p0, const Vec3f& p1) {
         double l = (p1 - p0).cast<double>().norm();
@@ -336,26 +339,25 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
           ++segs;
         }
       });
-      segCount[f] = segs;
-      ptCount[f] = pts;
+      segOffset[f + 1] = segs;
+      ptOffset[f + 1] = pts;
     }, 1024);
   }
 
   // Prefix sums: each face writes its own slots, so the output is the same for any thread count.
-  std::vector<size_t> segOffset(nf + 1, 0), ptOffset(nf + 1, 0);
   for (size_t f = 0; f < nf; ++f) {
-    segOffset[f + 1] = segOffset[f] + segCount[f];
-    ptOffset[f + 1] = ptOffset[f] + ptCount[f];
+    segOffset[f + 1] += segOffset[f];
+    if (convert) ptOffset[f + 1] += ptOffset[f];
     const FaceInfo& fi = info[f];
     if (fi.degenerate) continue;
     ++stats.cutByFamily[fi.family];
     stats.halvedSpacing += fi.level > 0;
-    stats.vertexTouches += fi.touches;
+    stats.vertexTouches += fi.touch;
     stats.convertedSegments += fi.converted;
-    stats.uncutTriangles += segCount[f] + ptCount[f] == 0;
+    stats.uncutTriangles += segCount(f) + ptCount(f) == 0;
   }
   stats.segments = segOffset[nf];
-  stats.points = ptOffset[nf];
+  stats.points = convert ? ptOffset[nf] : 0;
   if (stats.segments + stats.points > options.maxPrimitives)
     throwBadParameter("spacing", fmt::format("d = {:.6g} would cut {} segments and {} points (limit {}); use a larger spacing",
                                              d, stats.segments, stats.points, options.maxPrimitives));
@@ -375,8 +377,8 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   blockedWithProgress(nf, options.progress, 0.5, 1.0, [&](size_t begin, size_t end) {
     for (size_t f = begin; f < end; ++f) {
       const FaceInfo& fi = info[f];
-      if (fi.degenerate || segCount[f] + ptCount[f] == 0) continue;
-      size_t si = segOffset[f], pi = ptOffset[f];
+      if (fi.degenerate || segCount(f) + ptCount(f) == 0) continue;
+      size_t si = segOffset[f], pi = convert ? ptOffset[f] : 0;
       const Vec3f fn = faceNormal[f];
       cutter.cut(f, fi, [&](const EdgePoint& ea, const EdgePoint& eb, const Vec3f& p0, const Vec3f& p1) {
         double w0[3], w1[3];
