@@ -225,6 +225,16 @@ void benchCloud(const std::string& name, const HybridModel& model, const Options
              ours.orientationComponents, ours.orientationFlips, ours.averageSpacing);
 }
 
+/// Two unit spheres far apart (a disconnected neighbour graph).
+HybridModel twoSpheres() {
+  auto a = shapes::sphere(1, 10000), b = shapes::sphere(1, 10000, {.irregular = true, .seed = 8});
+  for (auto& p : b.points) {
+    p.position += Vec3f(5, 0, -1);
+    a.points.push_back(p);
+  }
+  return a;
+}
+
 /// Orientation on analytic shapes: normals pointing inward (exact normals known).
 void orientationShapes(const Options& opt) {
   struct Shape { std::string name; HybridModel m; };
@@ -234,7 +244,8 @@ void orientationShapes(const Options& opt) {
                              {"torus 30k regular", shapes::torus(2, 0.6f, 300, 100, reg)},
                              {"torus 30k irregular+noise", shapes::torus(2, 0.6f, 300, 100, irr)},
                              {"cylinder 20k regular (open)", shapes::cylinder(1, 4, 200, 100, reg)},
-                             {"cylinder 20k irregular+noise", shapes::cylinder(1, 4, 200, 100, irr)}};
+                             {"cylinder 20k irregular+noise", shapes::cylinder(1, 4, 200, 100, irr)},
+                             {"two spheres 2 x 10k (disconnected)", twoSpheres()}};
   fmt::print("\nOrientation on analytic shapes (k = {}): normals pointing inward, and time (s)\n", opt.k);
   fmt::print("| shape | linesurf | Open3D | CGAL |\n|---|---|---|---|\n");
   for (auto& [name, m] : list) {
@@ -276,6 +287,7 @@ void orientationShapes(const Options& opt) {
       // Exact outward normal of the analytic shape, recomputed from the position.
       Vec3f truth;
       if (name.rfind("sphere", 0) == 0) truth = pos;
+      else if (name.rfind("two", 0) == 0) truth = pos.x() > 2.5f ? Vec3f(pos - Vec3f(5, 0, -1)) : pos;
       else if (name.rfind("torus", 0) == 0) {
         Vec3f c(pos.x(), pos.y(), 0);
         c = c.normalized() * 2;

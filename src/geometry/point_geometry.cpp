@@ -74,7 +74,9 @@ void computeNeighbours(const HybridModel& cloud, int k, PointGeometry& g, const 
   CloudAdaptor adaptor{&cloud.points};
   KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   tree.buildIndex();
-  const size_t want = std::min(n, size_t(k) + 1);
+  // One result more than needed (self + k + 1) tells whether the k-th place is tied; only then
+  // a radius search collects every tied point, so ties are always broken by index.
+  const size_t want = std::min(n, size_t(k) + 2);
   // Query in the tree's leaf order: consecutive queries touch the same nodes (cache locality).
   // Each query writes only its own row, so the order does not change the result.
   const std::vector<uint32_t>& order = tree.vAcc;
@@ -82,19 +84,31 @@ void computeNeighbours(const HybridModel& cloud, int k, PointGeometry& g, const 
     std::vector<uint32_t> idx(want);
     std::vector<float> d2(want);
     std::vector<std::pair<float, uint32_t>> row;
+    std::vector<std::pair<uint32_t, float>> tied;
     for (size_t o = b; o < e; ++o) {
       const size_t i = order.size() == n ? order[o] : o;
       nanoflann::KNNResultSet<float, uint32_t> rs(want);
       rs.init(idx.data(), d2.data());
-      tree.findNeighbors(rs, cloud.points[i].position.data(), nanoflann::SearchParams());
+      const float* query = cloud.points[i].position.data();
+      tree.findNeighbors(rs, query, nanoflann::SearchParams());
       row.clear();
-      bool selfSeen = false;
-      for (size_t t = 0; t < rs.size(); ++t) {
-        if (idx[t] == i) { selfSeen = true; continue; }
-        row.emplace_back(d2[t], idx[t]);
+      for (size_t t = 0; t < rs.size(); ++t) row.emplace_back(d2[t], idx[t]);
+      // Sorted by distance already: order equal distances by index (insertion sort, ~free).
+      for (size_t a = 1; a < row.size(); ++a)
+        for (size_t c = a; c > 0 && row[c] < row[c - 1]; --c) std::swap(row[c], row[c - 1]);
+      if (row.size() == size_t(k) + 2 && row[size_t(k) + 1].first == row[size_t(k)].first) {
+        tied.clear();
+        tree.radiusSearch(query, std::nextafter(row[size_t(k)].first, kInf), tied, nanoflann::SearchParams(32, 0, false));
+        row.clear();
+        for (auto& [j, d] : tied) row.emplace_back(d, j);
+        std::sort(row.begin(), row.end());
       }
-      std::sort(row.begin(), row.end());
-      if (!selfSeen && row.size() > size_t(k)) row.resize(size_t(k));
+      // Drop the point itself (first among its duplicates by index, not necessarily first).
+      for (size_t t = 0; t < row.size(); ++t)
+        if (row[t].second == i) {
+          row.erase(row.begin() + std::ptrdiff_t(t));
+          break;
+        }
       const size_t m = std::min(row.size(), size_t(k));
       for (size_t t = 0; t < m; ++t) {
         g.neighbours[i * k + t] = row[t].second;

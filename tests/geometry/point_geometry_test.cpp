@@ -314,3 +314,29 @@ TEST(PointGeometry, ApplyWritesNormalsRadiiAndCurvatureProperties) {
   for (const char* name : {"k_min", "k_max", "dmin_x", "dmin_y", "dmin_z"})
     EXPECT_EQ(cloud.pointProperties.at(name).size(), cloud.points.size()) << name;
 }
+
+TEST(PointGeometry, NeighboursAreExactKNearest) {
+  // A noisy surface, a dense clump, duplicates and far outliers: the grid must stay exact.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1, 1);
+  HybridModel cloud = shapes::torus(2, 0.5f, 60, 20, {.noise = 0.2f, .irregular = true, .seed = 1});
+  for (int i = 0; i < 300; ++i) cloud.points.push_back({.position = Vec3f(0.01f * u(rng), 0.01f * u(rng), 3 + 0.01f * u(rng))});
+  for (int i = 0; i < 50; ++i) cloud.points.push_back(cloud.points[size_t(i * 7)]);
+  for (int i = 0; i < 20; ++i) cloud.points.push_back({.position = Vec3f(40 * u(rng), 40 * u(rng), 40 * u(rng))});
+  const int k = 10;
+  GeometryOptions o = recompute(k);
+  o.delaunayNeighbours = o.curvature = false;
+  auto g = computePointGeometry(cloud, o);
+  const size_t n = cloud.points.size();
+  std::vector<float> d(n);
+  for (size_t i = 0; i < n; i += 3) {
+    std::vector<std::pair<float, uint32_t>> all;
+    for (size_t j = 0; j < n; ++j)
+      if (j != i) all.emplace_back((cloud.points[j].position - cloud.points[i].position).squaredNorm(), uint32_t(j));
+    std::partial_sort(all.begin(), all.begin() + k, all.end());
+    for (int t = 0; t < k; ++t) {
+      ASSERT_FLOAT_EQ(g.neighbourDistances[i * k + t], std::sqrt(all[size_t(t)].first)) << i << " " << t;
+      ASSERT_EQ(g.neighbours[i * k + t], all[size_t(t)].second) << i << " " << t;
+    }
+  }
+}
