@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numeric>
 #include <queue>
-#include <tuple>
+#include <cstring>
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
@@ -233,6 +233,7 @@ struct SplitContext {
   float delta;
   int maxIterations;
   uint64_t seed;
+  SplitSeeding seeding;
 };
 
 /// Average normal of the given members (unit), zero when it cancels out.
@@ -288,15 +289,40 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
     return state % bound;
   };
   uint32_t seeds[2];
-  seeds[0] = uint32_t(nextRandom(m));
-  seeds[1] = uint32_t(nextRandom(m - 1));
-  if (seeds[1] >= seeds[0]) ++seeds[1];
+  if (ctx.seeding == SplitSeeding::Random) {
+    seeds[0] = uint32_t(nextRandom(m));
+    seeds[1] = uint32_t(nextRandom(m - 1));
+    if (seeds[1] >= seeds[0]) ++seeds[1];
+  } else {
+    // Normal extremes: from a random member r, t = the member whose normal is farthest from n_r,
+    // s = the member farthest from n_t (ties: lowest index). Seeds at the two ends of the normal
+    // distribution split the cluster where it bends, not by chance.
+    auto farthestFrom = [&](uint32_t from) {
+      const Vec3f nf = normals[w.members[from]];
+      float best = -1;
+      uint32_t arg = from;
+      for (size_t i = 0; i < m; ++i) {
+        float v = (normals[w.members[i]] - nf).squaredNorm();
+        if (v > best) best = v, arg = uint32_t(i);
+      }
+      return arg;
+    };
+    seeds[1] = farthestFrom(uint32_t(nextRandom(m)));
+    seeds[0] = farthestFrom(seeds[1]);
+    if (seeds[0] == seeds[1]) seeds[0] = seeds[1] == 0 ? 1 : 0;  // all normals equal (cannot violate delta_n)
+  }
   Vec3f seedN[2] = {normals[w.members[seeds[0]]], normals[w.members[seeds[1]]]};
 
   std::vector<int8_t> lab(m);
   std::vector<uint8_t> pushed(m);
-  using Entry = std::tuple<float, uint32_t, uint8_t>;  // (V_n, local index, cluster b)
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> pq;
+  // Queue entries packed in one integer: V_n's bits (order-preserving for V_n >= 0), then the local
+  // index, then b: the smallest V_n pops first, ties by index and cluster, deterministically.
+  std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> pq;
+  auto pack = [](float v, uint32_t local, uint32_t b) {
+    uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    return (uint64_t(bits) << 32) | (uint64_t(local) << 1) | b;
+  };
   auto localOf = [&](uint32_t p) -> uint32_t { return ctx.workOf[p] == workIndex ? ctx.slot[p] : kNone; };
 
   auto pushNeighbours = [&](uint32_t local, uint8_t b) {
@@ -304,7 +330,7 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
       uint32_t lq = localOf(q);
       if (lq == kNone || lab[lq] >= 0 || (pushed[lq] & (1u << b))) continue;
       pushed[lq] |= uint8_t(1u << b);
-      pq.emplace((normals[q] - seedN[b]).squaredNorm(), lq, b);
+      pq.push(pack((normals[q] - seedN[b]).squaredNorm(), lq, b));
     }
   };
 
@@ -317,8 +343,10 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
     for (int b = 0; b < 2; ++b) lab[seeds[b]] = int8_t(b);
     for (uint8_t b = 0; b < 2; ++b) pushNeighbours(seeds[b], b);
     while (!pq.empty()) {
-      auto [key, lq, b] = pq.top();
+      const uint64_t top = pq.top();
       pq.pop();
+      const uint32_t lq = uint32_t(top & 0xffffffffu) >> 1;
+      const uint8_t b = uint8_t(top & 1u);
       if (lab[lq] >= 0) continue;
       lab[lq] = int8_t(b);
       pushNeighbours(lq, b);
@@ -413,7 +441,8 @@ Clustering clusterHierarchical(const PointGeometry& geometry, const ClusteringOp
       for (size_t i = 0; i < members.size(); ++i) workOf[members[i]] = levelBase + uint32_t(w), slot[members[i]] = uint32_t(i);
     }, 16);
     std::vector<WorkResult> results(level.size());
-    SplitContext ctx{graph, normals, workOf, slot, options.deltaN, options.maxIterations, options.seed};
+    SplitContext ctx{graph, normals, workOf, slot, options.deltaN, options.maxIterations, options.seed,
+                     options.seeding};
     // Large clusters first in each chunk is not needed: grain 1 lets TBB balance uneven splits.
     parallelFor(0, level.size(), [&](size_t w) { results[w] = processWork(level[w], levelBase + uint32_t(w), ctx); }, 1);
     levelBase += uint32_t(level.size());

@@ -340,7 +340,8 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
   for (uint32_t i : kept) {
     Point p = cloud.points[i];
     p.normal = geometry.normals[i];
-    if (!(p.radius > 0) && haveSpacing) p.radius = geometry.spacing[i];
+    // Same rule as applyGeometry: the per-point spacing, else the cloud's average spacing.
+    if (!(p.radius > 0) && haveSpacing) p.radius = geometry.spacing[i] > 0 ? geometry.spacing[i] : geometry.averageSpacing;
     out.points.push_back(p);
   }
   for (const auto& [name, values] : cloud.pointProperties) {

@@ -20,6 +20,12 @@ namespace linesurf {
 
 struct PointGeometry;
 
+/// How a hierarchical split picks its two initial seeds (§3.2.3.2).
+enum class SplitSeeding {
+  Random,          ///< two random members, as the thesis states
+  NormalExtremes,  ///< random start r; t farthest in normal from r; s farthest from t (default)
+};
+
 struct ClusteringOptions {
   /// Normal variation tolerance delta_n: bound on ||n(C) - n_j||^2 = 2 - 2 cos(angle) for every
   /// member j. Default 0.008 (§7.2, about 5.1 degrees). Must lie in (0, 2): at 2 a member normal
@@ -30,6 +36,9 @@ struct ClusteringOptions {
   /// Hierarchical only: seed of the random initial seed pairs. Same seed, same clusters, for any
   /// thread count.
   uint64_t seed = 1;
+  /// Hierarchical only: initial seeds of a split (docs/decisions.md: random seeds make splits
+  /// peel off a few points at a time, quadratic time and more clusters).
+  SplitSeeding seeding = SplitSeeding::NormalExtremes;
   ProgressFn progress;  ///< optional progress callback
 };
 
