@@ -66,7 +66,7 @@ void BM_SegmentRate(benchmark::State& state) {
   state.counters["drawn"] = double(st.segmentsDrawn);
   state.counters["fragments"] = double(st.fragments);
 }
-BENCHMARK(BM_SegmentRate)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SegmentRate)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // The same plane as points (10 per segment): the pure point model the segments replace.
 void BM_PointRate(benchmark::State& state) {
@@ -85,7 +85,7 @@ void BM_PointRate(benchmark::State& state) {
   state.counters["points/s"] = benchmark::Counter(double(plane.points.size()), benchmark::Counter::kIsIterationInvariantRate);
   state.counters["fragments"] = double(st.fragments);
 }
-BENCHMARK(BM_PointRate)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PointRate)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // kind 0: points; 1: eps-delta; 2: shape approx greedy; 3: shape approx hierarchical.
 const HybridModel* model(int m, int kind, std::string& error) {
@@ -141,6 +141,7 @@ void BM_HybridFrame(benchmark::State& state) {
 BENCHMARK(BM_HybridFrame)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1, 2, 3}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()  // CPU seconds of both threads: robust on a shared, loaded machine
     ->UseRealTime()
     ->MinTime(1.0);
 

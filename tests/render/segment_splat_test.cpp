@@ -229,8 +229,6 @@ TEST(SegmentSplat, MethodsAgreeWithReferenceOnSimpleViews) {
     for (SegmentMethod m : {SegmentMethod::ScreenSpace, SegmentMethod::Approx}) {
       const WeightImage img = weightImage(s, cam, m);
       const WeightError e = weightError(img, ref);
-      std::printf("%-16s %-12s psnr %6.1f dB  max %.4f  fallback %d long %d quads %zu\n", v.name, name(m), e.psnr,
-                  e.maxRel, int(img.fallback), int(img.longCase), img.quads);
       if (m == SegmentMethod::ScreenSpace) {
         EXPECT_GT(e.psnr, 45) << v.name;
         EXPECT_LT(e.maxRel, 0.05) << v.name;
@@ -375,6 +373,88 @@ TEST(SegmentSplat, RandomViewsGiveSaneSplats) {
   }
   EXPECT_GT(drawn, 100);
   std::printf("random views: %d drawn, %d Approx fallbacks\n", drawn, fallbacks);
+}
+
+}  // namespace
+}  // namespace linesurf
+
+// Regenerates docs/images/segments/* and prints the error tables of docs/segment-splatting.md
+// when LINESURF_SEGMENT_DOC_IMAGES names an output folder; skipped otherwise.
+#include "linesurf/io/image_io.h"
+
+namespace linesurf {
+namespace {
+
+Image weightToImage(const WeightImage& w, int width, int height, float peak) {
+  Image img(width, height, Color(0, 0, 0, 1));
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const float v = std::clamp(w.w[size_t(y) * width + x] / peak, 0.0f, 1.0f);
+      img.at(x, y) = Color(v, v, v, 1);
+    }
+  return img;
+}
+
+TEST(SegmentSplatDocs, WriteImagesAndTables) {
+  const char* dirEnv = std::getenv("LINESURF_SEGMENT_DOC_IMAGES");
+  if (!dirEnv) GTEST_SKIP() << "set LINESURF_SEGMENT_DOC_IMAGES=<folder> to regenerate the docs images";
+  const std::filesystem::path dir(dirEnv);
+  std::filesystem::create_directories(dir);
+  // 1. Weight of one segment per view: ScreenSpace and Approx against the Reference.
+  struct View {
+    const char* name;
+    Vec3f eye;
+    float length;
+  };
+  const View views[] = {
+      {"front-long", Vec3f(0.1f, -0.2f, 3.0f), 1.0f},    {"front-short", Vec3f(0.1f, -0.2f, 3.0f), 0.08f},
+      {"oblique", Vec3f(0.5f, -2.0f, 1.5f), 1.0f},       {"grazing", Vec3f(0.3f, -3.0f, 0.15f), 1.0f},
+      {"grazing-10deg", Vec3f(0.2f, -3.0f, 0.5f), 1.0f}, {"close-up", Vec3f(0.05f, -0.3f, 0.35f), 1.0f},
+      {"along-axis", Vec3f(2.5f, -0.3f, 1.0f), 1.0f},    {"minified", Vec3f(0.2f, -4.0f, 25.0f), 1.0f},
+  };
+  std::printf("\n| view | ScreenSpace PSNR | ScreenSpace max | Approx PSNR | Approx max | Approx case |\n|---|---|---|---|---|---|\n");
+  for (const View& v : views) {
+    const Segment s = unitSegment(v.length, 0.05f);
+    const Camera cam = Camera::lookAt(v.eye, Vec3f(0, 0, 0), Vec3f(0, 0, 1), 40, 192, 192, 0.01f, 100);
+    const WeightImage ref = weightImage(s, cam, SegmentMethod::Reference);
+    const WeightImage ss = weightImage(s, cam, SegmentMethod::ScreenSpace);
+    const WeightImage ap = weightImage(s, cam, SegmentMethod::Approx);
+    const WeightError es = weightError(ss, ref), ea = weightError(ap, ref);
+    std::printf("| %s | %.1f dB | %.4f | %.1f dB | %.4f | %s |\n", v.name, es.psnr, es.maxRel, ea.psnr, ea.maxRel,
+                ap.fallback ? "fallback" : ap.longCase ? "long" : "short");
+    writePng(dir / (std::string("weight-") + v.name + "-reference.png"), weightToImage(ref, 192, 192, ref.peak), false);
+    writePng(dir / (std::string("weight-") + v.name + "-screenspace.png"), weightToImage(ss, 192, 192, ref.peak), false);
+    writePng(dir / (std::string("weight-") + v.name + "-approx.png"), weightToImage(ap, 192, 192, ref.peak), false);
+  }
+  // 2. Shaded images of the plane and the cylinder: points vs segments, each method vs Reference.
+  const Pair plane = planePair(90, 90, 0.05f, 6), cyl = cylinderPair(1.0f, 96, 60, 10);
+  struct Scene {
+    const char* name;
+    const Pair* pair;
+    Camera cam;
+  };
+  const Scene scenes[] = {
+      {"plane-close", &plane, Camera::lookAt(Vec3f(0.2f, -1.1f, 1.2f), Vec3f(0, 0.2f, 0), Vec3f(0, 0, 1), 40, 256, 256, 0.05f, 50)},
+      {"plane-grazing", &plane, Camera::lookAt(Vec3f(0.1f, -2.3f, 0.25f), Vec3f(0, 0.5f, 0), Vec3f(0, 0, 1), 40, 256, 256, 0.05f, 50)},
+      {"plane-far", &plane, Camera::lookAt(Vec3f(0.3f, -3.0f, 5.0f), Vec3f(0, 0.2f, 0), Vec3f(0, 0, 1), 40, 256, 256, 0.05f, 50)},
+      {"cylinder", &cyl, Camera::lookAt(Vec3f(0.3f, -4.2f, 0.8f), Vec3f(0, 0, 0), Vec3f(0, 0, 1), 40, 256, 256, 0.1f, 50)},
+  };
+  std::printf("\n| scene | points vs segments (ScreenSpace) MAD | ScreenSpace vs Reference PSNR / max | Approx vs Reference PSNR / max | Approx vs points MAD |\n|---|---|---|---|---|\n");
+  for (const Scene& sc : scenes) {
+    const Image pts = renderImage(sc.pair->points, sc.cam).color;
+    const Image ref = renderImage(sc.pair->segments, sc.cam, optionsFor(SegmentMethod::Reference)).color;
+    const Image ss = renderImage(sc.pair->segments, sc.cam, optionsFor(SegmentMethod::ScreenSpace)).color;
+    const Image ap = renderImage(sc.pair->segments, sc.cam, optionsFor(SegmentMethod::Approx)).color;
+    const ImageMetrics a = compareImages(pts, ss), b = compareImages(ref, ss), c = compareImages(ref, ap),
+                       d = compareImages(pts, ap);
+    std::printf("| %s | %.3f | %.1f dB / %.0f | %.1f dB / %.0f | %.3f |\n", sc.name, a.meanAbsDiff, b.psnr, b.maxAbsDiff,
+                c.psnr, c.maxAbsDiff, d.meanAbsDiff);
+    const std::string base = std::string(sc.name);
+    writePng(dir / (base + "-points.png"), pts, false);
+    writePng(dir / (base + "-segments.png"), ss, false);
+    writePng(dir / (base + "-approx.png"), ap, false);
+    writePng(dir / (base + "-diff-points-segments.png"), differenceHeatmap(pts, ss, 8), false);
+  }
 }
 
 }  // namespace

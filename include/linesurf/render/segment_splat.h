@@ -75,6 +75,7 @@ struct SegmentQuad {
   float scale[4];   ///< weight scaling factor at the corners (Figure 19)
   bool middle = false;   ///< T2 (middle portion) instead of T1 (endpoint portion)
   float tail = 1e30f;    ///< texture length of the segment: T1(x) - T1(x - tail) (short case)
+  Vec2f lo = Vec2f::Zero(), hi = Vec2f::Zero();  ///< bounding box of the corners
 };
 
 struct WeightTextures;  // §5.2.3.2 tables, segment_splat.cpp
@@ -94,6 +95,10 @@ struct PreparedSegment {
   Vec3f normal = Vec3f::Zero();  ///< unit, facing the viewer
   float length = 0;
   float aMin = 0, aMax = 0, bMax = 0;  ///< plane-coordinate box of the footprint
+  /// The footprint box projected to the screen (pixels), a convex quad when not clipped by the
+  /// near/far plane: rasterisation visits only each row's span inside it.
+  Vec2f screenQuad[4];
+  bool useSpans = false;
   float zThreshold0 = 0, zThreshold1 = 0;  ///< at p0 and p1
   float alpha = 1;
   Vec3f albedo = Vec3f::Zero();
