@@ -282,6 +282,15 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
     Vec3d p = mesh.positions[v].cast<double>();
     for (int fam = 0; fam < 2; ++fam) values[fam][v] = (planes.normal[fam].dot(p) - planes.offset[fam]) / d;
   }, 4096);
+  // Plane indices must stay exact integers in a double (and fit int64): |value| 2^m < 2^52.
+  constexpr double kExact = 0x1.0p52;
+  double maxValue = 0;
+  for (int fam = 0; fam < 2; ++fam)
+    for (double x : values[fam])
+      if (std::isfinite(x)) maxValue = std::max(maxValue, std::abs(x));
+  if (maxValue >= kExact / 4)
+    throwBadParameter("spacing", fmt::format("d = {:.6g} is too small for coordinates up to {:.6g} (plane indices beyond 2^50)",
+                                             d, maxValue * d));
 
   std::vector<Vec3f> unitVertexNormals;
   const bool useVertexNormals = options.vertexNormals && mesh.normals.size() == nv && nv > 0;
@@ -313,6 +322,12 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
       fi.family = first ? 0 : 1;
       int m = 0;  // smallest m with 2^m sin θ >= 1 (tolerance: sin θ = 1 up to rounding keeps d)
       for (double scaled = s; m < 60 && scaled < 1 - 1e-12; scaled *= 2) ++m;
+      // Faces almost parallel to the planes (only with familySwitchSine < 1) could need a level
+      // beyond exact integers: cap it there (their cut count is bounded anyway).
+      const auto& F = mesh.faces[f];
+      const std::vector<double>& val = values[fi.family];
+      const double vmax = std::max({std::abs(val[F[0]]), std::abs(val[F[1]]), std::abs(val[F[2]]), 1.0});
+      while (m > 0 && vmax * double(uint64_t(1) << m) >= kExact) --m;
       fi.level = uint8_t(m);
       Cutter::Sorted sf = cutter.sorted(f, fi);
       fi.touch = sf.topTouch;

@@ -488,6 +488,9 @@ TEST(Contour, BadParametersAndIndicesThrow) {
   o.maxPrimitives = 1000000;
   EXPECT_EQ(kindOf(o, mesh), badParameter);
   o = {};
+  o.spacing = 1e-30f;  // plane indices beyond exact doubles
+  EXPECT_EQ(kindOf(o, mesh), badParameter);
+  o = {};
   o.planes = ContourPlanes{{Vec3d(1, 0, 0), Vec3d(1, 0, 0)}, {0, 0}};
   EXPECT_EQ(kindOf(o, mesh), badParameter);
   TriangleMesh broken = mesh;
@@ -566,4 +569,28 @@ TEST(SharedContour, MeshEndpointsOnTrianglesAndSpacingAtMostD) {
     for (const Segment& s : model.segments)
       ASSERT_TRUE(s.p0.allFinite() && s.p1.allFinite() && s.normal.allFinite() && s.length() > 0);
   }
+}
+
+TEST(Contour, NearlyParallelFacesUseFinerSubLattices) {
+  // A strip of faces tilted 1e-3 rad against P=, cut with P= only: the level must rise to
+  // m = ⌈log2(1/sin θ)⌉ = 10 so that the segments on each face are still at most d apart.
+  TriangleMesh mesh = shapes::gridMesh(4, 4);
+  for (Vec3f& p : mesh.positions) p.z() = 1e-3f * p.x();
+  ContourOptions o = withFaces();
+  o.spacing = 0.1f;
+  o.familySwitchSine = 0;
+  o.planes = ContourPlanes{{Vec3d(0, 0, 1), Vec3d(1, 0, 0)}, {0.0, 0.0}};
+  ContourStats st;
+  HybridModel model = extractContour(mesh, o, &st);
+  EXPECT_EQ(st.cutByFamily[0], mesh.faces.size());
+  EXPECT_GE(model.segments.size(), 8u);
+  expectEndpointsOnTriangles(mesh, model, st, 1e-6);
+  expectSpacingAtMostD(mesh, model, st);
+  // The default rule takes P‖ (sin θ ~ 1) instead, at level 1 (sin θ just below 1).
+  o.familySwitchSine = 1;
+  ContourStats st1;
+  HybridModel model1 = extractContour(mesh, o, &st1);
+  EXPECT_EQ(st1.cutByFamily[1], mesh.faces.size());
+  EXPECT_LT(model1.segments.size(), model.segments.size() * 2);
+  expectSpacingAtMostD(mesh, model1, st1);
 }
