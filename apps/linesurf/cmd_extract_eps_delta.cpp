@@ -15,7 +15,7 @@ namespace {
 struct EpsDeltaArgs {
   std::string input, output;
   double epsilon = 0, epsilonRel = 0.05, delta = 0.004;
-  int k = 12, minReplaced = 4;
+  int k = 12, minReplaced = 4, maxReplaced = 0;
   bool provenance = false, recomputeNormals = false, ascii = false;
 };
 
@@ -55,6 +55,7 @@ void run(const EpsDeltaArgs& a) {
   o.epsilonRelative = a.epsilonRel;
   o.delta = a.delta;
   o.minReplaced = a.minReplaced;
+  o.maxReplaced = a.maxReplaced;
   o.provenance = a.provenance;
   o.progress = progressBar();
   EpsDeltaStats st;
@@ -103,6 +104,10 @@ RegisterCommand reg(31, [](CLI::App& app) {
       ->check(CLI::Range(0.0, 2.0));
   sub->add_option("--min-replaced", args->minReplaced, "Smallest number of points a segment may replace")->capture_default_str()
       ->check(CLI::Range(2, 1 << 30));
+  sub->add_option("--max-replaced", args->maxReplaced,
+                  "Stop growing a segment at this many points (0 = no limit; bounds time on long regular rows)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("-k,--neighbours", args->k, "Neighbours per point for normals and spacing (§6.1)")->capture_default_str()
       ->check(CLI::Range(3, 256));
   sub->add_flag("--provenance", args->provenance, "Record the input points each segment replaced (for verify-extraction)");

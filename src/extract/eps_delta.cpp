@@ -98,6 +98,7 @@ struct Context {
   double eps;
   float delta;
   int minReplaced;
+  int maxReplaced;
   std::vector<Vec3d> pos;
 };
 
@@ -141,7 +142,8 @@ bool growDirection(const Context& c, uint32_t i, uint32_t k, Grower& g, bool& de
   g.stamp[k] = g.epoch;
   take(i, 0.0);
   take(k, (c.pos[k] - pi).dot(line.dir));
-  while (!g.heap.empty()) {
+  const size_t cap = c.maxReplaced > 0 ? size_t(c.maxReplaced) : SIZE_MAX;
+  while (!g.heap.empty() && g.taken.size() < cap) {
     std::pop_heap(g.heap.begin(), g.heap.end(), CandGreater{});
     const Grower::Cand cand = g.heap.back();
     g.heap.pop_back();
@@ -202,6 +204,9 @@ void checkOptions(const EpsDeltaOptions& o) {
   if (!(o.delta >= 0 && o.delta <= 2))
     throwBadParameter("delta", "must lie in [0, 2] (it bounds 1 - n_i.n_j), got " + std::to_string(o.delta));
   if (o.minReplaced < 2) throwBadParameter("min-replaced", "must be >= 2, got " + std::to_string(o.minReplaced));
+  if (o.maxReplaced != 0 && o.maxReplaced < o.minReplaced)
+    throwBadParameter("max-replaced", "must be 0 (no limit) or >= min-replaced (" + std::to_string(o.minReplaced) +
+                                          "), got " + std::to_string(o.maxReplaced));
 }
 
 }  // namespace
@@ -227,7 +232,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
   stats.epsilon = eps;
   stats.delta = options.delta;
 
-  Context ctx{cloud, geometry, eps, float(options.delta), options.minReplaced, {}};
+  Context ctx{cloud, geometry, eps, float(options.delta), options.minReplaced, options.maxReplaced, {}};
   ctx.pos.resize(n);
   Bounds3f box;
   for (size_t i = 0; i < n; ++i) {

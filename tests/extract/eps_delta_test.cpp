@@ -158,6 +158,17 @@ TEST(EpsDelta, LazyHeapEqualsEagerDefinition) {
   EXPECT_GT(reinserts, 0u);  // the lazy path was exercised
 }
 
+TEST(EpsDelta, MaxReplacedBoundsSegments) {
+  HybridModel cloud = shapes::plane(2.0f, 1.0f, 60, 30);
+  PointGeometry g = syntheticGeometry(cloud);
+  EpsDeltaStats st;
+  HybridModel out = extractEpsDelta(cloud, g, {.maxReplaced = 16, .provenance = true}, &st);
+  for (auto& p : out.provenance) EXPECT_LE(p.size(), 16u);
+  EXPECT_GE(st.replacedFraction(), 0.9);
+  expectVerified(cloud, g, out, st.epsilon, st.delta);
+  EXPECT_THROW(extractEpsDelta(cloud, g, {.maxReplaced = 3}), Error);
+}
+
 TEST(EpsDelta, SegmentsComeInDecreasingCount) {
   HybridModel cloud = shapes::sphere(1.0f, 1200);
   PointGeometry g = syntheticGeometry(cloud);

@@ -41,6 +41,10 @@ struct EpsDeltaOptions {
   double delta = 0.004;
   /// Segments replacing fewer points are rejected ("3 or less" in §3.1.4 -> 4). >= 2.
   int minReplaced = 4;
+  /// Growth of one segment stops once it holds this many points; 0 = no limit (§3.1.4 as written).
+  /// Computing L_max for every point costs O(n x segment length) time and memory, which is
+  /// quadratic on long regular rows (a 300 x 300 grid plane); a limit bounds it. 0 or >= minReplaced.
+  int maxReplaced = 0;
   /// Record, per segment, the input indices it replaced (HybridModel::provenance); the anchor
   /// comes first, the rest in increasing position along the segment.
   bool provenance = false;
