@@ -148,6 +148,17 @@ void summarise(MethodResult& m) {
   m.referenceRenderMedian = median(tr);
   m.candidateRenderMedian = median(tc);
   m.speedup = m.referenceRenderMedian > 0 ? 1.0 - m.candidateRenderMedian / m.referenceRenderMedian : 0.0;
+  auto med = [&](auto field) {
+    std::vector<double> v;
+    for (const ExperimentView& x : m.views) v.push_back(double(x.*field));
+    return median(v);
+  };
+  m.referenceFragments = med(&ExperimentView::referenceFragments);
+  m.candidateFragments = med(&ExperimentView::candidateFragments);
+  m.referencePrepareMedian = med(&ExperimentView::referencePrepareSeconds);
+  m.candidatePrepareMedian = med(&ExperimentView::candidatePrepareSeconds);
+  m.referenceRasterMedian = med(&ExperimentView::referenceRasterSeconds);
+  m.candidateRasterMedian = med(&ExperimentView::candidateRasterSeconds);
 }
 
 double dataReduction(size_t referencePoints, size_t points, size_t segments) {
@@ -217,6 +228,12 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
       ExperimentView ev;
       ev.candidateSeconds = tc.seconds();
       ev.referenceSeconds = refSeconds;
+      ev.referenceFragments = rr.stats.fragments;
+      ev.candidateFragments = rc.stats.fragments;
+      ev.referencePrepareSeconds = rr.stats.prepareSeconds;
+      ev.candidatePrepareSeconds = rc.stats.prepareSeconds;
+      ev.referenceRasterSeconds = rr.stats.rasterSeconds;
+      ev.candidateRasterSeconds = rc.stats.rasterSeconds;
       ev.metrics = compareImages(rr.color, rc.color);
       c.result->views.push_back(ev);
       if (keep) {

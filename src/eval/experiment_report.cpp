@@ -32,6 +32,12 @@ json methodJson(const MethodResult& r) {
     json j = metricsJson(v.metrics);
     j["reference_seconds"] = num(v.referenceSeconds);
     j["candidate_seconds"] = num(v.candidateSeconds);
+    j["reference_fragments"] = v.referenceFragments;
+    j["candidate_fragments"] = v.candidateFragments;
+    j["reference_prepare_seconds"] = num(v.referencePrepareSeconds);
+    j["candidate_prepare_seconds"] = num(v.candidatePrepareSeconds);
+    j["reference_raster_seconds"] = num(v.referenceRasterSeconds);
+    j["candidate_raster_seconds"] = num(v.candidateRasterSeconds);
     views.push_back(j);
   }
   json j = {{"method", experimentMethodName(r.method)},
@@ -53,6 +59,12 @@ json methodJson(const MethodResult& r) {
             {"reference_render_median_seconds", num(r.referenceRenderMedian)},
             {"candidate_render_median_seconds", num(r.candidateRenderMedian)},
             {"speedup", num(r.speedup)},
+            {"reference_fragments_median", num(r.referenceFragments)},
+            {"candidate_fragments_median", num(r.candidateFragments)},
+            {"reference_prepare_median_seconds", num(r.referencePrepareMedian)},
+            {"candidate_prepare_median_seconds", num(r.candidatePrepareMedian)},
+            {"reference_raster_median_seconds", num(r.referenceRasterMedian)},
+            {"candidate_raster_median_seconds", num(r.candidateRasterMedian)},
             {"images", r.images},
             {"diff_images", r.diffImages},
             {"notes", r.notes},
@@ -236,14 +248,18 @@ void meshTable(std::string& md, const ExperimentResults& results) {
 
 void timingTable(std::string& md, const ExperimentResults& results) {
   md += "### Render times (median over the views, same run, interleaved per view)\n\n";
-  md += "| Model | Method | Reference (ms) | Hybrid / lines (ms) | Speedup | Reference primitives | Hybrid primitives |\n";
-  md += "|---|---|---:|---:|---:|---:|---:|\n";
+  md += "Each pair: reference (point model) / candidate (hybrid or line model). Prepare: per-primitive work (culling, "
+        "projection, lighting); raster: tiles rasterised and resolved (fill-bound, grows with the fragments).\n\n";
+  md += "| Model | Method | Total (ms) | Speedup | Primitives | Fragments (k) | Prepare (ms) | Raster (ms) |\n";
+  md += "|---|---|---:|---:|---:|---:|---:|---:|\n";
   for (const ModelResult& model : results.models) {
     if (model.failed) continue;
     for (const MethodResult& r : model.methods)
-      md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {} | {} | {} |\n", model.name, experimentMethodName(r.method),
-                        1000 * r.referenceRenderMedian, 1000 * r.candidateRenderMedian, pct(r.speedup),
-                        r.referencePoints, r.points + r.segments);
+      md += fmt::format("| {} | {} | {:.1f} / {:.1f} | {} | {} / {} | {:.0f} / {:.0f} | {:.1f} / {:.1f} | {:.1f} / {:.1f} |\n",
+                        model.name, experimentMethodName(r.method), 1000 * r.referenceRenderMedian,
+                        1000 * r.candidateRenderMedian, pct(r.speedup), r.referencePoints, r.points + r.segments,
+                        r.referenceFragments / 1000, r.candidateFragments / 1000, 1000 * r.referencePrepareMedian,
+                        1000 * r.candidatePrepareMedian, 1000 * r.referenceRasterMedian, 1000 * r.candidateRasterMedian);
   }
   md += "\n";
 }

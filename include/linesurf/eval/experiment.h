@@ -15,6 +15,7 @@
 /// Definitions of every figure are in docs/metrics.md; the protocol and our choices in
 /// docs/experiments.md and docs/decisions.md ("Experiments and metrics (§7)").
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -72,6 +73,11 @@ struct ExperimentView {
   ImageMetrics metrics;          ///< reference (point model) vs. candidate (hybrid / line model)
   double referenceSeconds = 0;   ///< wall time to render the reference
   double candidateSeconds = 0;   ///< wall time to render the candidate
+  /// Renderer breakdown (RenderStats): fragments generated, per-primitive prepare time and
+  /// rasterise + resolve time, for the reference and the candidate.
+  uint64_t referenceFragments = 0, candidateFragments = 0;
+  double referencePrepareSeconds = 0, candidatePrepareSeconds = 0;
+  double referenceRasterSeconds = 0, candidateRasterSeconds = 0;
 };
 
 /// Mean and standard deviation of a per-view quantity.
@@ -105,6 +111,10 @@ struct MethodResult {
   /// (T_ref - T_hybrid) / T_ref of the medians: the fraction of render time saved (thesis's
   /// "speedup", in percent there). Negative when the hybrid is slower.
   double speedup = 0;
+  /// Medians over the views of the RenderStats breakdown (same fields as ExperimentView).
+  double referenceFragments = 0, candidateFragments = 0;
+  double referencePrepareMedian = 0, candidatePrepareMedian = 0;
+  double referenceRasterMedian = 0, candidateRasterMedian = 0;
 
   std::vector<ExperimentView> views;
   std::vector<std::string> images;      ///< candidate images, relative to outDir
