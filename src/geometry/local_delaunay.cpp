@@ -5,21 +5,27 @@
 // and q_b are consecutive on that hull. One angular sort and a Graham scan, O(k log k).
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "geometry/detail/local_delaunay.h"
 
 namespace linesurf::detail {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 // Points on the same ray from p closer than this (sine of the angle) hide one another.
 constexpr double kSameRaySine = 1e-7;
 // A hull turn counts as convex unless it turns right by more than this (sine of the angle):
 // co-circular neighbours (regular grids, float round-off) stay in the star.
 constexpr double kTurnSine = 1e-6;
-// p lies on the hull of its neighbourhood when an angular gap reaches pi minus this.
+// p lies on the hull of its neighbourhood when an angular gap reaches pi minus about this (rad).
 constexpr double kGapTolerance = 1e-6;
+
+/// A monotone substitute for atan2 in [0, 4): cheaper, and exact on axis-aligned directions.
+inline double pseudoAngle(double x, double y) {
+  const double d = std::abs(x) + std::abs(y);
+  if (d == 0) return 0;
+  const double p = y / d;
+  return x >= 0 ? (y >= 0 ? p : 4 + p) : 2 - p;
+}
 
 inline double turnSine(double ax, double ay, double bx, double by, double cx, double cy) {
   const double ux = bx - ax, uy = by - ay, vx = cx - bx, vy = cy - by;
@@ -37,7 +43,7 @@ void localDelaunayStar(std::span<const Vec2d> q, double minDist2, LocalStar& sta
   for (size_t j = 0; j < q.size(); ++j) {
     const double r2 = q[j].squaredNorm();
     if (!(r2 > minDist2) || !std::isfinite(r2)) continue;
-    c.push_back({std::atan2(q[j].y(), q[j].x()), q[j].x() / r2, q[j].y() / r2, r2, int(j)});
+    c.push_back({pseudoAngle(q[j].x(), q[j].y()), q[j].x() / r2, q[j].y() / r2, r2, int(j)});
   }
   if (c.empty()) return;
   std::sort(c.begin(), c.end(), [](const auto& a, const auto& b) {
@@ -69,12 +75,15 @@ void localDelaunayStar(std::span<const Vec2d> q, double minDist2, LocalStar& sta
     star.boundary = true;
     return;
   }
-  // Largest angular gap: p is on the hull of its neighbourhood when it reaches pi.
+  // Largest angular gap (as a pseudo-angle of the turn from one direction to the next): p is on
+  // the hull of its neighbourhood when it reaches pi (pseudo-angle 2).
   size_t gapAt = 0;
   double maxGap = -1;
   for (size_t t = 0; t < m; ++t) {
-    const double next = t + 1 < m ? c[t + 1].angle : c[0].angle + 2 * kPi;
-    if (next - c[t].angle > maxGap) maxGap = next - c[t].angle, gapAt = t;
+    const auto& a = c[t];
+    const auto& b = c[t + 1 < m ? t + 1 : 0];
+    const double gap = pseudoAngle(a.ux * b.ux + a.uy * b.uy, a.ux * b.uy - a.uy * b.ux);
+    if (gap > maxGap) maxGap = gap, gapAt = t;
   }
   auto& h = scratch.hull;  // indices into c; -1 is the origin
   h.clear();
@@ -87,7 +96,7 @@ void localDelaunayStar(std::span<const Vec2d> q, double minDist2, LocalStar& sta
       h.pop_back();
     }
   };
-  star.boundary = maxGap >= kPi - kGapTolerance;
+  star.boundary = maxGap >= 2 - kGapTolerance;
   if (star.boundary) {
     // Origin is a hull vertex: scan from the first point after the gap around to the last.
     h.push_back(-1);

@@ -26,9 +26,9 @@ constexpr uint32_t kNone = PointGeometry::kNoNeighbour;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 struct CloudAdaptor {
-  const std::vector<Point>* pts;
+  const std::vector<Vec3f>* pts;
   size_t kdtree_get_point_count() const { return pts->size(); }
-  float kdtree_get_pt(size_t i, size_t d) const { return (*pts)[i].position[int(d)]; }
+  float kdtree_get_pt(size_t i, size_t d) const { return (*pts)[i][int(d)]; }
   template <class B> bool kdtree_get_bbox(B&) const { return false; }
 };
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CloudAdaptor>, CloudAdaptor, 3, uint32_t>;
@@ -66,30 +66,34 @@ inline Vec3f canonicalDirection(Vec3f d) {
 
 // ---------------------------------------------------------------------------------------------
 // Stage 1: exact k nearest neighbours (nanoflann kd-tree).
-void computeNeighbours(const HybridModel& cloud, int k, PointGeometry& g, const ProgressFn& progress) {
-  const size_t n = cloud.points.size();
+void computeNeighbours(const std::vector<Vec3f>& pos, int k, PointGeometry& g, std::vector<uint32_t>& orderOut,
+                       const ProgressFn& progress) {
+  const size_t n = pos.size();
+  orderOut.resize(n);
+  std::iota(orderOut.begin(), orderOut.end(), 0u);
   g.neighbours.assign(n * size_t(k), kNone);
   g.neighbourDistances.assign(n * size_t(k), kInf);
   if (n < 2) return;
-  CloudAdaptor adaptor{&cloud.points};
-  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  CloudAdaptor adaptor{&pos};
+  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
+  if (tree.vAcc.size() == n) orderOut.assign(tree.vAcc.begin(), tree.vAcc.end());
   // One result more than needed (self + k + 1) tells whether the k-th place is tied; only then
   // a radius search collects every tied point, so ties are always broken by index.
   const size_t want = std::min(n, size_t(k) + 2);
   // Query in the tree's leaf order: consecutive queries touch the same nodes (cache locality).
   // Each query writes only its own row, so the order does not change the result.
-  const std::vector<uint32_t>& order = tree.vAcc;
+  const std::vector<uint32_t>& order = orderOut;
   forBlocks(n, progress, "neighbours", 512, [&](size_t b, size_t e) {
     std::vector<uint32_t> idx(want);
     std::vector<float> d2(want);
     std::vector<std::pair<float, uint32_t>> row;
     std::vector<std::pair<uint32_t, float>> tied;
     for (size_t o = b; o < e; ++o) {
-      const size_t i = order.size() == n ? order[o] : o;
+      const size_t i = order[o];
       nanoflann::KNNResultSet<float, uint32_t> rs(want);
       rs.init(idx.data(), d2.data());
-      const float* query = cloud.points[i].position.data();
+      const float* query = pos[i].data();
       tree.findNeighbors(rs, query, nanoflann::SearchParams());
       row.clear();
       for (size_t t = 0; t < rs.size(); ++t) row.emplace_back(d2[t], idx[t]);
@@ -120,7 +124,7 @@ void computeNeighbours(const HybridModel& cloud, int k, PointGeometry& g, const 
 
 // ---------------------------------------------------------------------------------------------
 // Stage 2a: PCA normals (Hoppe 1992): covariance of p and its neighbours about their centroid.
-void computeNormals(const HybridModel& cloud, int k, float dupTol, bool keepFileNormals, PointGeometry& g,
+void computeNormals(const HybridModel& cloud, const std::vector<Vec3f>& pos, const std::vector<uint32_t>& order, int k, float dupTol, bool keepFileNormals, PointGeometry& g,
                     std::vector<uint8_t>& fixedNormal, const ProgressFn& progress) {
   const size_t n = cloud.points.size();
   g.normals.assign(n, Vec3f(0, 0, 1));
@@ -128,14 +132,15 @@ void computeNormals(const HybridModel& cloud, int k, float dupTol, bool keepFile
   g.surfaceVariation.assign(n, 0.0f);
   fixedNormal.assign(n, 0);
   forBlocks(n, progress, "normals", 256, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      const Vec3d p = cloud.points[i].position.cast<double>();
+    for (size_t o = b; o < e; ++o) {
+      const size_t i = order[o];
+      const Vec3d p = pos[i].cast<double>();
       Vec3d sum = Vec3d::Zero();
       int cnt = 1, distinct = 0;
       for (int t = 0; t < k; ++t) {
         const uint32_t j = g.neighbours[i * k + t];
         if (j == kNone) break;
-        sum += cloud.points[j].position.cast<double>() - p;
+        sum += pos[j].cast<double>() - p;
         ++cnt;
         if (g.neighbourDistances[i * k + t] > dupTol) ++distinct;
         else g.flags[i] |= kPointDuplicate;
@@ -145,7 +150,7 @@ void computeNormals(const HybridModel& cloud, int k, float dupTol, bool keepFile
       for (int t = 0; t < k; ++t) {
         const uint32_t j = g.neighbours[i * k + t];
         if (j == kNone) break;
-        const Vec3d d = cloud.points[j].position.cast<double>() - p - mean;
+        const Vec3d d = pos[j].cast<double>() - p - mean;
         cov += d * d.transpose();
       }
       cov += mean * mean.transpose();  // p itself (at 0 relative to p)
@@ -190,8 +195,8 @@ void computeNormals(const HybridModel& cloud, int k, float dupTol, bool keepFile
 // Stage 2b: consistent orientation by a minimum spanning tree (Hoppe 1992) over the symmetrised
 // kNN graph with weights 1 - |n_i . n_j|; Prim's algorithm with a binary heap, one seed per
 // connected component (see docs/decisions.md for the seed rule).
-void orientNormals(const HybridModel& cloud, int k, PointGeometry& g, const std::vector<uint8_t>& fixedNormal) {
-  const size_t n = cloud.points.size();
+void orientNormals(const std::vector<Vec3f>& pos, int k, PointGeometry& g, const std::vector<uint8_t>& fixedNormal) {
+  const size_t n = pos.size();
   // Symmetrised adjacency (CSR): row i = kNN row of i, then every j that lists i.
   std::vector<uint32_t> deg(n + 1, 0);
   for (size_t i = 0; i < n; ++i)
@@ -269,7 +274,7 @@ void orientNormals(const HybridModel& cloud, int k, PointGeometry& g, const std:
         float best = -kInf;
         for (size_t t = 0; t < size; ++t) {
           const uint32_t u = members[t];
-          const float v = cloud.points[u].position.dot(d);
+          const float v = pos[u].dot(d);
           if (v > best || (v == best && u < ext)) best = v, ext = u;
         }
         const float align = std::abs(g.normals[ext].dot(d));
@@ -308,9 +313,9 @@ void orientNormals(const HybridModel& cloud, int k, PointGeometry& g, const std:
 
 // ---------------------------------------------------------------------------------------------
 // Stages 3 and 4.
-void computeDelaunay(const HybridModel& cloud, int k, float dupTol, bool useCgal, PointGeometry& g,
+void computeDelaunay(const std::vector<Vec3f>& pos, const std::vector<uint32_t>& order, int k, float dupTol, bool useCgal, PointGeometry& g,
                      const ProgressFn& progress) {
-  const size_t n = cloud.points.size();
+  const size_t n = pos.size();
   std::vector<uint32_t> tmpIdx(n * size_t(k), kNone);
   std::vector<float> tmpW(n * size_t(k), 0.0f);
   std::vector<uint32_t> count(n, 0);
@@ -319,15 +324,16 @@ void computeDelaunay(const HybridModel& cloud, int k, float dupTol, bool useCgal
     detail::LocalStar star;
     detail::StarScratch scratch;
     std::vector<Vec2d> q(static_cast<size_t>(k));
-    for (size_t i = b; i < e; ++i) {
-      const Vec3d p = cloud.points[i].position.cast<double>();
+    for (size_t o = b; o < e; ++o) {
+      const size_t i = order[o];
+      const Vec3d p = pos[i].cast<double>();
       Vec3d x, y;
       householderTangents(g.normals[i].cast<double>(), x, y);
       int m = 0;
       for (; m < k; ++m) {
         const uint32_t j = g.neighbours[i * k + m];
         if (j == kNone) break;
-        const Vec3d d = cloud.points[j].position.cast<double>() - p;
+        const Vec3d d = pos[j].cast<double>() - p;
         q[size_t(m)] = Vec2d(d.dot(x), d.dot(y));
       }
       std::span<const Vec2d> qs(q.data(), size_t(m));
@@ -359,15 +365,16 @@ void computeDelaunay(const HybridModel& cloud, int k, float dupTol, bool useCgal
 /// Taubin 1995 as in thesis §6.1.2: M = sum_j w_j kappa_j T_j T_j^T restricted to the tangent
 /// plane; its eigenvalues m1 >= m2 give kappa_max = 3 m1 - m2, kappa_min = 3 m2 - m1. Or, with
 /// CurvatureFit::Quadric, the Hessian of a height function fitted to the k nearest neighbours.
-void computeCurvature(const HybridModel& cloud, CurvatureFit fit, PointGeometry& g, const ProgressFn& progress) {
-  const size_t n = cloud.points.size();
+void computeCurvature(const std::vector<Vec3f>& pos, const std::vector<uint32_t>& order, CurvatureFit fit, PointGeometry& g, const ProgressFn& progress) {
+  const size_t n = pos.size();
   g.kMin.assign(n, 0.0f);
   g.kMax.assign(n, 0.0f);
   g.minCurvatureDir.assign(n, Vec3f::Zero());
   g.maxCurvatureDir.assign(n, Vec3f::Zero());
   forBlocks(n, progress, "curvature", 256, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      const Vec3d p = cloud.points[i].position.cast<double>();
+    for (size_t o = b; o < e; ++o) {
+      const size_t i = order[o];
+      const Vec3d p = pos[i].cast<double>();
       const Vec3d nrm = g.normals[i].cast<double>();
       Vec3d x, y;
       householderTangents(nrm, x, y);
@@ -375,7 +382,7 @@ void computeCurvature(const HybridModel& cloud, CurvatureFit fit, PointGeometry&
       const auto ws = g.delaunayWeightsOf(i);
       double m11 = 0, m12 = 0, m22 = 0;  // Taubin's M in the (x, y) basis
       for (size_t t = 0; t < ids.size(); ++t) {
-        const Vec3d d = p - cloud.points[ids[t]].position.cast<double>();  // q_j -> p
+        const Vec3d d = p - pos[ids[t]].cast<double>();  // q_j -> p
         const double d2 = d.squaredNorm();
         double tx = d.dot(x), ty = d.dot(y);
         const double tl = std::sqrt(tx * tx + ty * ty);
@@ -403,7 +410,7 @@ void computeCurvature(const HybridModel& cloud, CurvatureFit fit, PointGeometry&
           if (j == kNone) break;
           if (scale <= 0) scale = double(g.neighbourDistances[i * size_t(g.k) + t]);
           if (!(scale > 0)) continue;
-          const Vec3d d = (cloud.points[j].position.cast<double>() - p) / scale;
+          const Vec3d d = (pos[j].cast<double>() - p) / scale;
           const double u = d.dot(x), v = d.dot(y), h = d.dot(nrm);
           Vec5d phi;
           phi << 0.5 * u * u, u * v, 0.5 * v * v, u, v;
@@ -463,13 +470,16 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   const ProgressFn& progress = options.progress;
 
   Timer timer;
-  computeNeighbours(cloud, k, g, progress);
+  std::vector<Vec3f> pos(n);
+  for (size_t i = 0; i < n; ++i) pos[i] = cloud.points[i].position;
+  std::vector<uint32_t> order;
+  computeNeighbours(pos, k, g, order, progress);
   g.times.neighbours = timer.seconds();
 
   timer.reset();
   const bool keepFile = cloud.attributes.normals && !options.recomputeNormals;
   std::vector<uint8_t> fixedNormal;
-  computeNormals(cloud, k, dupTol, keepFile, g, fixedNormal, progress);
+  computeNormals(cloud, pos, order, k, dupTol, keepFile, g, fixedNormal, progress);
   g.times.normals = timer.seconds();
 
   timer.reset();
@@ -477,19 +487,19 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
                           std::any_of(fixedNormal.begin(), fixedNormal.end(), [](uint8_t f) { return f == 0; });
   if (needOrient) {
     reportProgress(progress, "orientation", 0.0);
-    orientNormals(cloud, k, g, fixedNormal);
+    orientNormals(pos, k, g, fixedNormal);
     reportProgress(progress, "orientation", 1.0);
   }
   g.times.orientation = timer.seconds();
 
   if (options.delaunayNeighbours || options.curvature) {
     timer.reset();
-    computeDelaunay(cloud, k, dupTol, options.cgalDelaunay, g, progress);
+    computeDelaunay(pos, order, k, dupTol, options.cgalDelaunay, g, progress);
     g.times.delaunay = timer.seconds();
   }
   if (options.curvature) {
     timer.reset();
-    computeCurvature(cloud, options.curvatureFit, g, progress);
+    computeCurvature(pos, order, options.curvatureFit, g, progress);
     g.times.curvature = timer.seconds();
   }
 
