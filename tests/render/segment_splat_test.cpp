@@ -459,3 +459,41 @@ TEST(SegmentSplatDocs, WriteImagesAndTables) {
 
 }  // namespace
 }  // namespace linesurf
+
+namespace linesurf {
+namespace {
+
+// §5.2.4: uv interpolated between the endpoints, held at the endpoint's uv beyond them.
+TEST(SegmentSplat, TextureCoordinatesInterpolatedAndClampedBeyondEndpoints) {
+  auto tex = std::make_shared<Image>(64, 1);
+  for (int i = 0; i < 64; ++i) {
+    const float u = (i + 0.5f) / 64;
+    tex->at(i, 0) = Color(1 - u, 0, u, 1);
+  }
+  HybridModel m;
+  m.attributes.texcoords = m.attributes.normals = true;
+  m.texture = tex;
+  Segment s = unitSegment(1.0f, 0.1f);
+  s.uv0 = Vec2f(0.25f, 0.5f);
+  s.uv1 = Vec2f(0.75f, 0.5f);
+  m.segments.push_back(s);
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 2.0f), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 50, 128, 128);
+  for (SegmentMethod meth : kMethods) {
+    RenderOptions o = optionsFor(meth);
+    o.material.ambient = 1;
+    o.material.diffuse = 0;
+    o.material.specular = 0;
+    const Image img = renderImage(m, cam, o).color;
+    auto blueAt = [&](float x) {
+      const Vec3f p = cam.project(cam.toCamera(Vec3f(x, 0, 0)));
+      return img.at(int(p.x()), int(p.y())).z();
+    };
+    EXPECT_NEAR(blueAt(0.0f), 0.5f, 0.03f) << name(meth);
+    EXPECT_NEAR(blueAt(-0.25f), 0.375f, 0.03f) << name(meth);
+    EXPECT_NEAR(blueAt(0.54f), 0.75f, 0.03f) << name(meth);   // beyond p1: uv1
+    EXPECT_NEAR(blueAt(-0.54f), 0.25f, 0.03f) << name(meth);  // beyond p0: uv0
+  }
+}
+
+}  // namespace
+}  // namespace linesurf
