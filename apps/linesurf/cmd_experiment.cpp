@@ -21,6 +21,7 @@ struct ExperimentArgs {
   float deltaN = 0.008f;
   float contourScale = 1.0f;
   float contourSpacing = 0;
+  bool contourVertexNormals = false;
   bool noImages = false;
 };
 
@@ -53,6 +54,7 @@ void run(const ExperimentArgs& a) {
   o.shapeApprox.clustering.deltaN = a.deltaN;
   o.contour.spacingScale = a.contourScale;
   o.contour.spacing = a.contourSpacing;
+  o.contour.vertexNormals = a.contourVertexNormals;
 
   ExperimentResults res = runExperiment(o, progressBar());
   endProgress();
@@ -113,6 +115,8 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1e-3, 1e3));
   sub->add_option("--contour-spacing", a->contourSpacing, "contour: plane spacing d in object units (0 = --contour-scale)")
       ->capture_default_str()->check(CLI::Range(0.0, 1e30));
+  sub->add_flag("--contour-vertex-normals", a->contourVertexNormals,
+                "contour: normals interpolated from the mesh's vertex normals instead of the triangle's (smooth shading)");
   sub->callback([a] { run(*a); });
 });
 
