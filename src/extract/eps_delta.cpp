@@ -250,8 +250,9 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     const size_t b1 = std::min(n, b0 + block);
     parallelFor(b0, b1, [&](size_t ii) {
       thread_local Grower g;
+      thread_local std::vector<uint32_t> rec;  // built here, copied once into the anchor's slot
+      rec.clear();
       const uint32_t i = uint32_t(ii);
-      std::vector<uint32_t>& rec = records[i];
       auto nbs = geometry.delaunayOf(i);
       for (size_t a = 0; a < nbs.size(); ++a) {
         const uint32_t k = nbs[a];
@@ -275,7 +276,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
           rec.push_back(bits);
         }
       }
-      rec.shrink_to_fit();
+      if (!rec.empty()) records[i].assign(rec.begin(), rec.end());
     }, 64);
     reportProgress(options.progress, "eps-delta: grow segments", double(b1) / double(n));
   }
