@@ -496,6 +496,12 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
       p.scale0 = float(1 / (h * std::sqrt(station[k].determinant())));
       p.scale1 = float(1 / (h * std::sqrt(station[k + 1].determinant())));
       p.reach = float(R * std::sqrt(M(0, 0)));
+      p.skew = float(Mi(0, 1) / Mi(0, 0));
+      p.across = float(Mi(1, 1) - Mi(0, 1) * Mi(0, 1) / Mi(0, 0));
+      p.invM00 = float(1 / Mi(0, 0));
+      p.k = float(std::sqrt(0.5 * Mi(0, 0)));
+      const double slope = (double(p.scale1) - p.scale0) / (a1 - a0);
+      p.slope = std::abs(slope) * (a1 - a0) > 1e-4 * p.scale0 ? float(slope) : 0.0f;
       aMin = std::min(aMin, a0 - double(p.reach));
       aMax = std::max(aMax, a1 + double(p.reach));
       bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
@@ -649,21 +655,18 @@ float screenSpaceWeight(const PreparedSegment& sp, float a, float b, float R2) {
     if (a < p.a0 - p.reach || a > p.a1 + p.reach) continue;
     const float len = p.a1 - p.a0;
     const float x = a - p.a0;
-    const float tauStar = x + p.m01 * b / p.m00;
-    const float qmin = b * b * (p.m11 - p.m01 * p.m01 / p.m00);
+    const float tauStar = x + p.skew * b;
+    const float qmin = b * b * p.across;
     if (!(qmin < R2)) continue;
-    const float delta = std::sqrt((R2 - qmin) / p.m00);
+    const float delta = std::sqrt((R2 - qmin) * p.invM00);
     const float t0 = std::max(0.0f, tauStar - delta), t1 = std::min(len, tauStar + delta);
     if (!(t1 > t0)) continue;
-    const float k = std::sqrt(0.5f * p.m00);
-    const float u0 = k * (t0 - tauStar), u1 = k * (t1 - tauStar);
-    // integral of exp(-m00 (tau - tau*)^2 / 2) and of (tau - tau*) times it
-    const float i0 = 0.886226925f / k * (fastErf(u1) - fastErf(u0));  // sqrt(pi)/2 / k
-    const float slope = (p.scale1 - p.scale0) / len;
-    const float sStar = p.scale0 + slope * tauStar;
-    float sum = sStar * i0;
-    if (std::abs(slope) * len > 1e-4f * p.scale0)  // the linear part of the weight scale
-      sum += slope * (std::exp(-u0 * u0) - std::exp(-u1 * u1)) / p.m00;
+    const float u0 = p.k * (t0 - tauStar), u1 = p.k * (t1 - tauStar);
+    // integral of exp(-m00 (tau - tau*)^2 / 2) (= sqrt(pi)/2 / k (erf(u1) - erf(u0))) and of
+    // (tau - tau*) times it
+    const float i0 = 0.886226925f * (fastErf(u1) - fastErf(u0)) / p.k;
+    float sum = (p.scale0 + p.slope * tauStar) * i0;
+    if (p.slope != 0) sum += p.slope * (std::exp(-u0 * u0) - std::exp(-u1 * u1)) * p.invM00;
     w += std::exp(-0.5f * qmin) * sum;
   }
   return w;

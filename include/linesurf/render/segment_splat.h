@@ -60,6 +60,12 @@ struct SegmentPiece {
   float m00 = 1, m01 = 0, m11 = 1;   ///< M^-1 in (a, b)
   float scale0 = 0, scale1 = 0;      ///< weight scale 1 / (h sqrt(det M)) at a0 and a1
   float reach = 0;                   ///< R sqrt(M_aa): how far along a kernel reaches
+  // derived once in prepare (the per-pixel closed form needs no division)
+  float skew = 0;                    ///< m01 / m00
+  float across = 1;                  ///< m11 - m01^2 / m00 = 1 / M_bb
+  float invM00 = 1;                  ///< 1 / m00
+  float k = 1;                       ///< sqrt(m00 / 2)
+  float slope = 0;                   ///< (scale1 - scale0) / (a1 - a0), 0 when negligible
 };
 
 /// One node of the Reference quadrature.
