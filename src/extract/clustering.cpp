@@ -313,6 +313,18 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
   }
   Vec3f seedN[2] = {normals[w.members[seeds[0]]], normals[w.members[seeds[1]]]};
 
+  // Local copies of the normals and of the graph restricted to the cluster: the growths below
+  // then touch only small contiguous arrays.
+  std::vector<Vec3f> ln(m);
+  std::vector<uint32_t> adjOffsets(m + 1, 0), adj;
+  adj.reserve(m * 7);
+  for (size_t i = 0; i < m; ++i) {
+    ln[i] = normals[w.members[i]];
+    for (uint32_t q : ctx.graph.of(w.members[i]))
+      if (ctx.workOf[q] == workIndex) adj.push_back(ctx.slot[q]);
+    adjOffsets[i + 1] = uint32_t(adj.size());
+  }
+
   std::vector<int8_t> lab(m);
   std::vector<uint8_t> pushed(m);
   // Queue entries packed in one integer: V_n's bits (order-preserving for V_n >= 0), then the local
@@ -323,14 +335,12 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
     std::memcpy(&bits, &v, sizeof bits);
     return (uint64_t(bits) << 32) | (uint64_t(local) << 1) | b;
   };
-  auto localOf = [&](uint32_t p) -> uint32_t { return ctx.workOf[p] == workIndex ? ctx.slot[p] : kNone; };
-
   auto pushNeighbours = [&](uint32_t local, uint8_t b) {
-    for (uint32_t q : ctx.graph.of(w.members[local])) {
-      uint32_t lq = localOf(q);
-      if (lq == kNone || lab[lq] >= 0 || (pushed[lq] & (1u << b))) continue;
+    for (uint32_t e = adjOffsets[local]; e < adjOffsets[local + 1]; ++e) {
+      const uint32_t lq = adj[e];
+      if (lab[lq] >= 0 || (pushed[lq] & (1u << b))) continue;
       pushed[lq] |= uint8_t(1u << b);
-      pq.push(pack((normals[q] - seedN[b]).squaredNorm(), lq, b));
+      pq.push(pack((ln[lq] - seedN[b]).squaredNorm(), lq, b));
     }
   };
 
@@ -359,7 +369,7 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
 
     // Reseed from the average normal n'(C_b); new seed: the member closest to it.
     Vec3d sum[2] = {Vec3d::Zero(), Vec3d::Zero()};
-    for (size_t i = 0; i < m; ++i) sum[lab[i]] += normals[w.members[i]].cast<double>();
+    for (size_t i = 0; i < m; ++i) sum[lab[i]] += ln[i].cast<double>();
     uint32_t newSeeds[2] = {seeds[0], seeds[1]};
     Vec3f newN[2] = {seedN[0], seedN[1]};
     float best[2] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
@@ -367,7 +377,7 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
       if (sum[b].norm() > 1e-12) newN[b] = Vec3f(sum[b].normalized().cast<float>());
     for (size_t i = 0; i < m; ++i) {
       int b = lab[i];
-      float v = (normals[w.members[i]] - newN[b]).squaredNorm();
+      float v = (ln[i] - newN[b]).squaredNorm();
       if (v < best[b]) best[b] = v, newSeeds[b] = uint32_t(i);
     }
     if (newSeeds[0] == seeds[0] && newSeeds[1] == seeds[1]) break;
