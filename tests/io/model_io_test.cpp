@@ -300,3 +300,23 @@ TEST(SharedModelIo, ReadsEveryBundledModel) {
     if (fileHoldsMesh(entry.path())) EXPECT_FALSE(readMesh(entry.path()).faces.empty()) << entry.path();
   }
 }
+
+TEST(ModelIo, FailedOverwriteKeepsTheOldFile) {
+  auto dir = test::scratchDir("io_keep");
+  HybridModel m = randomModel(4, 1, 5);
+  writeModel(dir / "m.ply", m);
+  const std::string before = slurp(dir / "m.ply");
+  HybridModel bad = m;
+  bad.provenance = {{1}, {2}};  // two lists for one segment
+  EXPECT_THROW(writeModel(dir / "m.ply", bad), Error);
+  EXPECT_EQ(slurp(dir / "m.ply"), before);
+}
+
+TEST(ModelIo, AsciiWithWindowsLineEndings) {
+  const std::string ply = "ply\r\nformat ascii 1.0\r\ncomment crlf\r\nelement vertex 2\r\nproperty float x\r\n"
+                          "property float y\r\nproperty float z\r\nend_header\r\n1 2 3\r\n4 5 6\r\n";
+  HybridModel m = readPlyModelFromMemory(ply, "crlf.ply");
+  ASSERT_EQ(m.points.size(), 2u);
+  EXPECT_EQ(m.points[1].position, Vec3f(4, 5, 6));
+  EXPECT_EQ(m.comments, std::vector<std::string>{"crlf"});
+}
