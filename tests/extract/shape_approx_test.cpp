@@ -251,3 +251,126 @@ TEST(ShapeApprox, RejectsAbsurdParametersAndMismatchedGeometry) {
   HybridModel other = shapes::plane(1, 1, 4, 4);
   EXPECT_THROW(extractShapeApprox(other, g), Error);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Through the real §6.1 geometry pipeline.
+
+#include <filesystem>
+
+#include "linesurf/io/model_io.h"
+#include "test_util.h"
+
+namespace {
+
+void expectInvariant(const Clustering& c, const PointGeometry& g, float delta) {
+  ASSERT_EQ(c.labels.size(), g.size());
+  size_t total = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    ASSERT_LE(clusterMaxVariation(c, g, k), delta) << "cluster " << k;
+    total += c.clusterSize(k);
+  }
+  EXPECT_EQ(total, g.size());
+}
+
+}  // namespace
+
+TEST(ShapeApprox, ComputedGeometryCylinderSegmentsFollowTheAxis) {
+  for (bool irregular : {false, true}) {
+    HybridModel cyl = shapes::cylinder(1.0f, 2.0f, 120, 40, {.irregular = irregular, .seed = 5});
+    PointGeometry g = computePointGeometry(cyl, {.recomputeNormals = true});
+    for (ClusteringMethod method : {ClusteringMethod::Greedy, ClusteringMethod::Hierarchical}) {
+      ShapeApproxOptions o{.method = method};
+      Clustering c = clusterShapeApprox(g, o);
+      expectInvariant(c, g, o.clustering.deltaN);
+      HybridModel out = extractShapeApprox(cyl, g, c, o);
+      ASSERT_GT(out.segments.size(), 20u) << irregular;
+      size_t along = 0;
+      for (const Segment& s : out.segments) along += angleDegrees(s.p1 - s.p0, Vec3f::UnitZ()) <= 10.0;
+      EXPECT_GE(double(along), 0.9 * double(out.segments.size()))
+          << (irregular ? "irregular" : "grid") << " method " << int(method);
+    }
+  }
+}
+
+TEST(ShapeApprox, ComputedGeometryIrregularPlaneSpacingMatchesDensity) {
+  // 3000 uniform random samples on a 2 x 1 plane: density rho = 1500, nominal spacing
+  // 1/sqrt(rho) = 0.026. Segments of one cluster are parallel and spaced like the samples.
+  HybridModel plane = shapes::plane(2.0f, 1.0f, 60, 50, {.irregular = true, .seed = 9});
+  PointGeometry g = computePointGeometry(plane, {.recomputeNormals = true});
+  ShapeApproxStats st;
+  HybridModel out = extractShapeApprox(plane, g, {.provenance = true}, &st);
+  EXPECT_EQ(st.clusters, 1u);
+  ASSERT_GT(out.segments.size(), 10u);
+  const Vec3f d0 = (out.segments[0].p1 - out.segments[0].p0).normalized();
+  const Vec3f across = Vec3f::UnitZ().cross(d0).normalized();
+  std::vector<double> offsets;
+  double longest = 0;
+  for (const Segment& s : out.segments) longest = std::max(longest, double(s.length()));
+  for (const Segment& s : out.segments) {
+    // Long segments follow the cluster direction (short ones join two jittered samples).
+    if (s.length() > 0.5 * longest) {
+      EXPECT_LT(angleDegrees(s.p1 - s.p0, d0), 5.0);
+    }
+    offsets.push_back(double(0.5f * (s.p0 + s.p1).dot(across)));
+  }
+  std::sort(offsets.begin(), offsets.end());
+  offsets.erase(std::unique(offsets.begin(), offsets.end(), [](double a, double b) { return b - a < 0.004; }), offsets.end());
+  const double extent = offsets.back() - offsets.front();
+  const double meanGap = extent / double(offsets.size() - 1);
+  const double nominal = 1.0 / std::sqrt(3000.0 / 2.0);
+  EXPECT_GT(meanGap, 0.6 * nominal);
+  EXPECT_LT(meanGap, 1.4 * nominal);
+}
+
+TEST(ShapeApproxCli, WritesHybridAndClusterColouredCloud) {
+  auto dir = test::scratchDir("shape_approx_cli");
+  HybridModel cyl = shapes::cylinder(1.0f, 2.0f, 90, 30);
+  cyl.attributes.normals = false;  // let the CLI compute them
+  writeModel(dir / "cyl.ply", cyl);
+  const std::string in = (dir / "cyl.ply").string(), out = (dir / "out.ply").string(),
+                    clusters = (dir / "clusters.ply").string();
+  auto r = test::runCli("extract shape-approx " + in + " -o " + out + " --clustering hierarchical --seed 3 --clusters-out " +
+                        clusters);
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("clusters"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("reduction"), std::string::npos) << r.out;
+  HybridModel hybrid = readModel(out);
+  EXPECT_GT(hybrid.segments.size(), 0u);
+  HybridModel coloured = readModel(clusters);
+  EXPECT_EQ(coloured.points.size(), cyl.points.size());
+  EXPECT_TRUE(coloured.attributes.colors);
+  // Same seed, same output.
+  auto again = test::runCli("extract shape-approx " + in + " -o " + (dir / "out2.ply").string() +
+                            " --clustering hierarchical --seed 3");
+  ASSERT_EQ(again.exitCode, 0) << again.out;
+  HybridModel second = readModel(dir / "out2.ply");
+  ASSERT_EQ(second.segments.size(), hybrid.segments.size());
+  for (size_t i = 0; i < second.segments.size(); ++i) EXPECT_EQ(second.segments[i].p0, hybrid.segments[i].p0);
+  // Bad parameters exit 1 with the option's name.
+  auto bad = test::runCli("extract shape-approx " + in + " -o " + out + " --delta-n 2.5");
+  EXPECT_EQ(bad.exitCode, 1) << bad.out;
+  EXPECT_NE(bad.out.find("delta-n"), std::string::npos) << bad.out;
+  auto badMethod = test::runCli("extract shape-approx " + in + " -o " + out + " --clustering kmeans");
+  EXPECT_EQ(badMethod.exitCode, 1) << badMethod.out;
+}
+
+TEST(SharedShapeApprox, RockerArmInvariantAndPartition) {
+  LINESURF_REQUIRE_SHARED_DATA();
+  HybridModel cloud = readModel(test::sharedData() / "rockerarm_points.ply");
+  PointGeometry g = computePointGeometry(cloud);
+  for (ClusteringMethod method : {ClusteringMethod::Greedy, ClusteringMethod::Hierarchical}) {
+    ShapeApproxOptions o{.method = method, .provenance = true};
+    Clustering c = clusterShapeApprox(g, o);
+    expectInvariant(c, g, o.clustering.deltaN);
+    ShapeApproxStats st;
+    HybridModel out = extractShapeApprox(cloud, g, c, o, &st);
+    expectPartition(cloud, out);
+    EXPECT_GT(st.segments, 0u);
+    EXPECT_GT(st.dataReduction(), 0.0);
+    for (const Segment& s : out.segments) {
+      EXPECT_NEAR(s.normal.norm(), 1.0f, 1e-4f);
+      EXPECT_LT(std::abs(s.normal.dot((s.p1 - s.p0).normalized())), 1e-3f);
+      EXPECT_GT(s.radius, 0.0f);
+    }
+  }
+}
