@@ -398,7 +398,11 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     Segment s;
     s.p0 = (line.origin + tmin * line.dir).cast<float>();
     s.p1 = (line.origin + tmax * line.dir).cast<float>();
-    Vec3d nn = nid - nid.dot(line.dir) * line.dir;
+    // Perpendicular to the stored (float) segment, as the Segment contract says: on very short
+    // segments the rounded endpoints tilt the direction noticeably against line.dir.
+    Vec3d fdir = (s.p1.cast<double>() - s.p0.cast<double>());
+    fdir = fdir.norm() > 0 ? Vec3d(fdir.normalized()) : line.dir;
+    Vec3d nn = nid - nid.dot(fdir) * fdir;
     s.normal = nn.normalized().cast<float>();
     s.color = cloud.attributes.colors ? Color((colour / double(members.size())).cast<float>()) : Color(1, 1, 1, 1);
     s.radius = float(radius);
