@@ -13,7 +13,7 @@ namespace linesurf {
 
 namespace detail {
 
-std::string readFileBytes(const std::filesystem::path& path) {
+std::string readFileBytes(const std::filesystem::path& path, size_t maxBytes) {
   const std::string name = path.string();
   std::error_code ec;
   auto st = std::filesystem::status(path, ec);
@@ -25,9 +25,10 @@ std::string readFileBytes(const std::filesystem::path& path) {
   char buf[1 << 16];
   // Size from the file system when it has one; read in chunks regardless (pipes, /proc).
   uintmax_t size = std::filesystem::is_regular_file(st) ? std::filesystem::file_size(path, ec) : 0;
-  if (!ec && size > 0) bytes.reserve(size_t(size));
+  if (!ec && size > 0) bytes.reserve(size_t(std::min<uintmax_t>(size, maxBytes)));
   size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.append(buf, n);
+  while (bytes.size() < maxBytes && (n = std::fread(buf, 1, std::min(sizeof buf, maxBytes - bytes.size()), f)) > 0)
+    bytes.append(buf, n);
   const bool failed = std::ferror(f);
   std::fclose(f);
   if (failed) throwBadInput(name, "", "read error");
@@ -100,8 +101,10 @@ bool fileHoldsMesh(const std::filesystem::path& path) {
     case Kind::Xyz: detail::readFileBytes(path); return false;
     case Kind::Ply: break;
   }
-  // Only the header is needed; it parses from the whole file too (a body never has to be read).
-  return detail::plyHoldsMesh(detail::readFileBytes(path), path.string());
+  // Only the header is needed: try the first 64 KiB, the whole file when the header is longer.
+  std::string head = detail::readFileBytes(path, 1 << 16);
+  if (head.size() == (1 << 16) && head.find("end_header") == std::string::npos) head = detail::readFileBytes(path);
+  return detail::plyHoldsMesh(head, path.string());
 }
 
 void writeModel(const std::filesystem::path& path, const HybridModel& model, const WriteOptions& options) {

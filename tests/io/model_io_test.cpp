@@ -320,3 +320,12 @@ TEST(ModelIo, AsciiWithWindowsLineEndings) {
   EXPECT_EQ(m.points[1].position, Vec3f(4, 5, 6));
   EXPECT_EQ(m.comments, std::vector<std::string>{"crlf"});
 }
+
+TEST(ModelIo, FileHoldsMeshWithAHeaderLongerThan64KiB) {
+  auto dir = test::scratchDir("io_longheader");
+  TriangleMesh m = quadMesh();
+  m.comments.assign(3000, std::string(40, 'c'));  // ~140 KB of comments
+  writeMesh(dir / "long.ply", m);
+  EXPECT_TRUE(fileHoldsMesh(dir / "long.ply"));
+  EXPECT_EQ(readMesh(dir / "long.ply").comments.size(), 3000u);
+}

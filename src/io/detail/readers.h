@@ -9,8 +9,9 @@
 
 namespace linesurf::detail {
 
-/// The whole file as bytes; throws BadInput for a missing file, a directory or a read error.
-std::string readFileBytes(const std::filesystem::path& path);
+/// The whole file (or its first maxBytes) as bytes; throws BadInput for a missing file, a
+/// directory or a read error.
+std::string readFileBytes(const std::filesystem::path& path, size_t maxBytes = size_t(-1));
 
 /// PLY from bytes. `textureDir` is where a `comment TextureFile` is looked up; when null the
 /// texture is not loaded (in-memory reads).
