@@ -175,7 +175,7 @@ double bracketRoot(F&& f, double lo, double hi, double flo, double fhi) {
   int side = 0;
   double x = lo;
   for (int it = 0; it < 80; ++it) {
-    x = (lo * fhi - hi * flo) / (fhi - flo);
+    x = fhi != flo ? (lo * fhi - hi * flo) / (fhi - flo) : 0.5 * (lo + hi);
     if (!(x > std::min(lo, hi) && x < std::max(lo, hi))) x = 0.5 * (lo + hi);
     const double fx = f(x);
     if (fx == 0 || std::abs(hi - lo) < 1e-13) break;
