@@ -80,6 +80,10 @@ void run(const EpsDeltaArgs& a) {
   say(fmt::format("reduction    {:.2f}% (§7.2.2: 6 floats per point, 9 per segment)", 100.0 * st.dataReduction()));
   say(fmt::format("candidates   {} seed directions, {} with >= {} points; {} degenerate neighbours",
                   st.seedDirections, st.candidateDirections, a.minReplaced, st.degenerateNeighbours));
+  const double meanCandidate = st.candidateDirections ? double(st.candidateMembers) / st.candidateDirections : 0.0;
+  if (a.maxReplaced == 0 && meanCandidate > 64)
+    say(fmt::format("note         candidates hold {:.0f} points on average: growing them costs O(points x length); "
+                    "--max-replaced 32 bounds it", meanCandidate));
   say(fmt::format("times        read {:.3f} s, geometry {:.3f} s (kNN {:.3f}, normals {:.3f}, orient {:.3f}, "
                   "delaunay {:.3f}, spacing {:.3f}), grow {:.3f} s, select {:.3f} s, build {:.3f} s, write {:.3f} s, "
                   "total {:.3f} s",

@@ -283,7 +283,10 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
   for (size_t i = 0; i < n; ++i) {
     stats.seedDirections += seeds[i];
     stats.degenerateNeighbours += degenerate[i];
-    forEachDirection(records[i], [&](const DirectionView&) { ++stats.candidateDirections; });
+    forEachDirection(records[i], [&](const DirectionView& v) {
+      ++stats.candidateDirections;
+      stats.candidateMembers += v.m;
+    });
   }
   stats.growSeconds = timer.seconds();
 

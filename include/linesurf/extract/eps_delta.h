@@ -59,6 +59,7 @@ struct EpsDeltaStats {
   size_t replacedPoints = 0;   ///< inputPoints - keptPoints
   size_t seedDirections = 0;   ///< (anchor, neighbour) pairs that started a segment
   size_t candidateDirections = 0;  ///< of those, grown to >= minReplaced points
+  size_t candidateMembers = 0;     ///< points held by those candidates (grow-stage work and memory)
   size_t degenerateNeighbours = 0; ///< neighbours whose projection coincides with the anchor
   size_t heapPops = 0, heapReinserts = 0;  ///< lazy greedy phase work
   double epsilon = 0, delta = 0;   ///< the tolerances actually used
