@@ -76,7 +76,7 @@ void run(const ExperimentArgs& a) {
                     m.isMesh ? "" : fmt::format(", geometry {:.2f} s", m.geometrySeconds)));
     for (const MethodResult& r : m.methods)
       say(fmt::format("  {:<18} {:>8} pts {:>7} segs{} reduction {:>6}  mse {:.4f}  nccm {:.4f}  |A-B| {:.2f} ± {:.2f}"
-                      "  render {:.1f} -> {:.1f} ms (speedup {})  extract {:.2f} s",
+                      "  render {:.1f} -> {:.1f} ms CPU (speedup {})  extract {:.2f} s",
                       experimentMethodName(r.method), r.points, r.segments,
                       r.clusters ? fmt::format(" {:>6} clusters", r.clusters) : "", pct(r.dataReduction), r.mse,
                       r.nccm, r.meanAbsDiff.mean, r.stdAbsDiff.mean, 1000 * r.referenceRenderMedian,

@@ -10,6 +10,8 @@
 #include <memory>
 #include <system_error>
 
+#include <time.h>
+
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
@@ -153,6 +155,8 @@ void summarise(MethodResult& m) {
     for (const ExperimentView& x : m.views) v.push_back(double(x.*field));
     return median(v);
   };
+  m.referenceWallMedian = med(&ExperimentView::referenceWallSeconds);
+  m.candidateWallMedian = med(&ExperimentView::candidateWallSeconds);
   m.referenceFragments = med(&ExperimentView::referenceFragments);
   m.candidateFragments = med(&ExperimentView::candidateFragments);
   m.referencePrepareMedian = med(&ExperimentView::referencePrepareSeconds);
@@ -193,6 +197,13 @@ struct Candidate {
   std::unique_ptr<Renderer> renderer;
 };
 
+/// CPU time of the whole process (every thread), seconds.
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
 std::string viewName(int v) { return fmt::format("view_{:03d}", v); }
 
 /// Renders the reference and every candidate from the views, interleaved per view so that the
@@ -214,8 +225,9 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
   for (int v = 0; v < int(cams.size()); ++v) {
     progress(fmt::format("rendering view {}/{}", v + 1, cams.size()), lo + (hi - lo) * double(v) / double(cams.size()));
     Timer tr;
+    double cpu0 = processCpuSeconds();
     RenderResult rr = ref.render(cams[size_t(v)]);
-    const double refSeconds = tr.seconds();
+    const double refCpu = processCpuSeconds() - cpu0, refWall = tr.seconds();
     const bool keep = images && v < o.imageViews;
     if (keep) {
       const std::string rel = model.name + "/" + viewName(v) + "_points.png";
@@ -224,10 +236,13 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
     }
     for (Candidate& c : candidates) {
       Timer tc;
+      cpu0 = processCpuSeconds();
       RenderResult rc = c.renderer->render(cams[size_t(v)]);
       ExperimentView ev;
-      ev.candidateSeconds = tc.seconds();
-      ev.referenceSeconds = refSeconds;
+      ev.candidateSeconds = processCpuSeconds() - cpu0;
+      ev.candidateWallSeconds = tc.seconds();
+      ev.referenceSeconds = refCpu;
+      ev.referenceWallSeconds = refWall;
       ev.referenceFragments = rr.stats.fragments;
       ev.candidateFragments = rc.stats.fragments;
       ev.referencePrepareSeconds = rr.stats.prepareSeconds;

@@ -30,8 +30,10 @@ json methodJson(const MethodResult& r) {
   json views = json::array();
   for (const ExperimentView& v : r.views) {
     json j = metricsJson(v.metrics);
-    j["reference_seconds"] = num(v.referenceSeconds);
-    j["candidate_seconds"] = num(v.candidateSeconds);
+    j["reference_cpu_seconds"] = num(v.referenceSeconds);
+    j["candidate_cpu_seconds"] = num(v.candidateSeconds);
+    j["reference_wall_seconds"] = num(v.referenceWallSeconds);
+    j["candidate_wall_seconds"] = num(v.candidateWallSeconds);
     j["reference_fragments"] = v.referenceFragments;
     j["candidate_fragments"] = v.candidateFragments;
     j["reference_prepare_seconds"] = num(v.referencePrepareSeconds);
@@ -56,8 +58,10 @@ json methodJson(const MethodResult& r) {
             {"mean_abs_diff", {{"mean", num(r.meanAbsDiff.mean)}, {"std", num(r.meanAbsDiff.std)}}},
             {"std_abs_diff", {{"mean", num(r.stdAbsDiff.mean)}, {"std", num(r.stdAbsDiff.std)}}},
             {"max_abs_diff", num(r.maxAbsDiff)},
-            {"reference_render_median_seconds", num(r.referenceRenderMedian)},
-            {"candidate_render_median_seconds", num(r.candidateRenderMedian)},
+            {"reference_render_median_cpu_seconds", num(r.referenceRenderMedian)},
+            {"candidate_render_median_cpu_seconds", num(r.candidateRenderMedian)},
+            {"reference_render_median_wall_seconds", num(r.referenceWallMedian)},
+            {"candidate_render_median_wall_seconds", num(r.candidateWallMedian)},
             {"speedup", num(r.speedup)},
             {"reference_fragments_median", num(r.referenceFragments)},
             {"candidate_fragments_median", num(r.candidateFragments)},
@@ -248,16 +252,19 @@ void meshTable(std::string& md, const ExperimentResults& results) {
 
 void timingTable(std::string& md, const ExperimentResults& results) {
   md += "### Render times (median over the views, same run, interleaved per view)\n\n";
+  md += "Total: process CPU time of one render call (all threads), the basis of the speedup; wall: wall-clock time of "
+        "the same calls (depends on the machine's other load).\n";
   md += "Each pair: reference (point model) / candidate (hybrid or line model). Prepare: per-primitive work (culling, "
         "projection, lighting); raster: tiles rasterised and resolved (fill-bound, grows with the fragments).\n\n";
-  md += "| Model | Method | Total (ms) | Speedup | Primitives | Fragments (k) | Prepare (ms) | Raster (ms) |\n";
-  md += "|---|---|---:|---:|---:|---:|---:|---:|\n";
+  md += "| Model | Method | Total CPU (ms) | Speedup | Wall (ms) | Primitives | Fragments (k) | Prepare (ms) | Raster (ms) |\n";
+  md += "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const ModelResult& model : results.models) {
     if (model.failed) continue;
     for (const MethodResult& r : model.methods)
-      md += fmt::format("| {} | {} | {:.1f} / {:.1f} | {} | {} / {} | {:.0f} / {:.0f} | {:.1f} / {:.1f} | {:.1f} / {:.1f} |\n",
+      md += fmt::format("| {} | {} | {:.1f} / {:.1f} | {} | {:.1f} / {:.1f} | {} / {} | {:.0f} / {:.0f} | {:.1f} / {:.1f} | {:.1f} / {:.1f} |\n",
                         model.name, experimentMethodName(r.method), 1000 * r.referenceRenderMedian,
-                        1000 * r.candidateRenderMedian, pct(r.speedup), r.referencePoints, r.points + r.segments,
+                        1000 * r.candidateRenderMedian, pct(r.speedup), 1000 * r.referenceWallMedian,
+                        1000 * r.candidateWallMedian, r.referencePoints, r.points + r.segments,
                         r.referenceFragments / 1000, r.candidateFragments / 1000, 1000 * r.referencePrepareMedian,
                         1000 * r.candidatePrepareMedian, 1000 * r.referenceRasterMedian, 1000 * r.candidateRasterMedian);
   }

@@ -71,8 +71,10 @@ struct ExperimentOptions {
 /// Image comparison and timing of one view.
 struct ExperimentView {
   ImageMetrics metrics;          ///< reference (point model) vs. candidate (hybrid / line model)
-  double referenceSeconds = 0;   ///< wall time to render the reference
-  double candidateSeconds = 0;   ///< wall time to render the candidate
+  /// CPU time of the process (all threads) to render the reference / the candidate: what a
+  /// single-core machine like the thesis's would show as wall time, and robust to other load.
+  double referenceSeconds = 0, candidateSeconds = 0;
+  double referenceWallSeconds = 0, candidateWallSeconds = 0;  ///< wall-clock time of the same calls
   /// Renderer breakdown (RenderStats): fragments generated, per-primitive prepare time and
   /// rasterise + resolve time, for the reference and the candidate.
   uint64_t referenceFragments = 0, candidateFragments = 0;
@@ -107,7 +109,8 @@ struct MethodResult {
   double minNccm = 0;          ///< worst view
 
   // Timing (§7.2.3): medians over the views, measured interleaved in the same run.
-  double referenceRenderMedian = 0, candidateRenderMedian = 0;
+  double referenceRenderMedian = 0, candidateRenderMedian = 0;  ///< CPU seconds (ExperimentView)
+  double referenceWallMedian = 0, candidateWallMedian = 0;      ///< wall seconds
   /// (T_ref - T_hybrid) / T_ref of the medians: the fraction of render time saved (thesis's
   /// "speedup", in percent there). Negative when the hybrid is slower.
   double speedup = 0;
