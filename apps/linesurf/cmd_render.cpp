@@ -28,7 +28,7 @@ struct RenderArgs {
   std::vector<float> eye, target, up;
   float alpha = -1;
   int layers = 4;
-  float prefilter = 1.0f, cutoff = 2.5f, reconScale = 0.5f, radiusScale = 1.0f;
+  float prefilter = 1.0f, cutoff = 2.0f, reconScale = 0.5f, radiusScale = 1.0f;
   std::string zMode = "primitive";
   float zThreshold = -1;
   float ambient = 0.25f, diffuse = 0.75f, specular = 0.2f, shininess = 24;

@@ -58,6 +58,27 @@ bool clippedScreenBounds(const Camera& cam, const Vec3f* quad, int n, float& x0,
   return true;
 }
 
+// exp(-q/2) for q in [0, 25] (cutoff radius up to 5 sigma), linearly interpolated: the thesis's
+// Gaussian weight texture in one dimension. Relative error below 1e-5.
+struct GaussTable {
+  static constexpr int kSize = 2048;
+  static constexpr float kMaxQ = 25.0f;
+  float v[kSize + 2];
+  GaussTable() {
+    for (int i = 0; i < kSize + 2; ++i) v[i] = std::exp(-0.5f * kMaxQ * float(i) / kSize);
+  }
+  float operator()(float q) const {
+    const float x = q * (kSize / kMaxQ);
+    const int i = int(x);
+    const float f = x - float(i);
+    return v[i] + f * (v[i + 1] - v[i]);
+  }
+};
+const GaussTable& gaussTable() {
+  static const GaussTable table;
+  return table;
+}
+
 }  // namespace
 
 PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out) {
@@ -146,7 +167,7 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   Vec3f quad[4] = {c - R * r0 * E0 - R * r1 * E1, c + R * r0 * E0 - R * r1 * E1, c - R * r0 * E0 + R * r1 * E1,
                    c + R * r0 * E0 + R * r1 * E1};
   // side planes: all corners outside one plane -> outside
-  for (const Vec4f& pl : cam.frustumPlanes()) {
+  for (const Vec4f& pl : frame.frustum) {
     bool allOut = true;
     for (const Vec3f& q : quad)
       if (pl.head<3>().dot(q) + pl.w() >= 0) { allOut = false; break; }
@@ -178,8 +199,13 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   out.albedo = col.head<3>();
   out.alpha = std::clamp(col.w(), 0.0f, 1.0f);
   out.clipped = depthClipped;
-  if (!opt.perPixelLighting)  // Gouraud at the quad's vertices (§6.2.2)
-    for (int i = 0; i < 4; ++i) out.cornerColor[i] = frame.shade(out.albedo, n, quad[i]);
+  out.flat = out.bounds.width() <= PreparedPoint::kFlatShadeSpan && out.bounds.height() <= PreparedPoint::kFlatShadeSpan;
+  if (!opt.perPixelLighting) {  // Gouraud at the quad's vertices (§6.2.2)
+    if (out.flat)
+      out.cornerColor[0] = frame.shade(out.albedo, n, c);
+    else
+      for (int i = 0; i < 4; ++i) out.cornerColor[i] = frame.shade(out.albedo, n, quad[i]);
+  }
   return depthClipped || sideClipped ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
 }
 
@@ -193,9 +219,13 @@ void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   const float R = ctx.frame.opt().cutoffRadius;
   const bool perPixel = ctx.frame.opt().perPixelLighting;
   const float nearD = cam.nearDepth(), farD = cam.farDepth();
-  // Along the ray r(x, y) = ((x - cx)/f, -(y - cy)/f, -1) (depth 1): depth t = (n.c) / (n.r),
-  // plane coords s = t (a0.r) - a0.c, t' = t (a1.r) - a1.c; every dot product with r is affine in
-  // the pixel position, so it is stepped per pixel.
+  // Along the ray r(x, y) = ((x - cx)/f, -(y - cy)/f, -1) (depth 1) the tangent plane is hit at
+  // depth t = (n.c) / N with N = n.r, at plane coordinates s = S / N, t' = T / N where
+  // S = (n.c)(a0.r) - (a0.c) N and T likewise: N, S, T are affine in the pixel position. The
+  // cutoff ellipse q = (S^2 + T^2) / N^2 <= cutoff^2 is therefore a conic in the pixel plane; each
+  // row is clipped to the exact span where S^2 + T^2 - cutoff^2 N^2 <= 0 (a quadratic in x), so
+  // only pixels inside the splat are visited (the thesis rasterises the bounding quad and reads
+  // the weight texture; this is equivalent and perspective-exact).
   const Vec3f& n = sp.normal;
   const float nc = n.dot(sp.center);
   const float a0c = sp.axis0.dot(sp.center), a1c = sp.axis1.dot(sp.center);
@@ -208,33 +238,62 @@ void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   lin(n, ndx, ndy, nc0);
   lin(sp.axis0, adx, ady, ac0);
   lin(sp.axis1, bdx, bdy, bc0);
+  const float Sx = nc * adx - a0c * ndx, Sy = nc * ady - a0c * ndy, Sc = nc * ac0 - a0c * nc0;
+  const float Tx = nc * bdx - a1c * ndx, Ty = nc * bdy - a1c * ndy, Tc = nc * bc0 - a1c * nc0;
   Fragment fr;
   fr.zThreshold = sp.zThreshold;
   fr.alpha = sp.alpha;
   fr.normal = n;
+  // Gouraud: bilinear in the quad's corner colours with u = s/2R + 1/2, v = t'/2R + 1/2; inside
+  // the cutoff |s|, |t'| <= R, so it is the polynomial C0 + Cs s + Ct t' + Cst s t' (no clamping).
   const float inv2R = 0.5f / R;
+  const Vec3f& k00 = sp.cornerColor[0];
+  const Vec3f& k10 = sp.cornerColor[1];
+  const Vec3f& k01 = sp.cornerColor[2];
+  const Vec3f& k11 = sp.cornerColor[3];
+  const Vec3f C0 = 0.25f * (k00 + k10 + k01 + k11);
+  const Vec3f Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
+  const Vec3f Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
+  const Vec3f Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
+  const GaussTable& gauss = gaussTable();
+  const bool flat = sp.flat && !perPixel;
+  if (flat) fr.color = sp.cornerColor[0];
+  const float qa = Sx * Sx + Tx * Tx - cutoffQ * ndx * ndx;
   for (int y = r.y0; y < r.y1; ++y) {
     const float py = float(y) + 0.5f;
-    for (int x = r.x0; x < r.x1; ++x) {
+    const float S0 = Sy * py + Sc, T0 = Ty * py + Tc, N0 = ndy * py + nc0;
+    int xb = r.x0, xe = r.x1;
+    if (qa > 0) {
+      // span of the row inside the conic: qa x^2 + qb x + qc <= 0 (x = pixel centre)
+      const float qb = 2 * (Sx * S0 + Tx * T0 - cutoffQ * ndx * N0);
+      const float qc = S0 * S0 + T0 * T0 - cutoffQ * N0 * N0;
+      const float disc = qb * qb - 4 * qa * qc;
+      if (!(disc > 0)) continue;
+      const float sq = std::sqrt(disc), inv = 0.5f / qa;
+      const float xl = (-qb - sq) * inv, xr = (-qb + sq) * inv;
+      // pixel centres x + 0.5 in [xl, xr], widened by a pixel against rounding
+      xb = std::max(xb, int(std::floor(xl - 0.5f)));
+      xe = std::min(xe, int(std::floor(xr - 0.5f)) + 2);
+    }
+    for (int x = xb; x < xe; ++x) {
       const float px = float(x) + 0.5f;
-      const float nr = ndx * px + ndy * py + nc0;
-      if (!(nr < 0)) continue;  // ray parallel to or leaving the facing plane
-      const float t = nc / nr;
-      const float s = t * (adx * px + ady * py + ac0) - a0c;
-      const float tt = t * (bdx * px + bdy * py + bc0) - a1c;
+      const float N = ndx * px + N0;
+      if (!(N < 0)) continue;  // ray parallel to or leaving the facing plane
+      const float S = Sx * px + S0, T = Tx * px + T0;
+      const float iN = 1.0f / N;
+      const float s = S * iN, tt = T * iN;
       const float q = s * s + tt * tt;
-      if (q > cutoffQ) continue;
+      if (!(q <= cutoffQ)) continue;
+      const float t = nc * iN;
       if (sp.clipped && (t < nearD || t > farD)) continue;
       fr.depth = t;
-      fr.weight = std::exp(-0.5f * q) * sp.weightScale;
-      if (perPixel) {
+      fr.weight = gauss(q) * sp.weightScale;
+      if (flat) {
+      } else if (perPixel) {
         const Vec3f p = t * Vec3f((px - pp.x()) / f, -(py - pp.y()) / f, -1.0f);
         fr.color = ctx.frame.shade(sp.albedo, n, p);
       } else {
-        // bilinear Gouraud interpolation over the quad in its own (s, t) coordinates
-        const float us = std::clamp(s * inv2R + 0.5f, 0.0f, 1.0f), vs = std::clamp(tt * inv2R + 0.5f, 0.0f, 1.0f);
-        fr.color = (1 - vs) * ((1 - us) * sp.cornerColor[0] + us * sp.cornerColor[1]) +
-                   vs * ((1 - us) * sp.cornerColor[2] + us * sp.cornerColor[3]);
+        fr.color = C0 + s * Cs + tt * Ct + (s * tt) * Cst;  // bilinear Gouraud over the quad
       }
       ctx.tile.insert(x, y, fr);
     }

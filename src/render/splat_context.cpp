@@ -49,6 +49,7 @@ FrameContext FrameContext::make(const Camera& camera, const RenderOptions& optio
   f.lightDirCamera = options.light.headlight ? l : Vec3f((camera.rotation() * l).normalized());
   f.fixedZThreshold = options.zThreshold * (sphere.radius > 0 ? sphere.radius : 1.0f);
   f.cutoffQ = options.cutoffRadius * options.cutoffRadius;
+  f.frustum = camera.frustumPlanes();
   return f;
 }
 

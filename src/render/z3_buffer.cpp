@@ -8,59 +8,60 @@
 
 namespace linesurf {
 
-Z3Tile::Z3Tile(const PixelRect& rect, int layers) : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)) {
+Z3Tile::Z3Tile(const PixelRect& rect, int layers)
+    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)), stride_(size_t(kFields) * size_t(layers_)) {
   reset(rect);
 }
 
 void Z3Tile::reset(const PixelRect& rect) {
   rect_ = rect;
   size_t pixels = rect.empty() ? 0 : size_t(rect.width()) * size_t(rect.height());
-  size_t slots = pixels * size_t(layers_);
   count_.assign(pixels, 0);
-  if (z_.size() < slots) {
-    for (auto* v : {&z_, &thr_, &r_, &g_, &b_, &a_, &w_, &nx_, &ny_, &nz_}) v->resize(slots);
-    opaque_.resize(slots);
-  }
+  if (data_.size() < pixels * stride_) data_.resize(pixels * stride_);
   counters_ = {};
 }
+
+namespace {
+// Moves layer s to slot d (all fields) within one pixel block.
+inline void moveLayer(float* px, int L, int d, int s) {
+  for (int f = 0; f < 11; ++f) px[f * L + d] = px[f * L + s];
+}
+}  // namespace
 
 // Composites the adjacent pair of layers (i, i+1) with the smallest depth gap into one (step c).
 // The merged layer keeps the pair's total weight W so that later fragments merge into it in
 // proportion (the thesis sets w_m = 1, which makes later merges depend on the weight scale).
-void Z3Tile::compress(size_t base, int& n) {
+void Z3Tile::compress(float* px, int& n) {
+  const int L = layers_;
+  float* z = px + kZ * L;
   int best = 0;
   float bestGap = INFINITY;
   for (int i = 0; i + 1 < n; ++i) {
-    float gap = z_[base + i + 1] - z_[base + i];
+    float gap = z[i + 1] - z[i];
     if (gap < bestGap) { bestGap = gap; best = i; }
   }
-  size_t f = base + size_t(best), b = f + 1;
-  float iwf = 1.0f / w_[f], iwb = 1.0f / w_[b];
-  float af = a_[f] * iwf, ab = a_[b] * iwb;
-  float tb = ab * (1 - af);
-  float am = af + tb;
-  float W = w_[f] + w_[b];
-  float cr = r_[f] * iwf * af + r_[b] * iwb * tb;
-  float cg = g_[f] * iwf * af + g_[b] * iwb * tb;
-  float cb = b_[f] * iwf * af + b_[b] * iwb * tb;
-  float s = am > 0 ? W / am : 0;  // store straight colour times W
-  r_[f] = cr * s; g_[f] = cg * s; b_[f] = cb * s;
-  a_[f] = am * W;
-  // normal of the front layer, rescaled to the new weight
-  nx_[f] *= W * iwf; ny_[f] *= W * iwf; nz_[f] *= W * iwf;
-  z_[f] = 0.5f * (z_[f] + z_[b]);
-  thr_[f] = std::max(thr_[f], thr_[b]);
-  w_[f] = W;
-  opaque_[f] = am >= 1.0f;
-  // remove slot b
-  for (int i = best + 1; i + 1 < n; ++i) {
-    size_t d = base + size_t(i), s2 = d + 1;
-    z_[d] = z_[s2]; thr_[d] = thr_[s2]; r_[d] = r_[s2]; g_[d] = g_[s2]; b_[d] = b_[s2];
-    a_[d] = a_[s2]; w_[d] = w_[s2]; nx_[d] = nx_[s2]; ny_[d] = ny_[s2]; nz_[d] = nz_[s2];
-    opaque_[d] = opaque_[s2];
+  const int f = best, b = best + 1;
+  float* w = px + kW * L;
+  float* a = px + kA * L;
+  const float iwf = 1.0f / w[f], iwb = 1.0f / w[b];
+  const float af = a[f] * iwf, ab = a[b] * iwb;
+  const float tb = ab * (1 - af);
+  const float am = af + tb;
+  const float W = w[f] + w[b];
+  const float s = am > 0 ? W / am : 0;  // store straight colour times W
+  for (int c = kR; c <= kB; ++c) {
+    float* ch = px + c * L;
+    ch[f] = (ch[f] * iwf * af + ch[b] * iwb * tb) * s;
   }
+  a[f] = am * W;
+  for (int c = kNx; c <= kNz; ++c) px[c * L + f] *= W * iwf;  // normal of the front layer
+  z[f] = 0.5f * (z[f] + z[b]);
+  px[kThr * L + f] = std::max(px[kThr * L + f], px[kThr * L + b]);
+  w[f] = W;
+  px[kOpaque * L + f] = am >= 1.0f ? 1.0f : 0.0f;
+  for (int i = b; i + 1 < n; ++i) moveLayer(px, L, i, i + 1);
   --n;
-  if (opaque_[f]) n = best + 1;  // an opaque merged layer hides everything behind it
+  if (px[kOpaque * L + f] != 0) n = f + 1;  // an opaque merged layer hides everything behind it
   ++counters_.compressed;
 }
 
@@ -68,60 +69,65 @@ void Z3Tile::insert(int x, int y, const Fragment& fr) {
   if (!(fr.weight > 0)) return;
   ++counters_.fragments;
   const size_t p = index(x, y);
-  const size_t base = p * size_t(layers_);
+  float* px = block(p);
+  const int L = layers_;
   int n = count_[p];
   const float w = fr.weight;
+  float* z = px + kZ * L;
+  float* thr = px + kThr * L;
 
   // a. insertion: merge into the layer nearest in depth among those within the threshold
   int hit = -1;
   float hitDz = INFINITY;
   for (int i = 0; i < n; ++i) {
-    float dz = std::abs(fr.depth - z_[base + i]);
-    float t = std::max(fr.zThreshold, thr_[base + i]);
-    if (dz <= t && dz < hitDz) { hit = i; hitDz = dz; }
+    const float dz = std::abs(fr.depth - z[i]);
+    if (dz <= std::max(fr.zThreshold, thr[i]) && dz < hitDz) { hit = i; hitDz = dz; }
   }
   if (hit >= 0) {
-    size_t s = base + size_t(hit);
-    r_[s] += w * fr.color.x(); g_[s] += w * fr.color.y(); b_[s] += w * fr.color.z();
-    a_[s] += w * fr.alpha; w_[s] += w;
-    nx_[s] += w * fr.normal.x(); ny_[s] += w * fr.normal.y(); nz_[s] += w * fr.normal.z();
-    if (fr.alpha < 1.0f) opaque_[s] = 0;
+    px[kR * L + hit] += w * fr.color.x();
+    px[kG * L + hit] += w * fr.color.y();
+    px[kB * L + hit] += w * fr.color.z();
+    px[kA * L + hit] += w * fr.alpha;
+    px[kW * L + hit] += w;
+    px[kNx * L + hit] += w * fr.normal.x();
+    px[kNy * L + hit] += w * fr.normal.y();
+    px[kNz * L + hit] += w * fr.normal.z();
+    if (fr.alpha < 1.0f) px[kOpaque * L + hit] = 0;
     ++counters_.merged;
     return;
   }
   // behind an opaque layer (always the last one): occluded
-  if (n > 0 && opaque_[base + n - 1] && fr.depth > z_[base + n - 1]) {
+  if (n > 0 && px[kOpaque * L + n - 1] != 0 && fr.depth > z[n - 1]) {
     ++counters_.occluded;
     return;
   }
   // c. compression when every layer is taken
-  if (n == layers_) {
+  if (n == L) {
     if (n == 1) {
       // One layer: composite the fragment with it directly, in depth order.
-      size_t s = base;
-      float wl = w_[s], al = a_[s] / wl, af = fr.alpha;
-      Vec3f cl(r_[s] / wl, g_[s] / wl, b_[s] / wl);
-      bool front = fr.depth < z_[s];
-      float aFront = front ? af : al, aBack = front ? al : af;
-      Vec3f cFront = front ? fr.color : cl, cBack = front ? cl : fr.color;
-      float am = aFront + aBack * (1 - aFront);
-      Vec3f cm = cFront * aFront + cBack * (aBack * (1 - aFront));
-      float W = wl + w;
-      float sc = am > 0 ? W / am : 0;
-      r_[s] = cm.x() * sc; g_[s] = cm.y() * sc; b_[s] = cm.z() * sc;
-      a_[s] = am * W;
-      if (front) { nx_[s] = fr.normal.x() * W; ny_[s] = fr.normal.y() * W; nz_[s] = fr.normal.z() * W; }
-      else { nx_[s] *= W / wl; ny_[s] *= W / wl; nz_[s] *= W / wl; }
-      z_[s] = 0.5f * (z_[s] + fr.depth);
-      thr_[s] = std::max(thr_[s], fr.zThreshold);
-      w_[s] = W;
-      opaque_[s] = am >= 1.0f;
+      const float wl = px[kW], al = px[kA] / wl, af = fr.alpha;
+      const Vec3f cl(px[kR] / wl, px[kG] / wl, px[kB] / wl);
+      const bool front = fr.depth < z[0];
+      const float aFront = front ? af : al, aBack = front ? al : af;
+      const Vec3f cFront = front ? fr.color : cl, cBack = front ? cl : fr.color;
+      const float am = aFront + aBack * (1 - aFront);
+      const Vec3f cm = cFront * aFront + cBack * (aBack * (1 - aFront));
+      const float W = wl + w;
+      const float sc = am > 0 ? W / am : 0;
+      px[kR] = cm.x() * sc; px[kG] = cm.y() * sc; px[kB] = cm.z() * sc;
+      px[kA] = am * W;
+      if (front) { px[kNx] = fr.normal.x() * W; px[kNy] = fr.normal.y() * W; px[kNz] = fr.normal.z() * W; }
+      else { px[kNx] *= W / wl; px[kNy] *= W / wl; px[kNz] *= W / wl; }
+      z[0] = 0.5f * (z[0] + fr.depth);
+      thr[0] = std::max(thr[0], fr.zThreshold);
+      px[kW] = W;
+      px[kOpaque] = am >= 1.0f ? 1.0f : 0.0f;
       ++counters_.compressed;
       return;
     }
-    compress(base, n);
+    compress(px, n);
     // the compression may have produced an opaque layer in front of the fragment
-    if (opaque_[base + n - 1] && fr.depth > z_[base + n - 1] + std::max(fr.zThreshold, thr_[base + n - 1])) {
+    if (px[kOpaque * L + n - 1] != 0 && fr.depth > z[n - 1] + std::max(fr.zThreshold, thr[n - 1])) {
       count_[p] = uint8_t(n);
       ++counters_.occluded;
       return;
@@ -129,21 +135,21 @@ void Z3Tile::insert(int x, int y, const Fragment& fr) {
   }
   // b. allocation, keeping the layers sorted front to back
   int pos = n;
-  while (pos > 0 && z_[base + pos - 1] > fr.depth) --pos;
+  while (pos > 0 && z[pos - 1] > fr.depth) --pos;
   const bool opaque = fr.alpha >= 1.0f;
   if (opaque) n = pos;  // everything behind an opaque fragment is occluded: free it
-  for (int i = n; i > pos; --i) {
-    size_t d = base + size_t(i), s2 = d - 1;
-    z_[d] = z_[s2]; thr_[d] = thr_[s2]; r_[d] = r_[s2]; g_[d] = g_[s2]; b_[d] = b_[s2];
-    a_[d] = a_[s2]; w_[d] = w_[s2]; nx_[d] = nx_[s2]; ny_[d] = ny_[s2]; nz_[d] = nz_[s2];
-    opaque_[d] = opaque_[s2];
-  }
-  size_t s = base + size_t(pos);
-  z_[s] = fr.depth; thr_[s] = fr.zThreshold;
-  r_[s] = w * fr.color.x(); g_[s] = w * fr.color.y(); b_[s] = w * fr.color.z();
-  a_[s] = w * fr.alpha; w_[s] = w;
-  nx_[s] = w * fr.normal.x(); ny_[s] = w * fr.normal.y(); nz_[s] = w * fr.normal.z();
-  opaque_[s] = opaque;
+  for (int i = n; i > pos; --i) moveLayer(px, L, i, i - 1);
+  z[pos] = fr.depth;
+  thr[pos] = fr.zThreshold;
+  px[kR * L + pos] = w * fr.color.x();
+  px[kG * L + pos] = w * fr.color.y();
+  px[kB * L + pos] = w * fr.color.z();
+  px[kA * L + pos] = w * fr.alpha;
+  px[kW * L + pos] = w;
+  px[kNx * L + pos] = w * fr.normal.x();
+  px[kNy * L + pos] = w * fr.normal.y();
+  px[kNz * L + pos] = w * fr.normal.z();
+  px[kOpaque * L + pos] = opaque ? 1.0f : 0.0f;
   count_[p] = uint8_t(n + 1);
   ++counters_.allocated;
 }
@@ -151,24 +157,24 @@ void Z3Tile::insert(int x, int y, const Fragment& fr) {
 ResolvedPixel Z3Tile::resolve(int x, int y) const {
   ResolvedPixel out;
   const size_t p = index(x, y);
-  const size_t base = p * size_t(layers_);
   const int n = count_[p];
   if (n == 0) return out;
+  const float* px = block(p);
+  const int L = layers_;
   // Front-to-back "under" compositing of the normalised layers == the thesis's back-to-front merge.
   Vec3f c = Vec3f::Zero();
   float a = 0;
   for (int i = 0; i < n && a < 1.0f; ++i) {
-    size_t s = base + size_t(i);
-    float iw = 1.0f / w_[s];
-    float al = std::clamp(a_[s] * iw, 0.0f, 1.0f);
-    float t = (1 - a) * al;
-    c += t * Vec3f(r_[s] * iw, g_[s] * iw, b_[s] * iw);
+    const float iw = 1.0f / px[kW * L + i];
+    const float al = std::clamp(px[kA * L + i] * iw, 0.0f, 1.0f);
+    const float t = (1 - a) * al;
+    c += t * iw * Vec3f(px[kR * L + i], px[kG * L + i], px[kB * L + i]);
     a += t;
   }
   out.color = Color(c.x(), c.y(), c.z(), a);
-  out.depth = z_[base];
-  Vec3f nrm(nx_[base], ny_[base], nz_[base]);
-  float nn = nrm.norm();
+  out.depth = px[kZ * L];
+  Vec3f nrm(px[kNx * L], px[kNy * L], px[kNz * L]);
+  const float nn = nrm.norm();
   out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
   return out;
 }

@@ -38,6 +38,10 @@ struct PreparedPoint {
   /// Gouraud colours at the quad corners (s, t) = (-c,-c), (c,-c), (-c,c), (c,c), c = cutoff;
   /// unused with per-pixel lighting.
   Vec3f cornerColor[4];
+  /// The quad spans at most kFlatShadeSpan pixels each way: its vertex colours differ by less
+  /// than a grey level, so it is lit once at the centre (cornerColor[0]) and not interpolated.
+  bool flat = false;
+  static constexpr int kFlatShadeSpan = 6;
   bool clipped = false;        ///< crosses the near/far plane: per-fragment depth test needed
 };
 

@@ -15,6 +15,7 @@
 ///     A rasteriser only writes into ctx.tile, so the image is the same for any thread count.
 ///
 /// Points: point_splat.h. Line segments: segment_splat.h.
+#include <array>
 #include <cstdint>
 
 #include "linesurf/core/image.h"
@@ -52,6 +53,8 @@ struct FrameContext {
   /// Gaussian value below which fragments are dropped: exp(-cutoff^2 / 2).
   float cutoffQ = 6.25f;  ///< cutoffRadius^2, compare with the Mahalanobis distance q
 
+  /// camera.frustumPlanes(), computed once per frame.
+  std::array<Vec4f, 6> frustum;
   /// false when the model has no colours: every primitive gets options.defaultColor.
   bool modelHasColors = true;
 

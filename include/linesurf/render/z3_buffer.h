@@ -80,14 +80,18 @@ class Z3Tile {
   const Z3Counters& counters() const { return counters_; }
 
  private:
+  // One contiguous block per pixel: field-major arrays over the layers (SoA inside the pixel),
+  // so an insertion touches a few adjacent cache lines.
+  enum Field { kZ, kThr, kR, kG, kB, kA, kW, kNx, kNy, kNz, kOpaque, kFields };
   size_t index(int x, int y) const { return size_t(y - rect_.y0) * size_t(rect_.width()) + size_t(x - rect_.x0); }
-  void compress(size_t base, int& n);
+  float* block(size_t pixel) { return data_.data() + pixel * stride_; }
+  const float* block(size_t pixel) const { return data_.data() + pixel * stride_; }
+  void compress(float* px, int& n);
   PixelRect rect_;
   int layers_;
-  // SoA, layer-major within a pixel: slot = pixel * layers + layer.
+  size_t stride_;  ///< kFields * layers_
   std::vector<uint8_t> count_;
-  std::vector<float> z_, thr_, r_, g_, b_, a_, w_, nx_, ny_, nz_;
-  std::vector<uint8_t> opaque_;
+  std::vector<float> data_;
   Z3Counters counters_;
 };
 
