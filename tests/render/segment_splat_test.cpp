@@ -70,9 +70,14 @@ Pair cylinderPair(float r, int nA, int nZ, int per) {
   return p;
 }
 
+// The filter settings of docs/segment-splatting.md, pinned so that the tests and the docs do not
+// move with RenderOptions' defaults.
 RenderOptions optionsFor(SegmentMethod m) {
   RenderOptions o;
   o.segmentMethod = m;
+  o.cutoffRadius = 2.5f;
+  o.prefilterVariance = 1.0f;
+  o.reconstructionScale = 0.5f;
   return o;
 }
 
@@ -141,7 +146,7 @@ TEST(SegmentSplat, HybridRowsBlendWithPoints) {
     }
   }
   const Camera cam = Camera::lookAt(Vec3f(0.1f, -1.3f, 1.4f), Vec3f(0, 0.1f, 0), Vec3f(0, 0, 1), 40, 128, 128, 0.05f, 50);
-  const Image ref = renderImage(pair.points, cam).color;
+  const Image ref = renderImage(pair.points, cam, optionsFor(SegmentMethod::ScreenSpace)).color;
   for (SegmentMethod m : {SegmentMethod::ScreenSpace, SegmentMethod::Approx}) {
     const ImageMetrics im = compareImages(ref, renderImage(hybrid, cam, optionsFor(m)).color);
     EXPECT_LT(im.meanAbsDiff, 1.0) << name(m);
@@ -441,7 +446,7 @@ TEST(SegmentSplatDocs, WriteImagesAndTables) {
   };
   std::printf("\n| scene | points vs segments (ScreenSpace) MAD | ScreenSpace vs Reference PSNR / max | Approx vs Reference PSNR / max | Approx vs points MAD |\n|---|---|---|---|---|\n");
   for (const Scene& sc : scenes) {
-    const Image pts = renderImage(sc.pair->points, sc.cam).color;
+    const Image pts = renderImage(sc.pair->points, sc.cam, optionsFor(SegmentMethod::ScreenSpace)).color;
     const Image ref = renderImage(sc.pair->segments, sc.cam, optionsFor(SegmentMethod::Reference)).color;
     const Image ss = renderImage(sc.pair->segments, sc.cam, optionsFor(SegmentMethod::ScreenSpace)).color;
     const Image ap = renderImage(sc.pair->segments, sc.cam, optionsFor(SegmentMethod::Approx)).color;
@@ -493,6 +498,47 @@ TEST(SegmentSplat, TextureCoordinatesInterpolatedAndClampedBeyondEndpoints) {
     EXPECT_NEAR(blueAt(0.54f), 0.75f, 0.03f) << name(meth);   // beyond p1: uv1
     EXPECT_NEAR(blueAt(-0.54f), 0.25f, 0.03f) << name(meth);  // beyond p0: uv0
   }
+}
+
+}  // namespace
+}  // namespace linesurf
+
+namespace linesurf {
+namespace {
+
+// Without the prefilter M = sigma_r^2 I is constant along the segment, so ScreenSpace's closed
+// form is exact and the Reference must agree with it within its stated tolerance (2e-3 of the
+// peak); both are checked against the analytic weight of the T1/T2 formulas on the axis.
+TEST(SegmentSplat, ReferenceWithinToleranceOfTheClosedForm) {
+  Segment s = unitSegment(1.0f, 0.05f);
+  const Camera cam = Camera::lookAt(Vec3f(0.05f, -0.6f, 2.0f), Vec3f(0, 0, 0), Vec3f(0, 0, 1), 40, 96, 96, 0.01f, 100);
+  RenderOptions o = optionsFor(SegmentMethod::Reference);
+  o.prefilterVariance = 0;
+  o.backfaceCulling = false;
+  double maxRel = 0, peak = 0;
+  PreparedSegment ref, ss;
+  o.segmentMethod = SegmentMethod::Reference;
+  const FrameContext fr = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+  ASSERT_EQ(prepareSegment(s, 0, fr, ref), PrimitiveStatus::Drawn);
+  RenderOptions o2 = o;
+  o2.segmentMethod = SegmentMethod::ScreenSpace;
+  const FrameContext fs = FrameContext::make(cam, o2, BoundingSphere{Vec3f::Zero(), 1});
+  ASSERT_EQ(prepareSegment(s, 0, fs, ss), PrimitiveStatus::Drawn);
+  EXPECT_EQ(ss.pieces.size(), 1u);
+  for (int y = ref.bounds.y0; y < ref.bounds.y1; ++y)
+    for (int x = ref.bounds.x0; x < ref.bounds.x1; ++x) {
+      const Vec2f p(x + 0.5f, y + 0.5f);
+      const double a = segmentWeightAt(ref, fr, p), b = segmentWeightAt(ss, fs, p);
+      peak = std::max(peak, b);
+      maxRel = std::max(maxRel, std::abs(a - b));
+    }
+  ASSERT_GT(peak, 0);
+  EXPECT_LT(maxRel / peak, 2e-3);
+  // On the axis in the middle: (1/h) * sigma * T2(0) / sigma^2 = T2(0) / (h sigma).
+  const float sigma = 0.5f * s.radius;
+  const Vec3f mid = cam.project(cam.toCamera(Vec3f(0, 0, 0)));
+  const float expected = weightTextureT2(o.cutoffRadius, 0) / (s.radius * sigma);
+  EXPECT_NEAR(segmentWeightAt(ss, fs, mid.head<2>()), expected, 2e-3f * expected);
 }
 
 }  // namespace
