@@ -236,6 +236,48 @@ struct SplitContext {
   SplitSeeding seeding;
 };
 
+/// Min-heap of packed 64-bit keys, 4-ary: shallower than a binary heap and its children share a
+/// cache line. Keys are unique (one per point and cluster), so the pop order is exact.
+class QuadHeap {
+ public:
+  bool empty() const { return h_.empty(); }
+  void push(uint64_t v) {
+    size_t i = h_.size();
+    h_.push_back(v);
+    while (i > 0) {
+      size_t parent = (i - 1) / 4;
+      if (h_[parent] <= v) break;
+      h_[i] = h_[parent];
+      i = parent;
+    }
+    h_[i] = v;
+  }
+  uint64_t pop() {
+    const uint64_t top = h_[0];
+    const uint64_t v = h_.back();
+    h_.pop_back();
+    const size_t n = h_.size();
+    if (n == 0) return top;
+    size_t i = 0;
+    for (;;) {
+      size_t c = 4 * i + 1;
+      if (c >= n) break;
+      size_t best = c;
+      const size_t end = std::min(c + 4, n);
+      for (size_t k = c + 1; k < end; ++k)
+        if (h_[k] < h_[best]) best = k;
+      if (h_[best] >= v) break;
+      h_[i] = h_[best];
+      i = best;
+    }
+    h_[i] = v;
+    return top;
+  }
+
+ private:
+  std::vector<uint64_t> h_;
+};
+
 /// Average normal of the given members (unit), zero when it cancels out.
 Vec3f averageNormal(const std::vector<uint32_t>& members, const std::vector<Vec3f>& normals) {
   Vec3d sum = Vec3d::Zero();
@@ -329,7 +371,7 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
   std::vector<uint8_t> pushed(m);
   // Queue entries packed in one integer: V_n's bits (order-preserving for V_n >= 0), then the local
   // index, then b: the smallest V_n pops first, ties by index and cluster, deterministically.
-  std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> pq;
+  QuadHeap pq;
   auto pack = [](float v, uint32_t local, uint32_t b) {
     uint32_t bits;
     std::memcpy(&bits, &v, sizeof bits);
@@ -353,8 +395,7 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
     for (int b = 0; b < 2; ++b) lab[seeds[b]] = int8_t(b);
     for (uint8_t b = 0; b < 2; ++b) pushNeighbours(seeds[b], b);
     while (!pq.empty()) {
-      const uint64_t top = pq.top();
-      pq.pop();
+      const uint64_t top = pq.pop();
       const uint32_t lq = uint32_t(top & 0xffffffffu) >> 1;
       const uint8_t b = uint8_t(top & 1u);
       if (lab[lq] >= 0) continue;
