@@ -240,7 +240,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
       const auto& F = mesh.faces[f];
       Vec3d a = mesh.positions[F[0]].cast<double>(), b = mesh.positions[F[1]].cast<double>(),
             c = mesh.positions[F[2]].cast<double>();
-      Vec3d n = (b - a).cross(c - a);  // exact products of floats: tiny areas are still meaningful
+      Vec3d n = (b - a).cross(c - a);  // in double from float input: slivers keep a good normal
       double l0 = (b - a).norm(), l1 = (c - b).norm(), l2 = (a - c).norm();
       double maxEdge = std::max({l0, l1, l2});
       double area2 = n.norm();
