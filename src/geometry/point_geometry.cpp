@@ -193,9 +193,11 @@ void computeNormals(const HybridModel& cloud, const std::vector<Vec3f>& pos, con
 
 // ---------------------------------------------------------------------------------------------
 // Stage 2b: consistent orientation by a minimum spanning tree (Hoppe 1992) over the symmetrised
-// kNN graph with weights 1 - |n_i . n_j|; Prim's algorithm with a binary heap, one seed per
+// kNN graph with weights 1 - |n_i . n_j| (+ the penalty of GeometryOptions::orientationPenalty);
+// Prim's algorithm with a binary heap, one seed per
 // connected component (see docs/decisions.md for the seed rule).
-void orientNormals(const std::vector<Vec3f>& pos, int k, PointGeometry& g, const std::vector<uint8_t>& fixedNormal) {
+void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, PointGeometry& g,
+                   const std::vector<uint8_t>& fixedNormal) {
   const size_t n = pos.size();
   // Symmetrised adjacency (CSR): row i = kNN row of i, then every j that lists i.
   std::vector<uint32_t> deg(n + 1, 0);
@@ -249,6 +251,7 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, PointGeometry& g, const
   // Best known connection weight per node: an edge is pushed only when it improves it, which
   // keeps the heap small (lazy deletion of the superseded entries).
   std::vector<float> key(n, kInf);
+  const float crossPenalty = tangentPenalty;
   size_t flips = 0;
   for (size_t c = 0; c + 1 < compStart.size(); ++c) {
     const uint32_t* members = order.data() + compStart[c];
@@ -300,7 +303,12 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, PointGeometry& g, const
       for (uint32_t e = off[u]; e < off[u + 1]; ++e) {
         const uint32_t v = adj[e];
         if (done[v]) continue;
-        const float w = 1.0f - std::abs(nu.dot(g.normals[v]));
+        float w = 1.0f - std::abs(nu.dot(g.normals[v]));
+        if (crossPenalty > 0) {
+          const Vec3f d = pos[v] - pos[u];
+          const float l2 = d.squaredNorm();
+          if (l2 > 0) w += crossPenalty * std::abs(nu.dot(d)) * std::abs(g.normals[v].dot(d)) / l2;
+        }
         if (w < key[v]) {
           key[v] = w;
           heap.emplace(w, v, u);
@@ -455,6 +463,8 @@ size_t PointGeometry::countFlag(PointFlag f) const {
 
 PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {
   if (options.k < 3) throwBadParameter("k", "must be at least 3 (got " + std::to_string(options.k) + ")");
+  if (!(options.orientationPenalty >= 0) || !std::isfinite(options.orientationPenalty))
+    throwBadParameter("orientationPenalty", "must be finite and >= 0");
   if (options.k > 256) throwBadParameter("k", "must be at most 256 (got " + std::to_string(options.k) + ")");
   for (size_t i = 0; i < cloud.points.size(); ++i)
     if (!cloud.points[i].position.allFinite())
@@ -487,7 +497,7 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
                           std::any_of(fixedNormal.begin(), fixedNormal.end(), [](uint8_t f) { return f == 0; });
   if (needOrient) {
     reportProgress(progress, "orientation", 0.0);
-    orientNormals(pos, k, g, fixedNormal);
+    orientNormals(pos, k, options.orientationPenalty, g, fixedNormal);
     reportProgress(progress, "orientation", 1.0);
   }
   g.times.orientation = timer.seconds();

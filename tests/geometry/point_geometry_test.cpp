@@ -12,6 +12,8 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/shapes.h"
 #include "linesurf/geometry/point_geometry.h"
+#include "linesurf/io/model_io.h"
+#include "test_util.h"
 
 using namespace linesurf;
 
@@ -339,4 +341,16 @@ TEST(PointGeometry, NeighboursAreExactKNearest) {
       ASSERT_EQ(g.neighbours[i * k + t], all[size_t(t)].second) << i << " " << t;
     }
   }
+}
+
+TEST(SharedPointGeometry, OrientationAgreesWithMeshNormals) {
+  LINESURF_REQUIRE_SHARED_DATA();
+  // al carries consistent outward normals from its mesh; its thin parts (fingers, ears) are where
+  // Hoppe's plain weight flips whole regions.
+  auto al = readModel(test::sharedData() / "al_mesh.ply");
+  ASSERT_TRUE(al.attributes.normals);
+  auto g = computePointGeometry(al, recompute());
+  size_t agree = 0;
+  for (size_t i = 0; i < al.points.size(); ++i) agree += g.normals[i].dot(al.points[i].normal) > 0;
+  EXPECT_GE(double(agree), 0.9 * double(al.points.size()));
 }

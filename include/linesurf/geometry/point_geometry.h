@@ -33,6 +33,10 @@ struct GeometryOptions {
   int k = 12;                      ///< neighbours per point (stage 1), >= 3
   bool recomputeNormals = false;   ///< recompute even when the cloud has normals
   bool orientNormals = true;       ///< MST orientation of computed normals (stage 2)
+  /// MST edge weight = 1 - |n_i.n_j| + orientationPenalty |n_i.d||n_j.d| (d = unit p_j - p_i):
+  /// discourages edges along the normals, i.e. across thin parts between two sheets. 0 gives
+  /// Hoppe's weight. Default 0.5 (docs/decisions.md).
+  float orientationPenalty = 0.5f;
   bool delaunayNeighbours = true;  ///< stage 3
   bool curvature = true;           ///< stage 4 (needs stage 3)
   CurvatureFit curvatureFit = CurvatureFit::Taubin;  ///< stage 4 formula
