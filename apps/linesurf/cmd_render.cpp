@@ -156,7 +156,7 @@ void run(const RenderArgs& a) {
     o.zThreshold = a.zThreshold >= 0 ? a.zThreshold : 0.01f;
   } else if (a.zMode == "primitive") {
     o.zThresholdMode = ZThresholdMode::PerPrimitive;
-    o.zThreshold = a.zThreshold >= 0 ? a.zThreshold : 1.0f;
+    o.zThreshold = a.zThreshold >= 0 ? a.zThreshold : 0.5f;
   } else {
     throwBadParameter("--z-mode", "expected fixed or primitive");
   }
@@ -284,7 +284,7 @@ RegisterCommand reg(40, [](CLI::App& app) {
   auto* v = sub->add_option_group("visibility", "Modified Z^3 buffer (§6.2.3)");
   v->add_option("--layers", a->layers, "Fragment layers per pixel [1, 8]")->capture_default_str();
   v->add_option("--z-mode", a->zMode, "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)")->capture_default_str();
-  v->add_option("--z-threshold", a->zThreshold, "primitive: multiple of the depth extent (default 1); fixed: fraction of the bounding radius (default 0.01)");
+  v->add_option("--z-threshold", a->zThreshold, "primitive: multiple of the depth extent (default 0.5); fixed: fraction of the bounding radius (default 0.01)");
   v->add_option("--alpha", a->alpha, "Alpha of every primitive in [0, 1] (order-independent transparency)");
   v->add_flag("--no-cull", a->noCull, "Keep back faces (two-sided lighting)");
   auto* s = sub->add_option_group("shading", "Phong lighting (§6.2.2); defaults suit unit-free scans");

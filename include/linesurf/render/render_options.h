@@ -69,9 +69,9 @@ struct RenderOptions {
   // --- visibility and blending (§6.2.3, modified Z^3) -----------------------------------------
   ZThresholdMode zThresholdMode = ZThresholdMode::PerPrimitive;
   /// Fixed: fraction of the bounding-sphere radius. PerPrimitive: multiple of the primitive's
-  /// depth extent. >= 0; default 1.0 for PerPrimitive, use ~0.01 for Fixed (see
+  /// depth extent. >= 0; default 0.5 for PerPrimitive, use ~0.01 for Fixed (see
   /// docs/rendering.md and the measurement in docs/decisions.md).
-  float zThreshold = 1.0f;
+  float zThreshold = 0.5f;
   /// Fragment layers per pixel, [1, kMaxLayers]. Default 4 (thesis).
   int layers = 4;
   static constexpr int kMaxLayers = 8;
