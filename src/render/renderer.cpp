@@ -119,7 +119,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     const int tx = int(tile % size_t(tilesX)), ty = int(tile / size_t(tilesX));
     PixelRect rect{tx * T, ty * T, std::min(cam.width(), (tx + 1) * T), std::min(cam.height(), (ty + 1) * T)};
     thread_local std::unique_ptr<Z3Tile> buffer;
-    if (!buffer || buffer->layers() != opt.layers) buffer = std::make_unique<Z3Tile>(rect, opt.layers);
+    if (!buffer || buffer->layers() != opt.layers || buffer->keepsNormals() != opt.normalBuffer)
+      buffer = std::make_unique<Z3Tile>(rect, opt.layers, opt.normalBuffer);
     else buffer->reset(rect);
     Z3Tile& z3 = *buffer;
     SplatContext ctx{frame, rect, z3};

@@ -8,8 +8,9 @@
 
 namespace linesurf {
 
-Z3Tile::Z3Tile(const PixelRect& rect, int layers)
-    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)), stride_(size_t(kFields) * size_t(layers_)) {
+Z3Tile::Z3Tile(const PixelRect& rect, int layers, bool keepNormals)
+    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)), keepNormals_(keepNormals),
+      stride_(size_t(kFields) * size_t(layers_)) {
   reset(rect);
 }
 
@@ -65,37 +66,14 @@ void Z3Tile::compress(float* px, int& n) {
   ++counters_.compressed;
 }
 
-void Z3Tile::insert(int x, int y, const Fragment& fr) {
-  if (!(fr.weight > 0)) return;
+void Z3Tile::insertNew(size_t p, const Fragment& fr) {
   ++counters_.fragments;
-  const size_t p = index(x, y);
   float* px = block(p);
   const int L = layers_;
   int n = count_[p];
   const float w = fr.weight;
   float* z = px + kZ * L;
   float* thr = px + kThr * L;
-
-  // a. insertion: merge into the layer nearest in depth among those within the threshold
-  int hit = -1;
-  float hitDz = INFINITY;
-  for (int i = 0; i < n; ++i) {
-    const float dz = std::abs(fr.depth - z[i]);
-    if (dz <= std::max(fr.zThreshold, thr[i]) && dz < hitDz) { hit = i; hitDz = dz; }
-  }
-  if (hit >= 0) {
-    px[kR * L + hit] += w * fr.color.x();
-    px[kG * L + hit] += w * fr.color.y();
-    px[kB * L + hit] += w * fr.color.z();
-    px[kA * L + hit] += w * fr.alpha;
-    px[kW * L + hit] += w;
-    px[kNx * L + hit] += w * fr.normal.x();
-    px[kNy * L + hit] += w * fr.normal.y();
-    px[kNz * L + hit] += w * fr.normal.z();
-    if (fr.alpha < 1.0f) px[kOpaque * L + hit] = 0;
-    ++counters_.merged;
-    return;
-  }
   // behind an opaque layer (always the last one): occluded
   if (n > 0 && px[kOpaque * L + n - 1] != 0 && fr.depth > z[n - 1]) {
     ++counters_.occluded;

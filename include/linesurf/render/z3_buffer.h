@@ -13,6 +13,7 @@
 ///     composited into one (normalised colours, "over" operator, W = 1; step c);
 ///  2. resolve: layers normalised (C/W, A/W) and composited back to front.
 /// Storage is SoA with a fixed number of layers per pixel (no allocation per fragment).
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -62,15 +63,47 @@ struct ResolvedPixel {
 class Z3Tile {
  public:
   /// A tile covering `rect` with `layers` layers per pixel (1..RenderOptions::kMaxLayers).
-  Z3Tile(const PixelRect& rect, int layers);
+  /// keepNormals = false skips the weighted normal sums of merged fragments (ResolvedPixel::normal
+  /// is then the normal of the fragment that opened the layer).
+  Z3Tile(const PixelRect& rect, int layers, bool keepNormals = true);
   /// Clears the tile and moves it to `rect` (no reallocation when it is not larger).
   void reset(const PixelRect& rect);
 
   const PixelRect& rect() const { return rect_; }
   int layers() const { return layers_; }
 
+  bool keepsNormals() const { return keepNormals_; }
+
   /// Inserts a fragment at absolute pixel (x, y), which must lie inside rect().
-  void insert(int x, int y, const Fragment& f);
+  /// The common case (merge into an existing layer, step a) is inline.
+  void insert(int x, int y, const Fragment& f) {
+    if (!(f.weight > 0)) return;
+    const size_t p = index(x, y);
+    float* px = block(p);
+    const int L = layers_, n = count_[p];
+    int hit = -1;
+    float hitDz = INFINITY;
+    for (int i = 0; i < n; ++i) {
+      const float dz = std::abs(f.depth - px[kZ * L + i]);
+      const float t = f.zThreshold > px[kThr * L + i] ? f.zThreshold : px[kThr * L + i];
+      if (dz <= t && dz < hitDz) { hit = i; hitDz = dz; }
+    }
+    if (hit < 0) return insertNew(p, f);
+    const float w = f.weight;
+    px[kR * L + hit] += w * f.color.x();
+    px[kG * L + hit] += w * f.color.y();
+    px[kB * L + hit] += w * f.color.z();
+    px[kA * L + hit] += w * f.alpha;
+    px[kW * L + hit] += w;
+    if (keepNormals_) {
+      px[kNx * L + hit] += w * f.normal.x();
+      px[kNy * L + hit] += w * f.normal.y();
+      px[kNz * L + hit] += w * f.normal.z();
+    }
+    if (f.alpha < 1.0f) px[kOpaque * L + hit] = 0;
+    ++counters_.fragments;
+    ++counters_.merged;
+  }
 
   /// Resolves pixel (x, y) (absolute, inside rect()): back-to-front composite of its layers.
   ResolvedPixel resolve(int x, int y) const;
@@ -87,8 +120,10 @@ class Z3Tile {
   float* block(size_t pixel) { return data_.data() + pixel * stride_; }
   const float* block(size_t pixel) const { return data_.data() + pixel * stride_; }
   void compress(float* px, int& n);
+  void insertNew(size_t pixel, const Fragment& f);  // steps b and c
   PixelRect rect_;
   int layers_;
+  bool keepNormals_ = true;
   size_t stride_;  ///< kFields * layers_
   std::vector<uint8_t> count_;
   std::vector<float> data_;
