@@ -180,6 +180,7 @@ void run(const RenderArgs& a) {
   o.alphaBuffer = !a.alphaOut.empty();
   o.normalBuffer = !a.normalOut.empty();
   o.tileSize = a.tileSize;
+  o.progress = progressBar();
   if (!(a.zoom > 0) || !std::isfinite(a.zoom)) throwBadParameter("--zoom", "must be > 0");
 
   Renderer renderer(model, o);
