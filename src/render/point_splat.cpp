@@ -177,11 +177,12 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   float x0, y0, x1, y1;
   bool depthClipped = false;
   if (!clippedScreenBounds(cam, quadCycle, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
-  // pixel centres (i + 0.5) inside [x0, x1]
+  // pixel centres (i + 0.5) inside [x0, x1]; clamp first so that the int conversion is defined
+  const float lim = 1e7f;
+  x0 = std::clamp(x0, -lim, lim), x1 = std::clamp(x1, -lim, lim), y0 = std::clamp(y0, -lim, lim), y1 = std::clamp(y1, -lim, lim);
   PixelRect bb{int(std::floor(x0 - 0.5f)) + 1, int(std::floor(y0 - 0.5f)) + 1, int(std::floor(x1 - 0.5f)) + 1,
                int(std::floor(y1 - 0.5f)) + 1};
   PixelRect view{0, 0, cam.width(), cam.height()};
-  if (!(x0 > -1e9f && y0 > -1e9f && x1 < 1e9f && y1 < 1e9f)) bb = bb.intersect(view);  // guard overflow
   out.bounds = bb.intersect(view);
   if (out.bounds.empty()) return PrimitiveStatus::Outside;
   const bool sideClipped = out.bounds.x0 != bb.x0 || out.bounds.y0 != bb.y0 || out.bounds.x1 != bb.x1 ||
@@ -272,8 +273,9 @@ void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
       const float sq = std::sqrt(disc), inv = 0.5f / qa;
       const float xl = (-qb - sq) * inv, xr = (-qb + sq) * inv;
       // pixel centres x + 0.5 in [xl, xr], widened by a pixel against rounding
-      xb = std::max(xb, int(std::floor(xl - 0.5f)));
-      xe = std::min(xe, int(std::floor(xr - 0.5f)) + 2);
+      // (fmax/fmin also drop NaN from an overflowing discriminant and keep int() defined)
+      xb = std::max(xb, int(std::floor(std::fmax(xl - 0.5f, float(xb) - 1.0f))));
+      xe = std::min(xe, int(std::floor(std::fmin(xr - 0.5f, float(xe)))) + 2);
     }
     for (int x = xb; x < xe; ++x) {
       const float px = float(x) + 0.5f;

@@ -77,6 +77,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   auto boundsOf = [&](size_t p) -> const PixelRect& { return p < np ? pts[p].bounds : segs[p - np].bounds; };
   auto forTiles = [&](size_t p, auto&& fn) {
     const PixelRect& b = boundsOf(p);
+    if (b.empty()) return;
     int tx0 = b.x0 / T, tx1 = (b.x1 - 1) / T, ty0 = b.y0 / T, ty1 = (b.y1 - 1) / T;
     for (int ty = ty0; ty <= ty1; ++ty)
       for (int tx = tx0; tx <= tx1; ++tx) fn(size_t(ty) * size_t(tilesX) + size_t(tx));
