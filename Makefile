@@ -3,6 +3,10 @@
 #   make test   install, build and run the whole test suite (+ sanitizers, + a bounded fuzz run)
 BUILD ?= build
 JOBS ?= $(shell nproc)
+# CI builds from scratch: a compiler cache only adds risk there.
+ifdef CI
+export CCACHE_DISABLE := 1
+endif
 
 .PHONY: all setup build demo test test-fast test-sanitize fuzz bench clean
 

@@ -398,6 +398,14 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
       radius = std::max(radius, radiusOf(j) + (w - t * line.dir).norm());
       colour += cloud.points[j].color.cast<double>();
     }
+    // A segment stands for a row of points, each covering half a spacing on either side: extend
+    // both ends by half the mean spacing along the row so that the rendered segment covers what
+    // the row covered (docs/decisions.md). Replaced points only get closer to the segment.
+    if (members.size() > 1) {
+      const double half = 0.5 * (tmax - tmin) / double(members.size() - 1);
+      tmin -= half;
+      tmax += half;
+    }
     Segment s;
     s.p0 = (line.origin + tmin * line.dir).cast<float>();
     s.p1 = (line.origin + tmax * line.dir).cast<float>();
