@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job on the bundled models: geometry, both point-cloud extractions, contour extraction,
-# renderings of point and hybrid models side by side, and their image comparison.
+# The main job on the bundled models: geometry (§6.1), both point-cloud extractions (§3.1, §3.2),
+# contour extraction (§3.3), renderings of point and hybrid models from the same view (§4-§6.2)
+# and their image comparison (§7).
 # Usage: scripts/demo.sh [path/to/linesurf] [output folder]
 set -euo pipefail
 CLI=${1:-build/linesurf}
@@ -8,22 +9,26 @@ OUT=${2:-out/demo}
 DATA="$(cd "$(dirname "$0")/.." && pwd)/data"
 mkdir -p "$OUT"
 run() { echo; echo "\$ linesurf $*"; "$CLI" "$@"; }
+VIEW=(--size 512x512 --azimuth 0 --elevation 10)
 
-run info "$DATA/santa_points.ply"
-run normals "$DATA/santa_points.ply" -o "$OUT/santa_normals.ply" --curvature
-run extract eps-delta "$OUT/santa_normals.ply" -o "$OUT/santa_eps_delta.ply"
-run extract shape-approx "$OUT/santa_normals.ply" -o "$OUT/santa_shape_approx.ply" \
-    --clustering greedy --clusters-out "$OUT/santa_clusters.ply"
-run render "$OUT/santa_normals.ply" -o "$OUT/santa_points.png" --size 512x512 --azimuth 30 --elevation 15
-run render "$OUT/santa_eps_delta.ply" -o "$OUT/santa_eps_delta.png" --size 512x512 --azimuth 30 --elevation 15
-run render "$OUT/santa_shape_approx.ply" -o "$OUT/santa_shape_approx.png" --size 512x512 --azimuth 30 --elevation 15
-run render "$OUT/santa_clusters.ply" -o "$OUT/santa_clusters.png" --size 512x512 --azimuth 30 --elevation 15
-run compare "$OUT/santa_points.png" "$OUT/santa_eps_delta.png" --diff "$OUT/santa_eps_delta_diff.png"
+# Point cloud: the Igea artifact scan (134,345 points, the thesis's own model).
+run info "$DATA/igea_points.ply"
+run normals "$DATA/igea_points.ply" -o "$OUT/igea_normals.ply" --curvature
+run extract eps-delta "$OUT/igea_normals.ply" -o "$OUT/igea_eps_delta.ply"
+run extract shape-approx "$OUT/igea_normals.ply" -o "$OUT/igea_shape_approx.ply" \
+    --clustering greedy --clusters-out "$OUT/igea_clusters.ply"
+run render "$OUT/igea_normals.ply" -o "$OUT/igea_points.png" "${VIEW[@]}"
+run render "$OUT/igea_eps_delta.ply" -o "$OUT/igea_eps_delta.png" "${VIEW[@]}"
+run render "$OUT/igea_shape_approx.ply" -o "$OUT/igea_shape_approx.png" "${VIEW[@]}"
+run render "$OUT/igea_clusters.ply" -o "$OUT/igea_clusters.png" "${VIEW[@]}"
+run compare "$OUT/igea_points.png" "$OUT/igea_eps_delta.png" --diff "$OUT/igea_eps_delta_diff.png"
+run compare "$OUT/igea_points.png" "$OUT/igea_shape_approx.png" --diff "$OUT/igea_shape_approx_diff.png"
+
+# Triangle mesh: Al, cut into a pure line-segment model and a pure point model.
 run extract contour "$DATA/al_mesh.ply" -o "$OUT/al_segments.ply" --seed 1
 run extract contour "$DATA/al_mesh.ply" -o "$OUT/al_points.ply" --seed 1 --all-points
 run render "$OUT/al_segments.ply" -o "$OUT/al_segments.png" --size 512x512 --azimuth 20 --elevation 10
 run render "$OUT/al_points.ply" -o "$OUT/al_points.png" --size 512x512 --azimuth 20 --elevation 10
 run compare "$OUT/al_points.png" "$OUT/al_segments.png" --diff "$OUT/al_diff.png"
 echo
-echo "demo: pictures and models in $OUT:"
-ls "$OUT"
+echo "demo: pictures (*.png) and models (*.ply) in $OUT"

@@ -235,6 +235,7 @@ void run(const RenderArgs& a) {
     sum.pointsOutside += s.pointsOutside; sum.pointsDegenerate += s.pointsDegenerate;
     sum.segmentsDrawn += s.segmentsDrawn; sum.segmentsClipped += s.segmentsClipped; sum.segmentsCulled += s.segmentsCulled;
     sum.segmentsOutside += s.segmentsOutside; sum.segmentsDegenerate += s.segmentsDegenerate;
+    sum.segmentsFallback += s.segmentsFallback;
     sum.fragments += s.fragments; sum.merged += s.merged; sum.occluded += s.occluded; sum.compressed += s.compressed;
     sum.prepareSeconds += s.prepareSeconds; sum.binSeconds += s.binSeconds; sum.rasterSeconds += s.rasterSeconds;
     sum.totalSeconds += s.totalSeconds;
@@ -245,9 +246,9 @@ void run(const RenderArgs& a) {
     say(fmt::format("points{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate", per,
                     sum.pointsDrawn, sum.pointsClipped, sum.pointsCulled, sum.pointsOutside, sum.pointsDegenerate));
   if (!model.segments.empty())
-    say(fmt::format("segments{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate", per,
-                    sum.segmentsDrawn, sum.segmentsClipped, sum.segmentsCulled, sum.segmentsOutside,
-                    sum.segmentsDegenerate));
+    say(fmt::format("segments{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate, "
+                    "{} approx fallbacks to screen-space", per, sum.segmentsDrawn, sum.segmentsClipped, sum.segmentsCulled,
+                    sum.segmentsOutside, sum.segmentsDegenerate, sum.segmentsFallback));
   say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
   say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); total {:.2f} s",

@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   CLI::App app{"linesurf: surface modelling and rendering with line segments"};
   app.set_version_flag("--version", "linesurf 0.1.0");
   app.require_subcommand(1);
+  app.fallthrough();  // global options (-q, -j) may follow the subcommand too
   auto& g = cli::globalOptions();
   app.add_flag("-q,--quiet", g.quiet, "No progress and no summary")->configurable(false);
   app.add_option("-j,--threads", g.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));

@@ -61,6 +61,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   for (size_t i = 0; i < ns; ++i)
     count(status[np + i], st.segmentsDrawn, st.segmentsClipped, st.segmentsCulled, st.segmentsOutside,
           st.segmentsDegenerate);
+  for (size_t i = 0; i < ns; ++i) st.segmentsFallback += segs[i].fallback;
   st.prepareSeconds = t.seconds();
   reportProgress(opt.progress, "render", 0.1);
 
