@@ -62,6 +62,8 @@ ExperimentOptions fastOptions(const fs::path& dir) {
 TEST(Experiment, SmokeRunOnBundledModels) {
   ExperimentOptions o;
   o.dataDir = test::bundledData();
+  // The three small bundled models of the issue (data/ also holds the 134k-point Igea, for the demo).
+  o.only = {"santa_points", "rockerarm_points", "al_mesh"};
   o.outDir = test::scratchDir("experiment_smoke");
   o.views = 2;
   o.meshViews = 2;
@@ -70,7 +72,7 @@ TEST(Experiment, SmokeRunOnBundledModels) {
   std::vector<double> fractions;
   const ExperimentResults r = runExperiment(o, [&](std::string_view, double f) { fractions.push_back(f); });
 
-  ASSERT_EQ(r.models.size(), 3u);  // README.md is not a model
+  ASSERT_EQ(r.models.size(), 3u);  // README.md is not a model, Igea is left out
   EXPECT_EQ(r.failedCount(), 0u);
   EXPECT_FALSE(fractions.empty());
   for (size_t i = 1; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1] - 1e-12);
