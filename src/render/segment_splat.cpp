@@ -483,6 +483,8 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
     station[K] = M1;
     for (int k = 1; k < K; ++k) station[k] = (2 * k == K) ? Mmid : covAt(L * k / K);
     out.pieces.resize(K);
+    out.pieceInvLength = float(K / L);
+    out.pieceMaxReach = 0;
     for (int k = 0; k < K; ++k) {
       const double a0 = L * k / K, a1 = L * (k + 1) / K;
       const Mat2d M = K == 1 ? Mmid : covAt(0.5 * (a0 + a1));
@@ -502,6 +504,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
       p.k = float(std::sqrt(0.5 * Mi(0, 0)));
       const double slope = (double(p.scale1) - p.scale0) / (a1 - a0);
       p.slope = std::abs(slope) * (a1 - a0) > 1e-4 * p.scale0 ? float(slope) : 0.0f;
+      out.pieceMaxReach = std::max(out.pieceMaxReach, p.reach);
       aMin = std::min(aMin, a0 - double(p.reach));
       aMax = std::max(aMax, a1 + double(p.reach));
       bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
@@ -651,7 +654,18 @@ inline float fastErf(float x) {
 // = m00 (tau - tau*)^2 + qmin; each kernel counts where q <= R^2, i.e. |tau - tau*| <= delta.
 float screenSpaceWeight(const PreparedSegment& sp, float a, float b, float R2) {
   float w = 0;
-  for (const SegmentPiece& p : sp.pieces) {
+  // Only the pieces whose reach can contain a (with a piece of margin each side against
+  // rounding): the others are skipped by the test below anyway, so the sum is unchanged.
+  const int K = int(sp.pieces.size());
+  int k0 = 0, k1 = K;
+  if (K > 1) {
+    const float lo = std::floor((a - sp.pieceMaxReach) * sp.pieceInvLength);
+    const float hi = std::floor((a + sp.pieceMaxReach) * sp.pieceInvLength);
+    k0 = int(std::clamp(lo - 1.0f, 0.0f, float(K)));
+    k1 = int(std::clamp(hi + 2.0f, 0.0f, float(K)));
+  }
+  for (int k = k0; k < k1; ++k) {
+    const SegmentPiece& p = sp.pieces[k];
     if (a < p.a0 - p.reach || a > p.a1 + p.reach) continue;
     const float len = p.a1 - p.a0;
     const float x = a - p.a0;

@@ -112,6 +112,9 @@ struct PreparedSegment {
   /// Lighting stations evenly spaced over [0, length]: colour = albedo * diffuse + specular.
   std::vector<Vec3f> diffuse, specular;
   std::vector<SegmentPiece> pieces;  ///< ScreenSpace
+  /// ScreenSpace: pieces are evenly spaced (piece k covers [k, k+1] / pieceInvLength); a pixel at
+  /// a only meets the pieces within pieceMaxReach (the largest reach) of it.
+  float pieceInvLength = 0, pieceMaxReach = 0;
   std::vector<SegmentNode> nodes;    ///< Reference, spacing nodeStep starting at nodeStep / 2
   float nodeStep = 0, nodeReach = 0;
   std::vector<SegmentQuad> quads;    ///< Approx
