@@ -32,6 +32,9 @@ constexpr double kPieceTolerance = 0.04;
 // Reference quadrature: node spacing sigma_r / kNodesPerSigma, at most kMaxNodes nodes.
 constexpr double kNodesPerSigma = 32.0;
 constexpr int kMaxNodes = 1 << 16;
+// Rasterisation visits the pixel centres within this distance (pixels) of the projected footprint
+// box: the projection and the per-pixel ray-plane intersection differ by rounding only.
+constexpr float kSpanSlack = 0.05f;
 
 // --- the resampling covariance along the segment (§5.1.2) -------------------------------------
 
@@ -502,6 +505,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
       p.across = float(Mi(1, 1) - Mi(0, 1) * Mi(0, 1) / Mi(0, 0));
       p.invM00 = float(1 / Mi(0, 0));
       p.k = float(std::sqrt(0.5 * Mi(0, 0)));
+      p.erfScale = float(0.886226925 / std::sqrt(0.5 * Mi(0, 0)));
       const double slope = (double(p.scale1) - p.scale0) / (a1 - a0);
       p.slope = std::abs(slope) * (a1 - a0) > 1e-4 * p.scale0 ? float(slope) : 0.0f;
       out.pieceMaxReach = std::max(out.pieceMaxReach, p.reach);
@@ -649,6 +653,27 @@ inline float fastErf(float x) {
   return x < 0 ? -r : r;
 }
 
+// exp(-q/2) for q in [0, 25] (cutoff radius up to 5 sigma), linearly interpolated, as for point
+// splats (point_splat.cpp): relative error below 1e-5.
+struct GaussTable {
+  static constexpr int kSize = 2048;
+  static constexpr float kMaxQ = 25.0f;
+  float v[kSize + 2];
+  GaussTable() {
+    for (int i = 0; i < kSize + 2; ++i) v[i] = std::exp(-0.5f * kMaxQ * float(i) / kSize);
+  }
+};
+const GaussTable& gaussTable() {
+  static const GaussTable table;
+  return table;
+}
+inline float gaussHalf(float q) {
+  static const GaussTable& T = gaussTable();
+  const float x = std::clamp(q, 0.0f, GaussTable::kMaxQ) * (GaussTable::kSize / GaussTable::kMaxQ);
+  const int i = int(x);
+  return T.v[i] + (x - float(i)) * (T.v[i + 1] - T.v[i]);
+}
+
 // ScreenSpace: the cut-off Gaussian integrated along each sub-segment in closed form. With
 // x = a - a0 - tau along and b across, q(tau) = m00 (x - tau)^2 + 2 m01 (x - tau) b + m11 b^2
 // = m00 (tau - tau*)^2 + qmin; each kernel counts where q <= R^2, i.e. |tau - tau*| <= delta.
@@ -678,10 +703,11 @@ float screenSpaceWeight(const PreparedSegment& sp, float a, float b, float R2) {
     const float u0 = p.k * (t0 - tauStar), u1 = p.k * (t1 - tauStar);
     // integral of exp(-m00 (tau - tau*)^2 / 2) (= sqrt(pi)/2 / k (erf(u1) - erf(u0))) and of
     // (tau - tau*) times it
-    const float i0 = 0.886226925f * (fastErf(u1) - fastErf(u0)) / p.k;
-    float sum = (p.scale0 + p.slope * tauStar) * i0;
-    if (p.slope != 0) sum += p.slope * (std::exp(-u0 * u0) - std::exp(-u1 * u1)) * p.invM00;
-    w += std::exp(-0.5f * qmin) * sum;
+    // exp(-qmin/2) exp(-u^2) = exp(-q/2) with q = qmin + 2 u^2 in [0, R^2]: table lookups
+    const float i0 = p.erfScale * (fastErf(u1) - fastErf(u0));
+    float sum = (p.scale0 + p.slope * tauStar) * i0 * gaussHalf(qmin);
+    if (p.slope != 0) sum += p.slope * p.invM00 * (gaussHalf(qmin + 2 * u0 * u0) - gaussHalf(qmin + 2 * u1 * u1));
+    w += sum;
   }
   return w;
 }
@@ -774,7 +800,7 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   for (int y = r.y0; y < r.y1; ++y) {
     const float py = float(y) + 0.5f;
     int xb = r.x0, xe = r.x1;
-    if (sp.useSpans) {  // this row's span of the projected footprint quad (plus a pixel)
+    if (sp.useSpans) {  // this row's pixel centres inside the projected footprint quad
       float lo = INFINITY, hi = -INFINITY;
       for (int i = 0; i < 4; ++i) {
         const Vec2f& p = sp.screenQuad[i];
@@ -785,8 +811,10 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
         hi = std::max(hi, xi);
       }
       if (!(hi >= lo)) continue;
-      xb = std::max(r.x0, int(std::floor(std::max(lo, -1e8f))) - 1);
-      xe = std::min(r.x1, int(std::ceil(std::min(hi, 1e8f))) + 1);
+      // centres x + 0.5 in [lo, hi], widened by kSpanSlack pixel against rounding: a centre
+      // farther out lies outside the footprint box, where the weight is zero
+      xb = std::max(r.x0, int(std::ceil(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
+      xe = std::min(r.x1, int(std::floor(std::min(hi, 1e8f) - 0.5f + kSpanSlack)) + 1);
     }
     for (int x = xb; x < xe; ++x) {
       const float px = float(x) + 0.5f;

@@ -65,6 +65,7 @@ struct SegmentPiece {
   float across = 1;                  ///< m11 - m01^2 / m00 = 1 / M_bb
   float invM00 = 1;                  ///< 1 / m00
   float k = 1;                       ///< sqrt(m00 / 2)
+  float erfScale = 1;                ///< sqrt(pi) / 2 / k
   float slope = 0;                   ///< (scale1 - scale0) / (a1 - a0), 0 when negligible
 };
 
