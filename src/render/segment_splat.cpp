@@ -797,6 +797,7 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   fr.normal = n;
   const float L = sp.length;
   const int stations = int(sp.diffuse.size());
+  const bool screenSpace = sp.method == SegmentMethod::ScreenSpace;
   for (int y = r.y0; y < r.y1; ++y) {
     const float py = float(y) + 0.5f;
     int xb = r.x0, xe = r.x1;
@@ -826,7 +827,8 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
       const float a = t * (edx * px + edy * py + ec0) - eo;
       if (a < sp.aMin || a > sp.aMax) continue;
       if (sp.clipped && (t < nearD || t > farD)) continue;
-      const float w = weightAt(sp, a, b, R2);
+      // (the footprint box test of weightAt is already done above)
+      const float w = screenSpace ? screenSpaceWeight(sp, a, b, R2) : weightAt(sp, a, b, R2);
       if (!(w > 0)) continue;
       const float u = std::clamp(a / L, 0.0f, 1.0f);
       fr.depth = t;
