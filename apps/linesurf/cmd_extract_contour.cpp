@@ -61,11 +61,7 @@ void run(const ContourArgs& a) {
 }
 
 RegisterCommand reg(33, [](CLI::App& app) {
-  // `extract` is shared by the three extraction methods; whichever registers first creates it.
-  auto found = app.get_subcommands([](CLI::App* sub) { return sub->get_name() == "extract"; });
-  CLI::App* extract = found.empty()
-                          ? app.add_subcommand("extract", "Extract a line-segment or hybrid model")->require_subcommand(1)
-                          : found.front();
+  CLI::App* extract = extractCommand(app);
   auto a = std::make_shared<ContourArgs>();
   CLI::App* sub = extract->add_subcommand(
       "contour", "Cut a triangle mesh with two perpendicular families of contour planes (thesis §3.3)");

@@ -19,14 +19,6 @@ struct EpsDeltaArgs {
   bool provenance = false, recomputeNormals = false, ascii = false;
 };
 
-/// The shared `extract` parent: created by whichever method registers first.
-CLI::App* extractCommand(CLI::App& app) {
-  auto found = app.get_subcommands([](CLI::App* s) { return s->get_name() == "extract"; });
-  if (!found.empty()) return found.front();
-  CLI::App* e = app.add_subcommand("extract", "Extract a line-segment or hybrid model");
-  e->require_subcommand(1);
-  return e;
-}
 
 void run(const EpsDeltaArgs& a) {
   Timer total, t;

@@ -113,11 +113,7 @@ void run(const ShapeApproxArgs& a) {
 }
 
 RegisterCommand reg(32, [](CLI::App& app) {
-  // `extract` is shared by the three extraction methods; whichever registers first creates it.
-  auto found = app.get_subcommands([](CLI::App* sub) { return sub->get_name() == "extract"; });
-  CLI::App* extract = found.empty()
-                          ? app.add_subcommand("extract", "Extract a line-segment or hybrid model")->require_subcommand(1)
-                          : found.front();
+  CLI::App* extract = extractCommand(app);
   auto a = std::make_shared<ShapeApproxArgs>();
   CLI::App* sub = extract->add_subcommand(
       "shape-approx", "Shape-approximation extraction: normal-variation clusters, bunches of parallel segments (thesis §3.2)");

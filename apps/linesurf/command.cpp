@@ -33,6 +33,12 @@ std::vector<Registrar> registeredCommands() {
   return out;
 }
 
+CLI::App* extractCommand(CLI::App& app) {
+  auto found = app.get_subcommands([](CLI::App* s) { return s->get_name() == "extract"; });
+  if (!found.empty()) return found.front();
+  return app.add_subcommand("extract", "Extract a line-segment or hybrid model")->require_subcommand(1);
+}
+
 ProgressFn progressBar() {
   if (globalOptions().quiet || !isatty(STDERR_FILENO)) return {};
   auto last = std::make_shared<std::chrono::steady_clock::time_point>();

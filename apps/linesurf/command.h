@@ -26,6 +26,9 @@ struct RegisterCommand {
 /// Registered subcommands sorted by `order` (the order they appear in --help).
 std::vector<Registrar> registeredCommands();
 
+/// The `extract` parent command shared by the three extraction methods (created on first use).
+CLI::App* extractCommand(CLI::App& app);
+
 /// A progress callback that draws a bar on stderr when it is a terminal and --quiet is off.
 ProgressFn progressBar();
 /// Ends the progress line (call before printing a summary).
