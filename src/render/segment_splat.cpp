@@ -641,12 +641,10 @@ struct ErfTable {
     for (int i = 0; i <= n + 1; ++i) v[i] = float(std::erf(double(i) / scale));
   }
 };
-const ErfTable& erfTable() {
-  static const ErfTable table;
-  return table;
-}
+// Built at static initialisation (no guard check per lookup); only read while rendering.
+const ErfTable kErfTable;
 inline float fastErf(float x) {
-  static const ErfTable& T = erfTable();
+  const ErfTable& T = kErfTable;
   const float ax = std::min(std::abs(x), 4.0f) * ErfTable::scale;
   const int i = int(ax);
   const float r = T.v[i] + (ax - float(i)) * (T.v[i + 1] - T.v[i]);
@@ -663,12 +661,9 @@ struct GaussTable {
     for (int i = 0; i < kSize + 2; ++i) v[i] = std::exp(-0.5f * kMaxQ * float(i) / kSize);
   }
 };
-const GaussTable& gaussTable() {
-  static const GaussTable table;
-  return table;
-}
+const GaussTable kGaussTable;
 inline float gaussHalf(float q) {
-  static const GaussTable& T = gaussTable();
+  const GaussTable& T = kGaussTable;
   const float x = std::clamp(q, 0.0f, GaussTable::kMaxQ) * (GaussTable::kSize / GaussTable::kMaxQ);
   const int i = int(x);
   return T.v[i] + (x - float(i)) * (T.v[i + 1] - T.v[i]);
