@@ -1,4 +1,5 @@
 // Object-space EWA point splats, thesis §4.2.2 and §6.2.2 (see point_splat.h).
+#include "detail/splat_math.h"
 #include "linesurf/render/point_splat.h"
 
 #include <algorithm>
@@ -16,68 +17,6 @@ constexpr float kMaxStretch = 24.0f;
 // Splats seen closer to edge-on than this |cos| are dropped as culled (they project to a line).
 constexpr float kMinFacing = 2e-3f;
 
-// Clips a convex polygon (camera space) against depth >= nearD and depth <= farD and returns the
-// screen bounding box of what remains; false when nothing remains.
-bool clippedScreenBounds(const Camera& cam, const Vec3f* quad, int n, float& x0, float& y0, float& x1, float& y1,
-                         bool& clipped) {
-  Vec3f a[12], b[12];
-  int na = n;
-  for (int i = 0; i < n; ++i) a[i] = quad[i];
-  clipped = false;
-  for (int plane = 0; plane < 2; ++plane) {
-    // plane 0: d - near >= 0; plane 1: far - d >= 0 (d = -z)
-    auto dist = [&](const Vec3f& p) {
-      float d = -p.z();
-      return plane == 0 ? d - cam.nearDepth() : cam.farDepth() - d;
-    };
-    int nb = 0;
-    for (int i = 0; i < na; ++i) {
-      const Vec3f& p = a[i];
-      const Vec3f& q = a[(i + 1) % na];
-      float dp = dist(p), dq = dist(q);
-      if (dp >= 0) b[nb++] = p;
-      if ((dp >= 0) != (dq >= 0)) {
-        float t = dp / (dp - dq);
-        b[nb++] = p + t * (q - p);
-        clipped = true;
-      }
-    }
-    if (nb == 0) return false;
-    na = nb;
-    for (int i = 0; i < na; ++i) a[i] = b[i];
-  }
-  x0 = y0 = INFINITY;
-  x1 = y1 = -INFINITY;
-  for (int i = 0; i < na; ++i) {
-    Vec3f s = cam.project(a[i]);
-    x0 = std::min(x0, s.x());
-    x1 = std::max(x1, s.x());
-    y0 = std::min(y0, s.y());
-    y1 = std::max(y1, s.y());
-  }
-  return true;
-}
-
-// exp(-q/2) for q in [0, 25] (cutoff radius up to 5 sigma), linearly interpolated: the thesis's
-// Gaussian weight texture in one dimension. Relative error below 1e-5.
-struct GaussTable {
-  static constexpr int kSize = 2048;
-  static constexpr float kMaxQ = 25.0f;
-  float v[kSize + 2];
-  GaussTable() {
-    for (int i = 0; i < kSize + 2; ++i) v[i] = std::exp(-0.5f * kMaxQ * float(i) / kSize);
-  }
-  float operator()(float q) const {
-    const float x = q * (kSize / kMaxQ);
-    const int i = int(x);
-    const float f = x - float(i);
-    return v[i] + f * (v[i + 1] - v[i]);
-  }
-};
-const GaussTable& gaussTable() {
-  static const GaussTable table;
-  return table;
-}
 
 }  // namespace
 
@@ -176,7 +115,7 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   const Vec3f quadCycle[4] = {quad[0], quad[1], quad[3], quad[2]};
   float x0, y0, x1, y1;
   bool depthClipped = false;
-  if (!clippedScreenBounds(cam, quadCycle, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
+  if (!detail::clippedScreenBounds(cam, quadCycle, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
   // pixel centres (i + 0.5) inside [x0, x1]; clamp first so that the int conversion is defined
   const float lim = 1e7f;
   x0 = std::clamp(x0, -lim, lim), x1 = std::clamp(x1, -lim, lim), y0 = std::clamp(y0, -lim, lim), y1 = std::clamp(y1, -lim, lim);
@@ -256,7 +195,7 @@ void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   const Vec3f Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
   const Vec3f Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
   const Vec3f Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
-  const GaussTable& gauss = gaussTable();
+  const detail::GaussTable& gauss = detail::kGaussTable;
   const bool flat = sp.flat && !perPixel;
   if (flat) fr.color = sp.cornerColor[0];
   const float qa = Sx * Sx + Tx * Tx - cutoffQ * ndx * ndx;

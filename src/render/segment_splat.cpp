@@ -2,6 +2,7 @@
 // docs/segment-splatting.md). Three evaluations of the same filter: the thesis's weight-texture
 // quadrilaterals (§5.2.3, Approx), a per-pixel closed form in erf over sub-segments (after §9.3,
 // ScreenSpace) and per-pixel quadrature (Reference).
+#include "detail/splat_math.h"
 #include "linesurf/render/segment_splat.h"
 
 #include <algorithm>
@@ -378,42 +379,6 @@ bool inverseBilinear(const SegmentQuad& q, const Vec2f& p, float& alpha, float& 
   return tryV((-k1 - w) * ik2) || tryV((-k1 + w) * ik2);
 }
 
-// Clips a convex camera-space polygon against near/far and returns the screen box of the rest.
-bool clippedScreenBox(const Camera& cam, const Vec3f* poly, int n, float& x0, float& y0, float& x1, float& y1,
-                      bool& clipped) {
-  Vec3f a[16], b[16];
-  int na = n;
-  for (int i = 0; i < n; ++i) a[i] = poly[i];
-  clipped = false;
-  for (int plane = 0; plane < 2; ++plane) {
-    auto dist = [&](const Vec3f& p) { return plane == 0 ? -p.z() - cam.nearDepth() : cam.farDepth() + p.z(); };
-    int nb = 0;
-    for (int i = 0; i < na; ++i) {
-      const Vec3f& p = a[i];
-      const Vec3f& q = a[(i + 1) % na];
-      const float dp = dist(p), dq = dist(q);
-      if (dp >= 0) b[nb++] = p;
-      if ((dp >= 0) != (dq >= 0)) {
-        b[nb++] = p + (dp / (dp - dq)) * (q - p);
-        clipped = true;
-      }
-    }
-    if (nb == 0) return false;
-    na = nb;
-    for (int i = 0; i < na; ++i) a[i] = b[i];
-  }
-  x0 = y0 = INFINITY;
-  x1 = y1 = -INFINITY;
-  for (int i = 0; i < na; ++i) {
-    const Vec3f s = cam.project(a[i]);
-    x0 = std::min(x0, s.x());
-    x1 = std::max(x1, s.x());
-    y0 = std::min(y0, s.y());
-    y1 = std::max(y1, s.y());
-  }
-  return true;
-}
-
 }  // namespace
 
 float weightTextureT1(float cutoffRadius, float x, float y) { return weightTextures(cutoffRadius)->lookupT1(x, y); }
@@ -583,7 +548,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   }
   float x0, y0, x1, y1;
   bool depthClipped = false;
-  if (!clippedScreenBox(cam, boxf, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
+  if (!detail::clippedScreenBounds(cam, boxf, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
   const PixelRect view{0, 0, cam.width(), cam.height()};
   auto pix = [](float v) { return int(std::floor(std::clamp(v, -1e8f, 1e8f) - 0.5f)) + 1; };
   const PixelRect bb{pix(x0), pix(y0), pix(x1), pix(y1)};
@@ -651,23 +616,7 @@ inline float fastErf(float x) {
   return x < 0 ? -r : r;
 }
 
-// exp(-q/2) for q in [0, 25] (cutoff radius up to 5 sigma), linearly interpolated, as for point
-// splats (point_splat.cpp): relative error below 1e-5.
-struct GaussTable {
-  static constexpr int kSize = 2048;
-  static constexpr float kMaxQ = 25.0f;
-  float v[kSize + 2];
-  GaussTable() {
-    for (int i = 0; i < kSize + 2; ++i) v[i] = std::exp(-0.5f * kMaxQ * float(i) / kSize);
-  }
-};
-const GaussTable kGaussTable;
-inline float gaussHalf(float q) {
-  const GaussTable& T = kGaussTable;
-  const float x = std::clamp(q, 0.0f, GaussTable::kMaxQ) * (GaussTable::kSize / GaussTable::kMaxQ);
-  const int i = int(x);
-  return T.v[i] + (x - float(i)) * (T.v[i + 1] - T.v[i]);
-}
+using detail::gaussHalf;
 
 // ScreenSpace: the cut-off Gaussian integrated along each sub-segment in closed form. With
 // x = a - a0 - tau along and b across, q(tau) = m00 (x - tau)^2 + 2 m01 (x - tau) b + m11 b^2
