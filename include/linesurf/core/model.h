@@ -27,6 +27,10 @@ struct Point {
 struct Segment {
   Vec3f p0 = Vec3f::Zero(), p1 = Vec3f::Zero();  ///< endpoints, object space
   Vec3f normal = Vec3f::Zero();                  ///< unit, perpendicular to p1 - p0
+  /// Optional normals at p0 and p1 (smooth line models, beyond the thesis): unit, each
+  /// perpendicular to p1 - p0, interpolated along the segment by the renderer. Zero when the
+  /// segment carries only `normal` (the thesis's one-normal segment); see Attributes.
+  Vec3f normal0 = Vec3f::Zero(), normal1 = Vec3f::Zero();
   Color color = Color(1, 1, 1, 1);               ///< linear RGBA in [0,1]
   float radius = 0;                              ///< half-width of the strip, object space
   Vec2f uv0 = Vec2f::Zero(), uv1 = Vec2f::Zero(); ///< texture coordinates at the endpoints (§5.2.4)
@@ -40,6 +44,7 @@ struct Attributes {
   bool colors = false;
   bool radii = false;
   bool texcoords = false;  ///< segments carry uv0/uv1
+  bool endpointNormals = false;  ///< segments carry normal0/normal1 (PLY nx0..nz0, nx1..nz1)
 };
 
 /// A hybrid point + line-segment model (thesis §3). A point cloud is a HybridModel without
