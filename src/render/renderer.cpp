@@ -44,9 +44,10 @@ RenderResult Renderer::render(const Camera& cam) const {
   RenderResult res;
   RenderStats& st = res.stats;
   const RenderOptions& opt = options_;
-  const FrameContext frame =
+  FrameContext frame =
       FrameContext::make(cam, opt, sphere_, model_.attributes.colors,
                          model_.attributes.texcoords ? model_.texture.get() : nullptr);
+  frame.endpointNormals = model_.attributes.endpointNormals;
 
   // 1. prepare (per primitive, parallel, each writes its own slot)
   Timer t;

@@ -390,6 +390,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   out.index = index;
   out.bounds = {};
   out.fallback = false;
+  out.smooth = false;
   out.pieces.clear();
   out.nodes.clear();
   out.quads.clear();
@@ -403,8 +404,12 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   const double L = (c1 - c0).norm();
   if (!(L > 1e-6 * seg.radius) || !std::isfinite(L)) return PrimitiveStatus::Degenerate;
   const Vec3d e = (c1 - c0) / L;
+  // smooth line models: usable endpoint normals (finite, non-zero) shade the segment
+  const bool smooth = frame.endpointNormals && seg.normal0.allFinite() && seg.normal1.allFinite() &&
+                      seg.normal0.squaredNorm() > 0 && seg.normal1.squaredNorm() > 0;
   // local parameterisation (§6.2.2): b axis s = e x n, the normal made perpendicular to e
-  Vec3d n = (cam.rotation() * seg.normal).cast<double>();
+  const Vec3f planeNormal = smooth && !(seg.normal.squaredNorm() > 0) ? Vec3f(seg.normal0 + seg.normal1) : seg.normal;
+  Vec3d n = (cam.rotation() * planeNormal).cast<double>();
   n -= n.dot(e) * e;
   if (!(n.norm() > 1e-3)) {  // no (usable) normal: the strip through the segment facing the viewer
     const Vec3d toEye = -(c0 + 0.5 * L * e);
@@ -561,6 +566,16 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   out.along = e.cast<float>();
   out.across = s.cast<float>();
   out.normal = n.cast<float>();
+  out.smooth = smooth;
+  if (smooth) {  // endpoint shading normals, on the side of the (possibly flipped) plane normal
+    Vec3f m0 = (cam.rotation() * seg.normal0).normalized(), m1 = (cam.rotation() * seg.normal1).normalized();
+    if (out.normal.dot(m0 + m1) < 0) {
+      m0 = -m0;
+      m1 = -m1;
+    }
+    out.normal0 = m0;
+    out.normal1 = m1;
+  }
   out.length = float(L);
   out.aMin = float(aMin);
   out.aMax = float(aMax);
@@ -582,12 +597,18 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   out.textured = frame.texture != nullptr;
   out.uv0 = seg.uv0;
   out.uv1 = seg.uv1;
-  if (!opt.perPixelLighting) {  // Gouraud along the segment at K + 1 stations (§6.2.2)
-    const Vec3f nf = n.cast<float>();
-    out.diffuse.resize(K + 1);
-    out.specular.resize(K + 1);
-    for (int k = 0; k <= K; ++k) {
-      const Vec3f p = (c0 + (L * k / K) * e).cast<float>();
+  if (!opt.perPixelLighting) {  // Gouraud along the segment at S + 1 stations (§6.2.2)
+    int S = K;
+    if (smooth) {  // one station per 0.1 rad the interpolated normal turns
+      const float turn = std::acos(std::clamp(out.normal0.dot(out.normal1), -1.0f, 1.0f));
+      S = std::clamp(int(std::ceil(turn / 0.1f)), K, kMaxSegmentPieces);
+    }
+    out.diffuse.resize(S + 1);
+    out.specular.resize(S + 1);
+    for (int k = 0; k <= S; ++k) {
+      const float u = float(k) / float(S);
+      const Vec3f nf = smooth ? out.shadingNormal(u) : out.normal;
+      const Vec3f p = (c0 + (L * k / S) * e).cast<float>();
       out.specular[k] = frame.shade(Vec3f::Zero(), nf, p);
       out.diffuse[k] = frame.shade(Vec3f::Ones(), nf, p) - out.specular[k];
     }
@@ -778,6 +799,7 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
       fr.depth = t;
       fr.weight = w;
       fr.zThreshold = sp.zThreshold0 + u * (sp.zThreshold1 - sp.zThreshold0);
+      if (sp.smooth) fr.normal = sp.shadingNormal(u);
       Vec3f albedo = sp.albedo;
       if (sp.textured) {  // §5.2.4: interpolated between the endpoints, constant beyond
         const Vec2f uv = sp.uv0 + u * (sp.uv1 - sp.uv0);
@@ -785,7 +807,7 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
       }
       if (perPixel) {
         const Vec3f P = t * Vec3f((px - pp.x()) / f, -(py - pp.y()) / f, -1.0f);
-        fr.color = frame.shade(albedo, n, P);
+        fr.color = frame.shade(albedo, fr.normal, P);
       } else {
         const float fs = u * float(stations - 1);
         const int k = std::min(int(fs), stations - 2);

@@ -543,3 +543,54 @@ TEST(SegmentSplat, ReferenceWithinToleranceOfTheClosedForm) {
 
 }  // namespace
 }  // namespace linesurf
+
+namespace linesurf {
+namespace {
+
+// Smooth line models: with Attributes::endpointNormals a segment's shading normal is
+// normalize(lerp(normal0, normal1, u)) along it; without the attribute (or with zero endpoint
+// normals) the one-normal segment renders exactly as before.
+TEST(SegmentSplat, EndpointNormalsInterpolateAlongTheSegment) {
+  HybridModel m;
+  m.attributes.normals = m.attributes.radii = true;
+  Segment s;
+  s.p0 = Vec3f(-1, 0, 0);
+  s.p1 = Vec3f(1, 0, 0);
+  s.normal = Vec3f(0, 0, 1);
+  s.normal0 = Vec3f(-0.6f, 0, 0.8f);
+  s.normal1 = Vec3f(0.6f, 0, 0.8f);
+  s.radius = 0.1f;
+  m.segments.push_back(s);
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 160, 96, 0.1f, 50);
+  RenderOptions o;
+  o.normalBuffer = true;
+  o.perPixelLighting = false;
+  const RenderResult flat = renderImage(m, cam, o);
+  m.attributes.endpointNormals = true;
+  const RenderResult smooth = renderImage(m, cam, o);
+  ASSERT_TRUE(smooth.normal && flat.normal);
+  for (float u : {0.0f, 0.25f, 0.5f, 0.75f, 1.0f}) {
+    const Vec3f pc = cam.project(cam.toCamera(s.p0 + u * (s.p1 - s.p0)));
+    const int x = std::clamp(int(pc.x()), 0, cam.width() - 1), y = int(pc.y());
+    const Color nb = smooth.normal->at(x, y), nf = flat.normal->at(x, y);
+    ASSERT_GT(nb.w(), 0) << "u " << u;
+    const Vec3f got(2 * nb.x() - 1, 2 * nb.y() - 1, 2 * nb.z() - 1);
+    // u of the pixel centre actually sampled
+    const Vec3f ray = cam.rayThrough(x + 0.5f, y + 0.5f);
+    const float uc = std::clamp((ray.x() * 4 / -ray.z() + 1) / 2, 0.0f, 1.0f);
+    const Vec3f want = (cam.rotation() * (s.normal0 + uc * (s.normal1 - s.normal0))).normalized();
+    EXPECT_LT((got - want).norm(), 2e-3f) << "u " << u << " got " << got.transpose() << " want " << want.transpose();
+    EXPECT_NEAR(2 * nf.x() - 1, 0.0f, 1e-4f) << "one-normal segment: constant normal";
+  }
+  // Gouraud colour follows the interpolated normal: the two halves are lit differently.
+  const Vec3f left = cam.project(cam.toCamera(Vec3f(-0.7f, 0, 0))), right = cam.project(cam.toCamera(Vec3f(0.7f, 0, 0)));
+  EXPECT_GT(std::abs(smooth.color.at(int(left.x()), int(left.y())).x() - smooth.color.at(int(right.x()), int(right.y())).x()),
+            0.02f);
+  // Zero endpoint normals: the attribute changes nothing.
+  m.segments[0].normal0 = m.segments[0].normal1 = Vec3f::Zero();
+  const RenderResult zero = renderImage(m, cam, o);
+  EXPECT_EQ(compareImages(flat.color, zero.color).maxAbsDiff, 0.0);
+}
+
+}  // namespace
+}  // namespace linesurf

@@ -44,6 +44,11 @@
 ///    (the thesis assigns the endpoint's uv to points 1, 4, 5, 9, 11, 18); sampled per pixel.
 ///  - Lighting: Phong at stations along the segment interpolated along it (Gouraud, §6.2.2),
 ///    or per pixel with RenderOptions::perPixelLighting.
+///  - Smooth line models (beyond the thesis): when the model has Attributes::endpointNormals
+///    (FrameContext::endpointNormals) and both of a segment's normal0/normal1 are usable, the
+///    shading normal is interpolated between them along the segment (normalize(lerp(n0, n1, u)),
+///    u the along-axis parameter); the strip's plane (weights, depth, culling) still comes from
+///    Segment::normal (or from n0 + n1 when that is zero).
 #include <cstdint>
 #include <vector>
 
@@ -99,7 +104,18 @@ struct PreparedSegment {
   Vec3f origin = Vec3f::Zero();  ///< p0, camera space
   Vec3f along = Vec3f::Zero();   ///< unit (p1 - p0) / L, camera space
   Vec3f across = Vec3f::Zero();  ///< unit along x normal: the b axis, camera space
-  Vec3f normal = Vec3f::Zero();  ///< unit, facing the viewer
+  Vec3f normal = Vec3f::Zero();  ///< unit, facing the viewer: the strip's plane
+  /// Smooth line models (Attributes::endpointNormals): unit shading normals at p0 and p1, camera
+  /// space, on the viewer's side; a fragment's normal is normalize(lerp(normal0, normal1, u)) with
+  /// u = a / length clamped to [0, 1]. false: every fragment carries `normal`.
+  bool smooth = false;
+  Vec3f normal0 = Vec3f::Zero(), normal1 = Vec3f::Zero();
+  /// The shading normal at along-parameter u in [0, 1] (smooth segments only).
+  Vec3f shadingNormal(float u) const {
+    const Vec3f m = normal0 + u * (normal1 - normal0);
+    const float len = m.norm();
+    return len > 0 ? Vec3f(m / len) : normal;
+  }
   float length = 0;
   float aMin = 0, aMax = 0, bMax = 0;  ///< plane-coordinate box of the footprint
   /// The footprint box projected to the screen (pixels), a convex quad when not clipped by the

@@ -57,6 +57,9 @@ struct FrameContext {
   std::array<Vec4f, 6> frustum;
   /// false when the model has no colours: every primitive gets options.defaultColor.
   bool modelHasColors = true;
+  /// The model's segments carry normal0/normal1 (Attributes::endpointNormals): shading normals
+  /// are interpolated along segments (segment_splat.h).
+  bool endpointNormals = false;
 
   const Camera& cam() const { return *camera; }
 
