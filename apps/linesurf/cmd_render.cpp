@@ -15,6 +15,7 @@
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/render/camera.h"
+#include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
 
 namespace linesurf::cli {
@@ -40,6 +41,8 @@ struct RenderArgs {
   std::string depthOut, alphaOut, normalOut;
   int k = 12;
   int tileSize = 64;
+  std::string primitive = "auto";
+  int supersampling = 4;
 };
 
 Vec3f vec3(const std::vector<float>& v, const char* name) {
@@ -104,8 +107,19 @@ Image depthImage(const Image& depth) {
 void run(const RenderArgs& a) {
   Timer total;
   auto [w, h] = parseSize(a.size);
+  if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points")
+    throwBadParameter("--primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
+  const bool isMesh = fileHoldsMesh(a.model);
+  if (a.primitive == "mesh" && !isMesh)
+    throwBadParameter("--primitive", "mesh needs a file with faces; " + a.model + " holds none");
+  std::optional<TriangleMesh> triMesh;
   HybridModel model;
-  if (fileHoldsMesh(a.model)) {
+  if (isMesh && a.primitive != "points") {
+    triMesh = readMesh(a.model);
+    if (triMesh->faces.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the mesh has no faces");
+    say(fmt::format("{}: mesh, rasterising its {} triangles ({}x{} samples per pixel)", a.model, triMesh->faces.size(),
+                    a.supersampling, a.supersampling));
+  } else if (isMesh) {
     // A mesh file: render its vertices as a point cloud (normals kept when present).
     TriangleMesh mesh = readMesh(a.model);
     model.points.resize(mesh.positions.size());
@@ -123,7 +137,7 @@ void run(const RenderArgs& a) {
   } else {
     model = readModel(a.model);
   }
-  if (model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
+  if (!triMesh && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
 
   double geometrySeconds = 0;
   if (!model.points.empty() && (!model.attributes.normals || !model.attributes.radii)) {
@@ -183,8 +197,13 @@ void run(const RenderArgs& a) {
   o.progress = progressBar();
   if (!(a.zoom > 0) || !std::isfinite(a.zoom)) throwBadParameter("--zoom", "must be > 0");
 
-  Renderer renderer(model, o);
-  const BoundingSphere& sphere = renderer.sphere();
+  std::optional<Renderer> renderer;
+  std::optional<MeshRenderer> meshRenderer;
+  MeshRenderOptions mo;
+  mo.supersampling = a.supersampling;
+  if (triMesh) meshRenderer.emplace(*triMesh, o, mo);
+  else renderer.emplace(model, o);
+  const BoundingSphere& sphere = triMesh ? meshRenderer->sphere() : renderer->sphere();
   Vec3f upAxis;
   {
     std::string u = a.upAxis;
@@ -219,9 +238,26 @@ void run(const RenderArgs& a) {
   }
 
   RenderStats sum;
+  uint64_t tris[5] = {0, 0, 0, 0, 0};
   for (size_t i = 0; i < cams.size(); ++i) {
-    RenderOptions oi = o;
-    RenderResult r = renderer.render(cams[i]);
+    RenderResult r;
+    uint64_t trianglesThisView = 0;
+    if (meshRenderer) {  // the mesh ground truth: same outputs, triangle counts in the summary
+      MeshRenderResult m = meshRenderer->render(cams[i]);
+      r.color = std::move(m.color);
+      r.depth = std::move(m.depth);
+      r.alpha = std::move(m.alpha);
+      r.normal = std::move(m.normal);
+      r.stats.fragments = m.stats.samplesCovered;
+      r.stats.prepareSeconds = m.stats.prepareSeconds;
+      r.stats.rasterSeconds = m.stats.rasterSeconds;
+      r.stats.totalSeconds = m.stats.totalSeconds;
+      trianglesThisView = m.stats.trianglesDrawn;
+      tris[0] += m.stats.trianglesDrawn; tris[1] += m.stats.trianglesClipped; tris[2] += m.stats.trianglesCulled;
+      tris[3] += m.stats.trianglesOutside; tris[4] += m.stats.trianglesDegenerate;
+    } else {
+      r = renderer->render(cams[i]);
+    }
     const int vi = a.views > 0 ? int(i) : -1;
     std::filesystem::path out = vi >= 0 ? viewPath(a.output, vi) : std::filesystem::path(a.output);
     writePng(out, r.color, o.background.w() < 1);
@@ -230,7 +266,8 @@ void run(const RenderArgs& a) {
     if (r.normal) writePng(bufferPath(a.normalOut, vi, a.views), *r.normal);
     const RenderStats& s = r.stats;
     if (cams.size() > 1)
-      say(fmt::format("{}: {:.1f} ms, {} splats drawn", out.string(), 1000 * s.totalSeconds, s.pointsDrawn + s.segmentsDrawn));
+      say(fmt::format("{}: {:.1f} ms, {} {} drawn", out.string(), 1000 * s.totalSeconds,
+                      triMesh ? trianglesThisView : s.pointsDrawn + s.segmentsDrawn, triMesh ? "triangles" : "splats"));
     sum.pointsDrawn += s.pointsDrawn; sum.pointsClipped += s.pointsClipped; sum.pointsCulled += s.pointsCulled;
     sum.pointsOutside += s.pointsOutside; sum.pointsDegenerate += s.pointsDegenerate;
     sum.segmentsDrawn += s.segmentsDrawn; sum.segmentsClipped += s.segmentsClipped; sum.segmentsCulled += s.segmentsCulled;
@@ -239,7 +276,6 @@ void run(const RenderArgs& a) {
     sum.fragments += s.fragments; sum.merged += s.merged; sum.occluded += s.occluded; sum.compressed += s.compressed;
     sum.prepareSeconds += s.prepareSeconds; sum.binSeconds += s.binSeconds; sum.rasterSeconds += s.rasterSeconds;
     sum.totalSeconds += s.totalSeconds;
-    (void)oi;
   }
   const std::string per = cams.size() > 1 ? fmt::format(" (over {} views)", cams.size()) : "";
   if (!model.points.empty())
@@ -249,6 +285,10 @@ void run(const RenderArgs& a) {
     say(fmt::format("segments{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate, "
                     "{} approx fallbacks to screen-space", per, sum.segmentsDrawn, sum.segmentsClipped, sum.segmentsCulled,
                     sum.segmentsOutside, sum.segmentsDegenerate, sum.segmentsFallback));
+  if (triMesh)
+    say(fmt::format("triangles{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate; "
+                    "{} samples covered", per, tris[0], tris[1], tris[2], tris[3], tris[4], sum.fragments));
+  else
   say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
   say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); total {:.2f} s",
@@ -263,7 +303,7 @@ void run(const RenderArgs& a) {
 RegisterCommand reg(40, [](CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* sub = app.add_subcommand("render", "Render a point or hybrid model by EWA splatting (thesis §4-§6.2) to PNG");
-  sub->add_option("MODEL", a->model, "Point cloud or hybrid model (.ply, .xyz); a mesh renders its vertices")
+  sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")
       ->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->capture_default_str();
   sub->add_option("--size", a->size, "Image size WIDTHxHEIGHT")->capture_default_str();
@@ -304,6 +344,11 @@ RegisterCommand reg(40, [](CLI::App& app) {
   sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG");
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB");
   sub->add_option("--k", a->k, "Neighbours for normals/radii of raw scans (§6.1)")->capture_default_str()->check(CLI::Range(3, 200));
+  sub->add_option("--primitive", a->primitive,
+                  "What a mesh file is drawn as: mesh (anti-aliased triangles, the ground truth), points (its "
+                  "vertices as splats) or auto (mesh when the file has faces)")->capture_default_str();
+  sub->add_option("--supersampling", a->supersampling, "Mesh: samples per pixel side (S x S per pixel) [1, 16]")
+      ->capture_default_str();
   sub->add_option("--tile-size", a->tileSize, "Screen tile side in pixels (does not change the image)")->capture_default_str();
   sub->callback([a] { run(*a); });
 });
