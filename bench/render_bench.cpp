@@ -2,7 +2,7 @@
 // vertices) at 512^2 and 1024^2: time per frame, input splats per second, and the split between
 // prepare (transform, cull, warp, clip, light), binning and rasterisation + Z^3 + resolve.
 // Normals and radii come from the §6.1 geometry stage once per model (not timed).
-// Run: build/linesurf_bench --benchmark_filter=Render  (set LINESURF_SHARED_DATA if needed)
+// Arguments: size, threads. Run: build/linesurf_bench --benchmark_filter=Render  (set LINESURF_SHARED_DATA if needed)
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -56,7 +56,7 @@ void renderBench(benchmark::State& state, const std::string& file) {
     state.SkipWithError("shared model not found (set LINESURF_SHARED_DATA)");
     return;
   }
-  ThreadLimit limit(2);
+  ThreadLimit limit(int(state.range(1)));
   const int size = int(state.range(0));
   Renderer renderer(*m);
   const Camera cam = Camera::orbit(renderer.sphere(), 30, 20, 0, size, size);
@@ -78,14 +78,16 @@ void renderBench(benchmark::State& state, const std::string& file) {
   state.counters["prepare_ms"] = 1e3 * prep / it;
   state.counters["bin_ms"] = 1e3 * bin / it;
   state.counters["raster_ms"] = 1e3 * raster / it;
+  state.counters["fragments"] = double(last.fragments);
+  state.SetLabel(std::string("simd=") + renderSimdTarget());
 }
 
 void RenderIgea(benchmark::State& s) { renderBench(s, "igea_points.ply"); }
 void RenderArmadillo(benchmark::State& s) { renderBench(s, "armadillo_points.ply"); }
 void RenderDragonVertices(benchmark::State& s) { renderBench(s, "dragon_mesh.ply"); }
 
-BENCHMARK(RenderIgea)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(RenderArmadillo)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(RenderDragonVertices)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(RenderIgea)->ArgsProduct({{512, 1024}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(RenderArmadillo)->ArgsProduct({{512, 1024}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(RenderDragonVertices)->ArgsProduct({{512, 1024}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

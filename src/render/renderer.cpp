@@ -18,6 +18,8 @@ Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
   validate(options_);
 }
 
+const char* renderSimdTarget() { return "scalar"; }
+
 RenderResult renderImage(const HybridModel& model, const Camera& camera, const RenderOptions& options) {
   return Renderer(model, options).render(camera);
 }

@@ -52,6 +52,10 @@ class Renderer {
   BoundingSphere sphere_;
 };
 
+/// The SIMD target the rasteriser's rows run on in this process, chosen at run time (Highway's
+/// name: AVX3_ZEN4, AVX3, AVX2, SSE4, SSSE3, EMU128, ...). For benchmark tables.
+const char* renderSimdTarget();
+
 /// One-shot: Renderer(model, options).render(camera).
 RenderResult renderImage(const HybridModel& model, const Camera& camera, const RenderOptions& options = {});
 
