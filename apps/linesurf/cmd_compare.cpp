@@ -18,10 +18,14 @@ struct CompareArgs {
 };
 
 void run(const CompareArgs& args) {
-  Image a = readImage(args.a), b = readImage(args.b);
-  if (a.width != b.width || a.height != b.height)
+  checkFiles({args.a, args.b}, {{"--diff", args.diff, {".png"}}});
+  // Sizes from the headers before decoding: a small file may declare a huge image.
+  const ImageInfo ia = readImageInfo(args.a), ib = readImageInfo(args.b);
+  if (ia.width != ib.width || ia.height != ib.height)
     throw Error(Error::Kind::BadInput, args.b, "",
-                fmt::format("size {}x{} differs from {} ({}x{})", b.width, b.height, args.a, a.width, a.height));
+                fmt::format("size {}x{} differs from {} ({}x{})", ib.width, ib.height, args.a, ia.width, ia.height));
+  checkSize(args.a, 16.0 * 3 * ia.width * ia.height, fmt::format("comparing {}x{} images", ia.width, ia.height));
+  Image a = readImage(args.a, size_t(-1)), b = readImage(args.b, size_t(-1));
   ImageMetrics m = compareImages(a, b);
   if (!args.diff.empty()) writePng(args.diff, differenceHeatmap(a, b, args.saturate), false);
   if (args.json) {

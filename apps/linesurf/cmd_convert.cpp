@@ -26,6 +26,7 @@ void runConvert(const ConvertArgs& a) {
   WriteOptions wo;
   wo.encoding = a.ascii ? PlyEncoding::Ascii : PlyEncoding::BinaryLittleEndian;
   const std::string outExt = lowerExt(a.out);
+  checkFiles({a.in}, {{"output", a.out, {".ply", ".obj", ".xyz"}}});
   const char* enc = outExt == ".ply" ? (a.ascii ? " (ascii PLY)" : " (binary PLY)") : "";
   if (fileHoldsMesh(a.in) && !a.points && outExt != ".xyz") {
     TriangleMesh m = readMesh(a.in);

@@ -86,6 +86,7 @@ void run(const ExperimentArgs& a) {
   say(fmt::format("{} models ({} failed) in {:.1f} s on {} threads; wrote {}, {}, {}", res.models.size(), failed,
                   res.totalSeconds, res.threads, (out / "results.json").string(), (out / "results.md").string(),
                   (out / "index.html").string()));
+  if (failed) commitOutputs();  // a batch: keep the results of the models that did run
   if (failed)
     throw Error(Error::Kind::BadInput, a.dataDir, "",
                 fmt::format("{} of {} models failed (see above and results.json)", failed, res.models.size()));

@@ -20,6 +20,7 @@ struct ContourArgs {
 
 void run(const ContourArgs& a) {
   Timer total, t;
+  checkFiles({a.mesh}, {{"--output", a.output, a.allPoints ? std::vector<std::string>{".ply", ".xyz"} : std::vector<std::string>{".ply"}}});
   const TriangleMesh mesh = readMesh(a.mesh);
   const double readSeconds = t.seconds();
   say(fmt::format("{}: {} vertices, {} faces{}{} ({:.2f} s)", a.mesh, mesh.positions.size(), mesh.faces.size(),

@@ -22,6 +22,7 @@ struct EpsDeltaArgs {
 
 void run(const EpsDeltaArgs& a) {
   Timer total, t;
+  checkFiles({a.input}, {{"--output", a.output, {".ply"}}});
   HybridModel cloud = readModel(a.input);
   const double readSeconds = t.seconds();
   if (!cloud.segments.empty())

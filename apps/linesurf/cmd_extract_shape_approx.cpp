@@ -27,6 +27,7 @@ struct ShapeApproxArgs {
 
 void run(const ShapeApproxArgs& a) {
   Timer total, t;
+  checkFiles({a.input}, {{"--output", a.output, {".ply"}}, {"--clusters-out", a.clustersOut, {".ply", ".xyz"}}});
   HybridModel cloud = readModel(a.input);
   const double readSeconds = t.seconds();
   if (!cloud.segments.empty())

@@ -21,6 +21,7 @@ struct NormalsArgs {
 
 void run(const NormalsArgs& args) {
   Timer total;
+  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();
   if (model.points.empty()) throw Error(Error::Kind::BadInput, args.in, "", "holds no points");

@@ -14,6 +14,7 @@
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/io/model_validate.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
@@ -107,6 +108,10 @@ Image depthImage(const Image& depth) {
 void run(const RenderArgs& a) {
   Timer total;
   auto [w, h] = parseSize(a.size);
+  checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},
+                         {"--alpha-out", a.alphaOut, {".png"}}, {"--normal-out", a.normalOut, {".png"}}});
+  // Colour, depth, alpha, normal images (16 bytes a pixel each) and the Z3 fragment layers.
+  checkSize("--size", double(w) * h * (16.0 * 4 + 48.0 * std::max(a.layers, 1)), "a " + a.size + " image");
   if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points")
     throwBadParameter("--primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
   const bool isMesh = fileHoldsMesh(a.model);
@@ -139,8 +144,12 @@ void run(const RenderArgs& a) {
   }
   if (!triMesh && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
 
+  if (size_t n = estimateSegmentRadii(model))
+    say(fmt::format("{} segments without a radius: estimated from the spacing of their neighbours", n));
+  const bool pointWithoutRadius =
+      std::any_of(model.points.begin(), model.points.end(), [](const Point& p) { return p.radius == 0.0f; });
   double geometrySeconds = 0;
-  if (!model.points.empty() && (!model.attributes.normals || !model.attributes.radii)) {
+  if (!model.points.empty() && (!model.attributes.normals || !model.attributes.radii || pointWithoutRadius)) {
     Timer t;
     const std::string what = !model.attributes.normals ? "normals + radii" : "radii";
     GeometryOptions go;
@@ -150,6 +159,8 @@ void run(const RenderArgs& a) {
     go.progress = progressBar();
     PointGeometry geo = computePointGeometry(model, go);
     applyGeometry(model, geo);
+    for (size_t i = 0; i < model.points.size() && i < geo.spacing.size(); ++i)  // hybrid: radii on segments only
+      if (model.points[i].radius == 0.0f) model.points[i].radius = geo.spacing[i] > 0 ? geo.spacing[i] : geo.averageSpacing;
     geometrySeconds = t.seconds();
     endProgress();
     say(fmt::format("geometry (§6.1): {} for {} points (k = {}) in {:.2f} s",
@@ -304,7 +315,7 @@ RegisterCommand reg(40, [](CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* sub = app.add_subcommand("render", "Render a point or hybrid model by EWA splatting (thesis §4-§6.2) to PNG");
   sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")
-      ->required()->check(CLI::ExistingFile);
+      ->required();
   sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->capture_default_str();
   sub->add_option("--size", a->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   auto* g = sub->add_option_group("camera", "Orbit view auto-framed on the bounding sphere, N views, or look-at");

@@ -75,3 +75,76 @@ void say(const std::string& line) {
 }
 
 }  // namespace linesurf::cli
+
+#include <fmt/format.h>
+
+#include <filesystem>
+
+#include "linesurf/core/error.h"
+#include "linesurf/io/atomic_file.h"
+
+namespace linesurf::cli {
+
+namespace {
+std::filesystem::path canonicalOrSelf(const std::string& p) {
+  std::error_code ec;
+  auto c = std::filesystem::weakly_canonical(std::filesystem::absolute(p, ec), ec);
+  return ec ? std::filesystem::path(p).lexically_normal() : c;
+}
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+}  // namespace
+
+void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs) {
+  std::vector<std::pair<std::filesystem::path, const OutputSpec*>> seen;
+  for (const OutputSpec& o : outputs) {
+    if (o.path.empty()) continue;
+    const std::string where = o.option + " " + o.path;
+    const FileId id = fileId(o.path);
+    const std::filesystem::path c = canonicalOrSelf(o.path);
+    for (const std::string& in : inputs) {
+      if (in.empty()) continue;
+      if ((id.exists() && id == fileId(in)) || c == canonicalOrSelf(in))
+        throwBadParameter(o.option, fmt::format("'{}' is also the input '{}' (not overwritten)", o.path, in));
+    }
+    if (!o.extensions.empty()) {
+      const std::string ext = lower(std::filesystem::path(o.path).extension().string());
+      bool ok = false;
+      std::string list;
+      for (const std::string& e : o.extensions) {
+        ok = ok || ext == e;
+        list += (list.empty() ? "" : ", ") + e;
+      }
+      if (!ok)
+        throwBadParameter(o.option, fmt::format("'{}': the extension must be {} (the format written)", o.path, list));
+    }
+    for (auto& [p, other] : seen)
+      if (p == c) throwBadParameter(o.option, fmt::format("'{}' is also the path of {}", o.path, other->option));
+    seen.emplace_back(c, &o);
+    std::filesystem::path dir = std::filesystem::path(o.path).parent_path();
+    if (dir.empty()) dir = ".";
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec)) throwIo(o.path, "output folder does not exist");
+    if (std::filesystem::is_directory(o.path, ec)) throwIo(o.path, "is a directory");
+    if (::access(dir.c_str(), W_OK) != 0) throwIo(o.path, "output folder is not writable");
+  }
+}
+
+namespace {
+OutputTransaction* currentTransaction = nullptr;
+}
+void setOutputTransaction(OutputTransaction* t) { currentTransaction = t; }
+void commitOutputs() {
+  if (currentTransaction) currentTransaction->commit();
+}
+
+void checkSize(const std::string& option, double bytes, const std::string& what) {
+  const double limit = globalOptions().maxMegabytes * 1024.0 * 1024.0;
+  if (!(bytes <= limit))
+    throwBadParameter(option, fmt::format("{} needs about {:.3g} MiB, more than --max-mb {:g} (raise --max-mb to allow it)",
+                                          what, bytes / (1024.0 * 1024.0), globalOptions().maxMegabytes));
+}
+
+}  // namespace linesurf::cli

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "linesurf/core/progress.h"
+#include "linesurf/io/atomic_file.h"
 
 namespace linesurf::cli {
 
@@ -15,6 +16,7 @@ namespace linesurf::cli {
 struct GlobalOptions {
   bool quiet = false;
   int threads = 0;  ///< 0 = all cores
+  double maxMegabytes = 4096;  ///< --max-mb: largest image buffer or output estimated before work
 };
 GlobalOptions& globalOptions();
 
@@ -33,6 +35,28 @@ CLI::App* extractCommand(CLI::App& app);
 ProgressFn progressBar();
 /// Ends the progress line (call before printing a summary).
 void endProgress();
+
+/// Checks a command's file arguments before any work (main.cpp's OutputTransaction checks the
+/// files actually written again). Throws Error:
+/// - BadParameter (exit 1): an output equal to an input (same file, or same path), two outputs
+///   with one path, an output whose extension is not one of `extensions` (e.g. {".png"});
+/// - Io (exit 3): an output whose folder does not exist, or an output that is a folder.
+/// `outputs` pairs an option name (as typed, for messages) with its value; empty values are
+/// skipped. An input path that does not exist is left to the reader.
+struct OutputSpec {
+  std::string option, path;
+  std::vector<std::string> extensions;  ///< lower case with the dot; empty = any
+};
+void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs);
+
+/// Refuses (BadParameter, exit 1) work whose estimated size exceeds --max-mb, naming `option`.
+void checkSize(const std::string& option, double bytes, const std::string& what);
+
+/// The command's output transaction (opened by main.cpp): setOutputTransaction registers it,
+/// commitOutputs() renames what was written so far into place before the command ends (for a
+/// batch such as `experiment` that reports failed models but keeps the others' results).
+void setOutputTransaction(OutputTransaction* t);
+void commitOutputs();
 
 /// Prints to stdout unless --quiet.
 void say(const std::string& line);

@@ -1,11 +1,23 @@
 // linesurf: command-line front end. Parses arguments, calls the library, maps errors to exit
-// codes: 0 ok, 1 usage or bad parameter, 2 bad input file, 3 other failure.
+// codes: 0 ok, 1 usage or bad parameter, 2 bad input file, 3 failure to write and other failures.
+// Every error is one line on stderr ("PATH: WHERE: WHAT"). Every command runs inside one
+// OutputTransaction: its outputs are renamed into place only when the whole command succeeded.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <new>
 
 #include "command.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
+#include "linesurf/io/atomic_file.h"
+
+namespace {
+void printError(const std::string& message) {
+  linesurf::cli::endProgress();
+  std::fprintf(stderr, "%s\n", linesurf::oneLine(message).c_str());
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace linesurf;
@@ -16,26 +28,46 @@ int main(int argc, char** argv) {
   auto& g = cli::globalOptions();
   app.add_flag("-q,--quiet", g.quiet, "No progress and no summary")->configurable(false);
   app.add_option("-j,--threads", g.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+  app.add_option("--max-mb", g.maxMegabytes,
+                 "Largest image buffer or output a command may make, estimated before the work, MiB")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e9));
   for (auto& reg : cli::registeredCommands()) reg(app);
   // Thread limit must exist before any subcommand callback runs.
   std::unique_ptr<ThreadLimit> limit;
   app.parse_complete_callback([&] { limit = std::make_unique<ThreadLimit>(g.threads); });
   try {
+    OutputTransaction outputs;
+    cli::setOutputTransaction(&outputs);
     app.parse(argc, argv);
+    cli::setOutputTransaction(nullptr);
+    outputs.commit();
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);  // prints help, version or the usage error
-    return code == 0 ? 0 : 1;
+    if (e.get_exit_code() == 0) return app.exit(e);
+    printError(std::string("linesurf: ") + e.what() + " (see --help)");
+    return 1;
   } catch (const Error& e) {
-    cli::endProgress();
-    std::fprintf(stderr, "%s\n", e.what());
-    return e.kind() == Error::Kind::BadParameter ? 1 : 2;
+    printError(e.what());
+    switch (e.kind()) {
+      case Error::Kind::BadParameter: return 1;
+      case Error::Kind::BadInput: return 2;
+      case Error::Kind::Io: return 3;
+    }
+    return 3;
   } catch (const std::bad_alloc&) {
-    cli::endProgress();
-    std::fprintf(stderr, "linesurf: out of memory\n");
+    printError("linesurf: out of memory (a smaller --size, spacing or model needs less)");
+    return 3;
+  } catch (const std::filesystem::filesystem_error& e) {
+    printError(e.path1().string() + ": " + e.code().message());
     return 3;
   } catch (const std::exception& e) {
-    cli::endProgress();
-    std::fprintf(stderr, "linesurf: error: %s\n", e.what());
+    printError(std::string("linesurf: error: ") + e.what());
     return 3;
   }
   return 0;

@@ -431,6 +431,11 @@ ExperimentResults runExperiment(const ExperimentOptions& options, const Progress
         runMesh(options, files[i], m, mp);
       else
         runPointCloud(options, files[i], m, mp);
+    } catch (const Error& e) {
+      if (e.kind() == Error::Kind::BadParameter) throw;  // an invalid option fails every model: refuse it
+      m.failed = true;
+      m.error = e.what();
+      m.methods.clear();
     } catch (const std::bad_alloc&) {
       m.failed = true;
       m.error = m.file + ": out of memory";

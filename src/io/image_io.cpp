@@ -1,10 +1,14 @@
 #include "linesurf/io/image_io.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <string>
 
 #include "linesurf/core/error.h"
+#include "io/detail/readers.h"
 #include "linesurf/io/atomic_file.h"
 
 #define STB_IMAGE_IMPLEMENTATION
@@ -40,13 +44,34 @@ void writePng(const std::filesystem::path& path, const Image& image, bool withAl
   writeFileAtomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
-Image readImage(const std::filesystem::path& path) {
+namespace {
+ImageInfo infoOf(const std::string& bytes, const std::string& name) {
   int w = 0, h = 0, n = 0;
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throwBadInput(path.string(), "", "is a directory");
-  if (!std::filesystem::exists(path, ec)) throwBadInput(path.string(), "", "no such file");
-  unsigned char* data = stbi_load(path.string().c_str(), &w, &h, &n, 4);
-  if (!data) throwBadInput(path.string(), "", std::string("cannot read image: ") + stbi_failure_reason());
+  if (!stbi_info_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()), int(std::min<size_t>(bytes.size(), INT_MAX)),
+                             &w, &h, &n))
+    throwBadInput(name, "", std::string("cannot read image: ") + stbi_failure_reason());
+  if (w <= 0 || h <= 0) throwBadInput(name, "", "image has no pixels");
+  return {w, h};
+}
+}  // namespace
+
+ImageInfo readImageInfo(const std::filesystem::path& path) {
+  // The header is within the first 64 KiB for every format stb_image reads.
+  return infoOf(detail::readFileBytes(path, 1 << 16), path.string());
+}
+
+Image readImage(const std::filesystem::path& path, size_t maxPixels) {
+  const std::string name = path.string();
+  const std::string bytes = detail::readFileBytes(path);
+  if (bytes.size() > size_t(INT_MAX)) throwBadInput(name, "", "image file larger than 2 GiB");
+  const ImageInfo info = infoOf(bytes, name);
+  if (double(info.width) * info.height > double(maxPixels))
+    throwBadInput(name, "", fmt::format("image of {}x{} pixels is larger than the limit of {} pixels", info.width,
+                                        info.height, maxPixels));
+  int w = 0, h = 0, n = 0;
+  unsigned char* data =
+      stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()), int(bytes.size()), &w, &h, &n, 4);
+  if (!data) throwBadInput(name, "", std::string("cannot read image: ") + stbi_failure_reason());
   Image img(w, h);
   for (size_t i = 0; i < size_t(w) * h; ++i)
     for (int c = 0; c < 4; ++c) img.pixels[i][c] = data[i * 4 + c] / 255.0f;

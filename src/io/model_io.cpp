@@ -8,6 +8,8 @@
 
 #include "io/detail/readers.h"
 #include "linesurf/core/error.h"
+#include "linesurf/io/atomic_file.h"
+#include "linesurf/io/model_validate.h"
 
 namespace linesurf {
 
@@ -16,15 +18,17 @@ namespace detail {
 std::string readFileBytes(const std::filesystem::path& path, size_t maxBytes) {
   const std::string name = path.string();
   std::error_code ec;
-  auto st = std::filesystem::status(path, ec);
+  auto st = std::filesystem::status(path, ec);  // follows links: a link to /dev/zero is a device
   if (ec || !std::filesystem::exists(st)) throwBadInput(name, "", "no such file");
   if (std::filesystem::is_directory(st)) throwBadInput(name, "", "is a directory, not a file");
+  // FIFOs, devices and sockets would hang or never end: only regular files are read.
+  if (!std::filesystem::is_regular_file(st)) throwBadInput(name, "", "is not a regular file (a pipe, device or socket)");
   FILE* f = std::fopen(name.c_str(), "rb");
   if (!f) throwBadInput(name, "", std::string("cannot open: ") + std::strerror(errno));
+  noteInput(path);
   std::string bytes;
   char buf[1 << 16];
-  // Size from the file system when it has one; read in chunks regardless (pipes, /proc).
-  uintmax_t size = std::filesystem::is_regular_file(st) ? std::filesystem::file_size(path, ec) : 0;
+  uintmax_t size = std::filesystem::file_size(path, ec);
   if (!ec && size > 0) bytes.reserve(size_t(std::min<uintmax_t>(size, maxBytes)));
   size_t n;
   while (bytes.size() < maxBytes && (n = std::fread(buf, 1, std::min(sizeof buf, maxBytes - bytes.size()), f)) > 0)
@@ -67,7 +71,25 @@ HybridModel meshVerticesAsPoints(const TriangleMesh& mesh) {
 
 }  // namespace
 
+namespace {
+HybridModel readModelUnchecked(const std::filesystem::path& path);
+TriangleMesh readMeshUnchecked(const std::filesystem::path& path);
+}  // namespace
+
 HybridModel readModel(const std::filesystem::path& path) {
+  HybridModel m = readModelUnchecked(path);
+  validateModel(m, path.string());
+  return m;
+}
+
+TriangleMesh readMesh(const std::filesystem::path& path) {
+  TriangleMesh m = readMeshUnchecked(path);
+  validateMesh(m, path.string());
+  return m;
+}
+
+namespace {
+HybridModel readModelUnchecked(const std::filesystem::path& path) {
   switch (kindOf(path)) {
     case Kind::Ply: {
       std::string bytes = detail::readFileBytes(path);
@@ -80,7 +102,7 @@ HybridModel readModel(const std::filesystem::path& path) {
   return {};
 }
 
-TriangleMesh readMesh(const std::filesystem::path& path) {
+TriangleMesh readMeshUnchecked(const std::filesystem::path& path) {
   switch (kindOf(path)) {
     case Kind::Ply: {
       std::string bytes = detail::readFileBytes(path);
@@ -94,6 +116,7 @@ TriangleMesh readMesh(const std::filesystem::path& path) {
   }
   return {};
 }
+}  // namespace
 
 bool fileHoldsMesh(const std::filesystem::path& path) {
   switch (kindOf(path)) {
@@ -108,17 +131,20 @@ bool fileHoldsMesh(const std::filesystem::path& path) {
 }
 
 void writeModel(const std::filesystem::path& path, const HybridModel& model, const WriteOptions& options) {
+  validateModel(model, path.string(), Error::Kind::Io);  // never write what the readers refuse
   switch (kindOf(path)) {
     case Kind::Ply: return detail::writePlyModel(path, model, options);
     case Kind::Xyz:
       if (!model.segments.empty())
         throwBadParameter(path.string(), "an .xyz file cannot hold line segments (write .ply)");
+      if (model.points.empty()) throwIo(path.string(), "an .xyz file needs at least one point (write .ply)");
       return detail::writeXyz(path, model);
     case Kind::Obj: throwBadParameter(path.string(), "points and segments are written as .ply or .xyz, not .obj");
   }
 }
 
 void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options) {
+  validateMesh(mesh, path.string(), Error::Kind::Io);
   switch (kindOf(path)) {
     case Kind::Ply: return detail::writePlyMesh(path, mesh, options);
     case Kind::Obj: return detail::writeObj(path, mesh);
@@ -127,11 +153,27 @@ void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh, cons
 }
 
 HybridModel readPlyModelFromMemory(std::string_view bytes, const std::string& nameForMessages) {
-  return detail::plyToModel(bytes, nameForMessages, nullptr);
+  HybridModel m = detail::plyToModel(bytes, nameForMessages, nullptr);
+  validateModel(m, nameForMessages);
+  return m;
 }
 
 TriangleMesh readPlyMeshFromMemory(std::string_view bytes, const std::string& nameForMessages) {
-  return detail::plyToMesh(bytes, nameForMessages, nullptr);
+  TriangleMesh m = detail::plyToMesh(bytes, nameForMessages, nullptr);
+  validateMesh(m, nameForMessages);
+  return m;
+}
+
+HybridModel readXyzModelFromMemory(std::string_view bytes, const std::string& nameForMessages) {
+  HybridModel m = detail::xyzToModel(bytes, nameForMessages);
+  validateModel(m, nameForMessages);
+  return m;
+}
+
+TriangleMesh readObjMeshFromMemory(std::string_view bytes, const std::string& nameForMessages) {
+  TriangleMesh m = detail::objToMesh(bytes, nameForMessages, nullptr);
+  validateMesh(m, nameForMessages);
+  return m;
 }
 
 }  // namespace linesurf

@@ -3,10 +3,12 @@
 
 #include <nanoflann.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/io/model_validate.h"
 
 namespace linesurf {
 
@@ -41,6 +43,43 @@ double averageSpacing(const std::vector<Vec3f>& positions) {
   double sum = 0;  // serial sum: same result for any thread count
   for (double d : nearest) sum += d;
   return sum / double(n);
+}
+
+size_t estimateSegmentRadii(HybridModel& m) {
+  size_t missing = 0;
+  for (const Segment& s : m.segments) missing += s.radius == 0.0f;
+  if (missing == 0) return 0;
+  // Centres of every primitive: points and segment midpoints (computed in a frame centred on
+  // the model, so distances do not lose precision far from the origin).
+  std::vector<Vec3f> centres;
+  centres.reserve(m.points.size() + m.segments.size());
+  for (const Point& p : m.points) centres.push_back(p.position);
+  for (const Segment& s : m.segments) centres.push_back(0.5f * (s.p0 + s.p1));
+  if (centres.size() < 2) {
+    for (Segment& s : m.segments)
+      if (s.radius == 0.0f) s.radius = s.length() > 0 ? 0.25f * s.length() : 1.0f;
+    return missing;
+  }
+  Cloud cloud{centres};
+  Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  for (size_t i = 0; i < m.segments.size(); ++i) {
+    Segment& s = m.segments[i];
+    if (s.radius != 0.0f) continue;
+    const size_t self = m.points.size() + i;
+    uint32_t idx[4];
+    float d2[4];
+    const size_t found = tree.knnSearch(centres[self].data(), 4, idx, d2);
+    float best = std::numeric_limits<float>::infinity();
+    for (size_t k = 0; k < found; ++k)
+      if (idx[k] != self && d2[k] > 0) best = std::min(best, d2[k]);
+    const float len = s.length();
+    float r = std::isfinite(best) ? 0.75f * std::sqrt(best) : 0.25f * len;
+    if (len > 0) r = std::clamp(r, 0.05f * len, len);
+    if (!(r > 0) || !std::isfinite(r)) r = len > 0 ? 0.25f * len : 1.0f;
+    s.radius = r;
+  }
+  return missing;
 }
 
 ModelSummary summarizeFile(const std::filesystem::path& path) {

@@ -3,6 +3,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "io/detail/readers.h"
 #include "linesurf/core/error.h"
@@ -20,15 +22,116 @@ std::string firstLine(std::string s) {
 }
 }  // namespace
 
+namespace {
+
+bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+std::vector<std::string_view> tokens(std::string_view s) {
+  std::vector<std::string_view> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && isSpace(s[i])) ++i;
+    size_t b = i;
+    while (i < s.size() && !isSpace(s[i])) ++i;
+    if (i > b) out.push_back(s.substr(b, i - b));
+  }
+  return out;
+}
+
+std::string quoted(std::string_view t) { return "'" + std::string(t.substr(0, 40)) + (t.size() > 40 ? "...'" : "'"); }
+
+/// A number as tinyobjloader would read it, but strictly: the whole token, finite, within float.
+void number(std::string_view tok, const std::string& name, const std::string& where, const char* what) {
+  std::string_view s = tok;
+  if (s.size() > 1 && s[0] == '+') s.remove_prefix(1);
+  double v = 0;
+  auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec == std::errc::invalid_argument || ptr != s.data() + s.size())
+    throwBadInput(name, where, quoted(tok) + " is not a number (" + what + ")");
+  if (ec == std::errc::result_out_of_range || !std::isfinite(v) || std::fabs(v) > 3.4028234663852886e38)
+    throwBadInput(name, where, quoted(tok) + " is not a finite 32-bit float (" + what + ")");
+}
+
+void integer(std::string_view tok, std::string_view corner, const std::string& name, const std::string& where) {
+  long long v = 0;
+  auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  if (ec != std::errc() || ptr != tok.data() + tok.size() || v == 0 || v > INT32_MAX || v < -INT32_MAX)
+    throwBadInput(name, where, "face corner " + quoted(corner) + " is not a valid index (non-zero integers v, v/t, v//n or v/t/n)");
+}
+
+/// The checks tinyobjloader does not make (it reads `v 5 abc 7` as 5 0 7, `v 0.5` as 0.5 0 0,
+/// `f 1 2` as nothing): coordinates count and syntax, finite values, face corners. Returns the
+/// first `mtllib` file name (or empty).
+std::string prescanObj(std::string_view text, const std::string& name) {
+  std::string mtllib;
+  size_t pos = 0;
+  int line = 0;
+  while (pos < text.size()) {
+    size_t e = text.find('\n', pos);
+    if (e == std::string_view::npos) e = text.size();
+    std::string_view l = text.substr(pos, e - pos);
+    pos = e + 1;
+    ++line;
+    if (size_t h = l.find('#'); h != std::string_view::npos) l = l.substr(0, h);
+    auto t = tokens(l);
+    if (t.empty()) continue;
+    const std::string where = "line " + std::to_string(line);
+    const std::string_view key = t[0];
+    const size_t n = t.size() - 1;
+    if (key == "v") {
+      if (n != 3 && n != 4 && n != 6 && n != 7)
+        throwBadInput(name, where, "'v' needs x y z [w] or x y z r g b, found " + std::to_string(n) + " values");
+      for (size_t i = 1; i <= n; ++i) number(t[i], name, where, "vertex coordinate");
+    } else if (key == "vn") {
+      if (n != 3) throwBadInput(name, where, "'vn' needs 3 values, found " + std::to_string(n));
+      for (size_t i = 1; i <= n; ++i) number(t[i], name, where, "normal");
+    } else if (key == "vt") {
+      if (n < 1 || n > 3) throwBadInput(name, where, "'vt' needs 1 to 3 values, found " + std::to_string(n));
+      for (size_t i = 1; i <= n; ++i) number(t[i], name, where, "texture coordinate");
+    } else if (key == "f") {
+      if (n < 3) throwBadInput(name, where, "a face needs at least 3 corners, found " + std::to_string(n));
+      for (size_t i = 1; i <= n; ++i) {
+        std::string_view c = t[i];
+        size_t s1 = c.find('/');
+        integer(c.substr(0, s1), c, name, where);
+        if (s1 == std::string_view::npos) continue;
+        std::string_view rest = c.substr(s1 + 1);
+        size_t s2 = rest.find('/');
+        std::string_view vt = rest.substr(0, s2);
+        if (!vt.empty()) integer(vt, c, name, where);
+        if (s2 != std::string_view::npos) integer(rest.substr(s2 + 1), c, name, where);
+        else if (vt.empty()) integer(vt, c, name, where);  // "1/" is incomplete
+      }
+    } else if (key == "mtllib" && mtllib.empty() && n >= 1) {
+      mtllib = std::string(l.substr(l.find("mtllib") + 6));
+      while (!mtllib.empty() && isSpace(mtllib.front())) mtllib.erase(mtllib.begin());
+      while (!mtllib.empty() && isSpace(mtllib.back())) mtllib.pop_back();
+    }
+  }
+  return mtllib;
+}
+
+}  // namespace
+
 TriangleMesh readObj(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  std::string text = readFileBytes(path);  // missing file, directory, unreadable: our messages
+  std::filesystem::path dir = path.parent_path();
+  return objToMesh(readFileBytes(path), path.string(), &dir);
+}
+
+TriangleMesh objToMesh(std::string_view bytes, const std::string& name, const std::filesystem::path* dir) {
+  const std::string text(bytes);
+  const std::string mtllib = prescanObj(text, name);
+  std::string mtlText;
+  if (dir && !mtllib.empty()) {
+    std::filesystem::path mtl = *dir / mtllib;
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(mtl, ec)) mtlText = readFileBytes(mtl);
+  }
   tinyobj::ObjReaderConfig cfg;
   cfg.triangulate = true;
   cfg.vertex_color = false;  // colours only when every vertex has them
-  cfg.mtl_search_path = path.parent_path().string();
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(name, cfg))
+  if (!reader.ParseFromString(text, mtlText, cfg))
     throwBadInput(name, "", "cannot parse OBJ: " + firstLine(reader.Error().empty() ? "unknown error" : reader.Error()));
   const tinyobj::attrib_t& a = reader.GetAttrib();
   const size_t nv = a.vertices.size() / 3, nn = a.normals.size() / 3, nt = a.texcoords.size() / 2;
@@ -93,8 +196,8 @@ TriangleMesh readObj(const std::filesystem::path& path) {
     }
   }
   for (const tinyobj::material_t& m : reader.GetMaterials()) {
-    if (m.diffuse_texname.empty()) continue;
-    std::filesystem::path file = path.parent_path() / m.diffuse_texname;
+    if (m.diffuse_texname.empty() || !dir) continue;
+    std::filesystem::path file = *dir / m.diffuse_texname;
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec))
       throwBadInput(name, "material " + m.name, "texture file '" + m.diffuse_texname + "' not found");

@@ -1,6 +1,8 @@
 // Low-level PLY reader: header parsing and body decoding into columns (see detail/ply_format.h).
 #include "io/detail/ply_format.h"
 
+#include <fmt/format.h>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -350,6 +352,12 @@ class BodyDecoder {
       throwBadInput(path_, where ? *where : "element " + e.name + " " + std::to_string(row),
                     std::string(std::isnan(v) ? "NaN" : "infinite") + " value in property '" + p.name + "'" +
                         (where ? " of element " + e.name + " " + std::to_string(row) : std::string()));
+    // Every model field is a float: a double beyond its range would become infinite.
+    if (!isIntegral(p.type) && std::fabs(v) > double(std::numeric_limits<float>::max()))
+      throwBadInput(path_, where ? *where : "element " + e.name + " " + std::to_string(row),
+                    "value " + fmt::format("{:g}", v) + " in property '" + p.name + "'" +
+                        (where ? " of element " + e.name + " " + std::to_string(row) : std::string()) +
+                        " is too large for a 32-bit float (|v| > 3.4e38)");
   }
 
   void binaryElement(const Element& e, ElementData& d, const std::vector<char>& kept, bool any) {

@@ -1,5 +1,7 @@
 // PLY schema of linesurf (docs/file-format.md): points in `vertex`, segments in `segment`,
 // meshes in `vertex` + `face`; mapping decoded columns onto the model types, and the writers.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <bit>
 #include <cctype>
@@ -98,6 +100,43 @@ const ElementData* elementData(const Header& h, const std::vector<ElementData>& 
   return i < 0 ? nullptr : &data[size_t(i)];
 }
 
+/// The face element's index list property: its name ("vertex_indices" or "vertex_index"); it
+/// must exist and be a list of integers.
+std::string checkFaceHeader(const Element& fe, const std::string& path) {
+  std::string indexName = fe.find("vertex_indices") >= 0 ? "vertex_indices" : "vertex_index";
+  int ii = fe.find(indexName);
+  if (ii < 0) throwBadInput(path, lineAt(fe.line), "element face has no list property 'vertex_indices'");
+  const Property& ip = fe.properties[size_t(ii)];
+  if (!ip.isList || !isIntegral(ip.type))
+    throwBadInput(path, lineAt(ip.line), "property '" + indexName + "' must be a list of integers");
+  return indexName;
+}
+
+/// Every face has >= 3 corners, indices in [0, nv), and (with texcoords) 2 values per corner.
+void checkFaceRows(const ElementData& fd, const std::string& indexName, uint64_t nv, const std::string& path,
+                   const ListColumn* tc) {
+  const ListColumn& idx = *fd.list(indexName);
+  for (size_t f = 0; f < fd.element->count; ++f) {
+    const uint64_t b = idx.offsets[f], n = idx.offsets[f + 1] - b;
+    if (n < 3)
+      throwBadInput(path, fd.where(f), "face " + std::to_string(f) + " has " + std::to_string(n) +
+                                           " vertices (at least 3 needed)");
+    for (uint64_t k = 0; k < n; ++k) {
+      double v = idx.values[b + k];
+      if (v < 0 || v >= double(nv))
+        throwBadInput(path, fd.where(f), "face " + std::to_string(f) + " vertex index " + std::to_string(int64_t(v)) +
+                                             " out of range (the file has " + std::to_string(nv) + " vertices)");
+    }
+    if (tc) {
+      const uint64_t tn = tc->offsets[f + 1] - tc->offsets[f];
+      if (tn != 2 * n)
+        throwBadInput(path, fd.where(f), "face " + std::to_string(f) + " has " + std::to_string(tn) +
+                                             " texcoord values for " + std::to_string(n) + " corners (expected " +
+                                             std::to_string(2 * n) + ")");
+    }
+  }
+}
+
 }  // namespace
 
 HybridModel plyToModel(std::string_view bytes, const std::string& path, const std::filesystem::path* textureDir) {
@@ -131,12 +170,19 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
         throwBadInput(path, lineAt(p.line), "property 'provenance' must be a list of integers");
     }
   }
+  // Faces are not part of the model, but a file with broken faces is broken for every command.
+  const int fi = h.find("face");
+  std::string faceIndexName;
+  if (fi >= 0) faceIndexName = checkFaceHeader(h.elements[size_t(fi)], path);
   auto keep = [&](const Element& e, const Property& p) {
+    if (fi >= 0 && &e == &h.elements[size_t(fi)]) return p.isList && p.name == faceIndexName;
     if (e.name == "vertex") return !p.isList;  // every scalar: standard or extra property
     if (e.name == "segment") return (p.isList && p.name == "provenance") || (!p.isList && kSegmentNames.count(p.name));
     return false;
   };
   std::vector<ElementData> data = decodeBody(bytes, h, path, keep);
+  if (fi >= 0 && h.elements[size_t(fi)].count > 0)
+    checkFaceRows(data[size_t(fi)], faceIndexName, vi >= 0 ? h.elements[size_t(vi)].count : 0, path, nullptr);
 
   if (const ElementData* d = elementData(h, data, "vertex"); d && d->element->count > 0) {
     const Element& e = *d->element;
@@ -162,7 +208,10 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     }
     if (vRadius) {
       const double* r = col("radius");
-      for (size_t i = 0; i < n; ++i) m.points[i].radius = float(r[i]);
+      for (size_t i = 0; i < n; ++i) {
+        if (!(r[i] > 0)) throwBadInput(path, d->where(i), fmt::format("vertex {}: radius {:g} is not positive", i, r[i]));
+        m.points[i].radius = float(r[i]);
+      }
     }
     for (const Property& p : e.properties) {
       if (p.isList || kPointNames.count(p.name)) continue;
@@ -200,7 +249,10 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     }
     if (sRadius) {
       const double* r = col("radius");
-      for (size_t i = 0; i < n; ++i) m.segments[i].radius = float(r[i]);
+      for (size_t i = 0; i < n; ++i) {
+        if (!(r[i] > 0)) throwBadInput(path, d->where(i), fmt::format("segment {}: radius {:g} is not positive", i, r[i]));
+        m.segments[i].radius = float(r[i]);
+      }
     }
     if (sUV) {
       const double *u0 = col("u0"), *v0 = col("v0"), *u1 = col("u1"), *v1 = col("v1");
@@ -243,12 +295,7 @@ TriangleMesh plyToMesh(std::string_view bytes, const std::string& path, const st
   const bool normals = group(ve, {"nx", "ny", "nz"}, path);
   const bool colors = group(ve, {"red", "green", "blue"}, path);
   const bool alpha = group(ve, {"alpha"}, path);
-  std::string indexName = fe.find("vertex_indices") >= 0 ? "vertex_indices" : "vertex_index";
-  int ii = fe.find(indexName);
-  if (ii < 0) throwBadInput(path, lineAt(fe.line), "element face has no list property 'vertex_indices'");
-  const Property& ip = fe.properties[size_t(ii)];
-  if (!ip.isList || !isIntegral(ip.type))
-    throwBadInput(path, lineAt(ip.line), "property '" + indexName + "' must be a list of integers");
+  const std::string indexName = checkFaceHeader(fe, path);
   int ti = fe.find("texcoord");
   if (ti >= 0 && !fe.properties[size_t(ti)].isList)
     throwBadInput(path, lineAt(fe.properties[size_t(ti)].line), "property 'texcoord' must be a list");
@@ -294,24 +341,9 @@ TriangleMesh plyToMesh(std::string_view bytes, const std::string& path, const st
     const ListColumn* tc = ti >= 0 ? fd.list("texcoord") : nullptr;
     mesh.faces.reserve(idx.values.size() >= 2 * fe.count ? idx.values.size() - 2 * fe.count : fe.count);
     if (tc) mesh.cornerUVs.reserve(mesh.faces.capacity());
+    checkFaceRows(fd, indexName, nv, path, tc);
     for (size_t f = 0; f < fe.count; ++f) {
       const uint64_t b = idx.offsets[f], n = idx.offsets[f + 1] - b;
-      if (n < 3)
-        throwBadInput(path, fd.where(f), "face " + std::to_string(f) + " has " + std::to_string(n) +
-                                             " vertices (at least 3 needed)");
-      for (uint64_t k = 0; k < n; ++k) {
-        double v = idx.values[b + k];
-        if (v < 0 || v >= double(nv))
-          throwBadInput(path, fd.where(f), "face " + std::to_string(f) + " vertex index " + std::to_string(int64_t(v)) +
-                                               " out of range (the file has " + std::to_string(nv) + " vertices)");
-      }
-      if (tc) {
-        const uint64_t tn = tc->offsets[f + 1] - tc->offsets[f];
-        if (tn != 2 * n)
-          throwBadInput(path, fd.where(f), "face " + std::to_string(f) + " has " + std::to_string(tn) +
-                                               " texcoord values for " + std::to_string(n) + " corners (expected " +
-                                               std::to_string(2 * n) + ")");
-      }
       // Polygons are fan-triangulated around their first corner.
       for (uint64_t k = 1; k + 1 < n; ++k) {
         mesh.faces.push_back({uint32_t(idx.values[b]), uint32_t(idx.values[b + k]), uint32_t(idx.values[b + k + 1])});

@@ -228,7 +228,7 @@ TEST(ModelIo, WriterLeavesNothingOnFailure) {
     writeModel(dir / "m.ply", m);
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), Error::Kind::BadParameter);
+    EXPECT_EQ(e.kind(), Error::Kind::Io);
   }
   EXPECT_TRUE(fs::is_empty(dir));
   m.pointProperties.erase("bad");

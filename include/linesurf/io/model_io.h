@@ -37,5 +37,8 @@ void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh, cons
 /// error messages. A `comment TextureFile` is kept out of comments but not loaded.
 HybridModel readPlyModelFromMemory(std::string_view bytes, const std::string& nameForMessages);
 TriangleMesh readPlyMeshFromMemory(std::string_view bytes, const std::string& nameForMessages);
+/// The XYZ and OBJ readers over bytes in memory (an OBJ's mtllib is not loaded).
+HybridModel readXyzModelFromMemory(std::string_view bytes, const std::string& nameForMessages);
+TriangleMesh readObjMeshFromMemory(std::string_view bytes, const std::string& nameForMessages);
 
 }  // namespace linesurf

@@ -22,6 +22,8 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& model, 
 void writePlyMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options);
 
 TriangleMesh readObj(const std::filesystem::path& path);
+/// OBJ from bytes; `mtlDir` is where mtllib and textures are looked up (null: not loaded).
+TriangleMesh objToMesh(std::string_view bytes, const std::string& name, const std::filesystem::path* mtlDir);
 void writeObj(const std::filesystem::path& path, const TriangleMesh& mesh);
 
 HybridModel xyzToModel(std::string_view bytes, const std::string& name);
