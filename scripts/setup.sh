@@ -6,6 +6,7 @@ PKGS=(
   libeigen3-dev libnanoflann-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev
   libstb-dev libcli11-dev libfmt-dev nlohmann-json3-dev libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium  # headless browser test of `linesurf view` (tests/browser)
 )
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "command.h"
+#include "drawable_model.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/point_geometry.h"
@@ -125,19 +126,7 @@ void run(const RenderArgs& a) {
     say(fmt::format("{}: mesh, rasterising its {} triangles ({}x{} samples per pixel)", a.model, triMesh->faces.size(),
                     a.supersampling, a.supersampling));
   } else if (isMesh) {
-    // A mesh file: render its vertices as a point cloud (normals kept when present).
-    TriangleMesh mesh = readMesh(a.model);
-    model.points.resize(mesh.positions.size());
-    for (size_t i = 0; i < mesh.positions.size(); ++i) {
-      model.points[i].position = mesh.positions[i];
-      if (!mesh.normals.empty()) {
-        Vec3f n = mesh.normals[i];
-        model.points[i].normal = n.norm() > 0 ? Vec3f(n.normalized()) : Vec3f::Zero();
-      }
-      if (!mesh.colors.empty()) model.points[i].color = mesh.colors[i];
-    }
-    model.attributes.normals = !mesh.normals.empty();
-    model.attributes.colors = !mesh.colors.empty();
+    model = meshVerticesAsPoints(readMesh(a.model));
     say(fmt::format("{}: mesh, rendering its {} vertices as points", a.model, model.points.size()));
   } else {
     model = readModel(a.model);
@@ -146,27 +135,7 @@ void run(const RenderArgs& a) {
 
   if (size_t n = estimateSegmentRadii(model))
     say(fmt::format("{} segments without a radius: estimated from the spacing of their neighbours", n));
-  const bool pointWithoutRadius =
-      std::any_of(model.points.begin(), model.points.end(), [](const Point& p) { return p.radius == 0.0f; });
-  double geometrySeconds = 0;
-  if (!model.points.empty() && (!model.attributes.normals || !model.attributes.radii || pointWithoutRadius)) {
-    Timer t;
-    const std::string what = !model.attributes.normals ? "normals + radii" : "radii";
-    GeometryOptions go;
-    go.k = a.k;
-    go.delaunayNeighbours = false;
-    go.curvature = false;
-    go.progress = progressBar();
-    PointGeometry geo = computePointGeometry(model, go);
-    applyGeometry(model, geo);
-    for (size_t i = 0; i < model.points.size() && i < geo.spacing.size(); ++i)  // hybrid: radii on segments only
-      if (model.points[i].radius == 0.0f) model.points[i].radius = geo.spacing[i] > 0 ? geo.spacing[i] : geo.averageSpacing;
-    geometrySeconds = t.seconds();
-    endProgress();
-    say(fmt::format("geometry (§6.1): {} for {} points (k = {}) in {:.2f} s",
-                    what, model.points.size(), a.k,
-                    geometrySeconds));
-  }
+  completePointGeometry(model, a.k);
   if (a.radiusScale != 1.0f) {
     for (Point& p : model.points) p.radius *= a.radiusScale;
     for (Segment& s : model.segments) s.radius *= a.radiusScale;

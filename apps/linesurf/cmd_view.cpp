@@ -1,0 +1,91 @@
+// linesurf view MODEL [-o model.html]: one self-contained HTML page that draws the model with
+// WebGL2 (GPU point and line-segment splatting, thesis §4-§6.2 and §9.3). Raw scans get normals
+// and radii from the geometry stage (§6.1) first, as for `linesurf render`.
+#include <fmt/format.h>
+
+#include <filesystem>
+
+#include "command.h"
+#include "drawable_model.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/timer.h"
+#include "linesurf/view/viewer_page.h"
+
+namespace linesurf::cli {
+namespace {
+
+struct ViewArgs {
+  std::string model, output;
+  std::string upAxis = "y";
+  int k = 12;
+  size_t maxPrimitives = ViewerPageOptions{}.maxPrimitives;
+};
+
+Vec3f parseUpAxis(std::string u) {
+  float sign = 1;
+  if (!u.empty() && (u[0] == '-' || u[0] == '+')) {
+    sign = u[0] == '-' ? -1.f : 1.f;
+    u = u.substr(1);
+  }
+  if (u == "x") return Vec3f(sign, 0, 0);
+  if (u == "y") return Vec3f(0, sign, 0);
+  if (u == "z") return Vec3f(0, 0, sign);
+  throwBadParameter("--up-axis", "expected x, y, z, -x, -y or -z, got '" + u + "'");
+}
+
+void run(const ViewArgs& a) {
+  Timer total;
+  ViewerPageOptions o;
+  o.name = std::filesystem::path(a.model).filename().string();
+  o.maxPrimitives = a.maxPrimitives;
+  o.upAxis = parseUpAxis(a.upAxis);
+  const std::string out =
+      a.output.empty() ? std::filesystem::path(a.model).filename().replace_extension(".html").string() : a.output;
+  checkFiles({a.model}, {{"--output", out, {".html", ".htm"}}});
+
+  HybridModel model = readDrawableModel(a.model);
+  // Refuse before the geometry stage: a model over the budget costs nothing more.
+  const size_t primitives = model.points.size() + model.segments.size();
+  if (primitives > a.maxPrimitives)
+    throw Error(Error::Kind::BadInput, a.model, "view",
+                fmt::format("{} primitives exceed the viewer's budget of {} (--max-primitives)", primitives,
+                            a.maxPrimitives));
+
+  completePointGeometry(model, a.k);
+
+  ViewerPageStats st;
+  try {
+    st = writeViewerPage(out, model, o);
+  } catch (const Error& e) {
+    if (e.path() == o.name) throw Error(e.kind(), a.model, e.where(), e.reason());  // name the path typed
+    throw;
+  }
+  if (st.skippedPoints || st.skippedSegments)
+    say(fmt::format("left out {} points and {} segments (non-finite or zero radius)", st.skippedPoints,
+                    st.skippedSegments));
+  say(fmt::format("page: {} points + {} segments, {:.1f} MB, in {:.2f} s", st.points, st.segments,
+                  double(st.bytes) / 1e6, total.seconds()));
+  say("wrote " + out + " (open it in a browser with WebGL2; the URL fragment #eye=X,Y,Z&target=X,Y,Z&up=X,Y,Z&fov=DEG "
+      "sets the camera)");
+}
+
+RegisterCommand reg(45, [](CLI::App& app) {
+  auto a = std::make_shared<ViewArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "view", "Write a self-contained HTML page that draws the model with WebGL2 splats (orbit, zoom, pan)");
+  sub->add_option("MODEL", a->model, "Point cloud, hybrid or line model (.ply, .xyz); a mesh shows its vertices")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
+  sub->add_option("--up-axis", a->upAxis, "World up axis of the orbit: x, y, z, -x, -y, -z")->capture_default_str();
+  sub->add_option("--k", a->k, "Neighbours for normals/radii of raw scans (§6.1)")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 200));
+  sub->add_option("--max-primitives", a->maxPrimitives, "Refuse models with more points + segments than this")
+      ->capture_default_str()
+      ->check(CLI::Range(size_t(1), size_t(1) << 40));
+  sub->callback([a] { run(*a); });
+});
+
+}  // namespace
+}  // namespace linesurf::cli

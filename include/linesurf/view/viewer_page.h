@@ -1,0 +1,55 @@
+#pragma once
+/// `linesurf view`: one self-contained HTML page that draws a point, segment or hybrid model with
+/// WebGL2 on the GPU (GPU line-segment splatting, the future work of thesis §9.3). The page holds
+/// the model (base64 of float32 / int16 / uint8 arrays), the viewer's JavaScript and GLSL
+/// (web/viewer.js), and needs no network access and no server: it opens from file://.
+///
+/// The page draws what `linesurf render` draws, with the same conventions (camera.h) and the same
+/// defaults (render_options.h): object-space EWA point splats (§4.2.2) and line-segment splats
+/// (§5, the closed form in erf of the ScreenSpace method), depth-tolerant blending with
+/// normalisation (the two-pass visibility + accumulation of Botsch et al. 2005 standing in for
+/// Z^3, §6.2.3), per-pixel Phong lighting (§6.2.2). See docs/decisions.md (issue 16).
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+#include "linesurf/core/model.h"
+#include "linesurf/render/render_options.h"
+
+namespace linesurf {
+
+struct ViewerPageOptions {
+  /// Shown in the page's title and panel (e.g. the model's file name); also the PATH of errors.
+  std::string name;
+  /// Largest number of points + segments a page may hold, >= 1. Default 5 M: about 110 MB of
+  /// base64 and 200 MB of GPU buffers; larger models are refused (Error BadInput).
+  size_t maxPrimitives = 5'000'000;
+  /// World up axis of the default orbit view and of the turntable (as `render --up-axis`).
+  Vec3f upAxis = Vec3f(0, 1, 0);
+  /// Default orbit view (as `linesurf render`'s defaults): degrees.
+  float azimuth = 30, elevation = 20, fovY = 30;
+  /// Filtering, z threshold (PerPrimitive mode), material, light (headlight), default colour and
+  /// background of the page; the page always lights per pixel and culls back faces.
+  RenderOptions render;
+};
+
+/// Counts of what went into a page.
+struct ViewerPageStats {
+  size_t points = 0, segments = 0;        ///< embedded
+  size_t skippedPoints = 0, skippedSegments = 0;  ///< non-finite or zero-radius: never drawn
+  size_t bytes = 0;                       ///< size of the page
+};
+
+/// The page for `model`, whose points and segments must carry normals and radii (the CLI runs the
+/// geometry stage, §6.1, first; a zero normal is drawn facing the viewer). Primitives with
+/// non-finite coordinates or a radius <= 0 are left out and counted.
+/// Throws linesurf::Error: BadInput (path = options.name) when the model holds more than
+/// options.maxPrimitives primitives or nothing drawable; BadParameter for absurd options.
+std::string viewerPage(const HybridModel& model, const ViewerPageOptions& options = {},
+                       ViewerPageStats* stats = nullptr);
+
+/// viewerPage() written atomically to `path` (no half-written file on failure).
+ViewerPageStats writeViewerPage(const std::filesystem::path& path, const HybridModel& model,
+                                const ViewerPageOptions& options = {});
+
+}  // namespace linesurf

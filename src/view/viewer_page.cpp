@@ -1,0 +1,227 @@
+// The self-contained WebGL2 viewer page (see viewer_page.h; the page itself is web/viewer.*).
+#include "linesurf/view/viewer_page.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "linesurf/core/error.h"
+#include "linesurf/io/atomic_file.h"
+#include "linesurf/render/camera.h"
+#include "linesurf/web_assets.h"
+
+namespace linesurf {
+
+namespace {
+
+using json = nlohmann::json;
+
+// The binary part of the page: arrays appended one after the other, each 4-byte aligned.
+class Blob {
+ public:
+  template <class T>
+  json add(const std::vector<T>& values, const char* type, int components) {
+    while (bytes_.size() % 4) bytes_.push_back(0);
+    const size_t offset = bytes_.size();
+    bytes_.resize(offset + values.size() * sizeof(T));
+    if (!values.empty()) std::memcpy(bytes_.data() + offset, values.data(), values.size() * sizeof(T));
+    return {{"offset", offset}, {"type", type}, {"components", components}};
+  }
+  const std::vector<uint8_t>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_;
+};
+
+std::string base64(const std::vector<uint8_t>& in) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const uint32_t v = uint32_t(in[i]) << 16 | uint32_t(in[i + 1]) << 8 | in[i + 2];
+    out += k[v >> 18];
+    out += k[(v >> 12) & 63];
+    out += k[(v >> 6) & 63];
+    out += k[v & 63];
+  }
+  if (i < in.size()) {
+    const uint32_t v = uint32_t(in[i]) << 16 | (i + 1 < in.size() ? uint32_t(in[i + 1]) << 8 : 0u);
+    out += k[v >> 18];
+    out += k[(v >> 12) & 63];
+    out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+int16_t snorm16(float v) { return int16_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f)); }
+uint8_t unorm8(float v) { return uint8_t(std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 255.0f)); }
+
+bool finite(const Vec3f& v) { return v.allFinite(); }
+
+json vec(const Vec3f& v) { return json::array({v.x(), v.y(), v.z()}); }
+json rgb(const Color& c) { return json::array({c.x(), c.y(), c.z()}); }
+
+// Replaces the one occurrence of `marker` in `page` by `text`.
+void fill(std::string& page, const std::string& marker, const std::string& text) {
+  const size_t at = page.find(marker);
+  if (at == std::string::npos) throw Error(Error::Kind::Io, "web/viewer.html", "", "template lacks " + marker);
+  page.replace(at, marker.size(), text);
+}
+
+}  // namespace
+
+std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, ViewerPageStats* statsOut) {
+  validate(o.render);
+  if (o.maxPrimitives < 1) throwBadParameter("maxPrimitives", "must be >= 1");
+  if (!o.upAxis.allFinite() || o.upAxis.norm() == 0) throwBadParameter("upAxis", "must be a finite non-zero vector");
+  if (!(o.fovY >= 1 && o.fovY <= 170)) throwBadParameter("fovY", "must be in [1, 170] degrees");
+  if (!(o.elevation >= -90 && o.elevation <= 90) || !std::isfinite(o.azimuth))
+    throwBadParameter("elevation", "must be in [-90, 90] degrees (azimuth finite)");
+  const size_t total = model.points.size() + model.segments.size();
+  if (total > o.maxPrimitives)
+    throw Error(Error::Kind::BadInput, o.name, "view",
+                std::to_string(total) + " primitives exceed the viewer's budget of " + std::to_string(o.maxPrimitives) +
+                    " (render it with `linesurf render`, or thin it first)");
+
+  ViewerPageStats st;
+  const BoundingSphere sphere = boundingSphere(model);
+  const Vec3f centre = sphere.center;
+  const float invR = 1.0f / sphere.radius;
+  // Positions are stored relative to the bounding sphere (centre 0, radius 1): float32 keeps its
+  // precision for models far from the origin, and the shaders work in units near 1.
+  auto local = [&](const Vec3f& p) { return Vec3f((p - centre) * invR); };
+  const bool clusters = model.pointProperties.count("cluster") > 0 &&
+                        model.pointProperties.at("cluster").size() == model.points.size();
+
+  Blob blob;
+  json meta = {{"format", "linesurf-view"}, {"version", 1}, {"name", o.name}};
+  {
+    std::vector<float> pos, rad, cluster;
+    std::vector<int16_t> nrm;
+    std::vector<uint8_t> col;
+    for (size_t i = 0; i < model.points.size(); ++i) {
+      const Point& p = model.points[i];
+      if (!finite(p.position) || !finite(p.normal) || !(p.radius > 0) || !std::isfinite(p.radius)) {
+        ++st.skippedPoints;
+        continue;
+      }
+      const Vec3f q = local(p.position);
+      pos.insert(pos.end(), {q.x(), q.y(), q.z()});
+      const float nn = p.normal.norm();
+      const Vec3f n = nn > 0 ? Vec3f(p.normal / nn) : Vec3f::Zero();
+      nrm.insert(nrm.end(), {snorm16(n.x()), snorm16(n.y()), snorm16(n.z())});
+      rad.push_back(p.radius * invR);
+      if (model.attributes.colors)
+        col.insert(col.end(), {unorm8(p.color.x()), unorm8(p.color.y()), unorm8(p.color.z()), unorm8(p.color.w())});
+      if (clusters) {
+        const float c = model.pointProperties.at("cluster")[i];
+        cluster.push_back(std::isfinite(c) && c >= 0 && c < 16777216.0f ? std::floor(c) : -1.0f);
+      }
+    }
+    st.points = rad.size();
+    if (st.points) {
+      json pts = {{"count", st.points},
+                  {"position", blob.add(pos, "f32", 3)},
+                  {"normal", blob.add(nrm, "i16", 3)},
+                  {"radius", blob.add(rad, "f32", 1)}};
+      if (model.attributes.colors) pts["color"] = blob.add(col, "u8", 4);
+      if (clusters) pts["cluster"] = blob.add(cluster, "f32", 1);
+      meta["points"] = pts;
+    }
+  }
+  {
+    std::vector<float> p0, p1, rad;
+    std::vector<int16_t> nrm, n0, n1;
+    std::vector<uint8_t> col;
+    const bool ends = model.attributes.endpointNormals;
+    auto unit = [](const Vec3f& v) {
+      const float n = v.norm();
+      return n > 0 && std::isfinite(n) ? Vec3f(v / n) : Vec3f::Zero();
+    };
+    for (const Segment& s : model.segments) {
+      if (!finite(s.p0) || !finite(s.p1) || !finite(s.normal) || !(s.radius > 0) || !std::isfinite(s.radius) ||
+          !((s.p1 - s.p0).norm() > 0)) {
+        ++st.skippedSegments;
+        continue;
+      }
+      const Vec3f a = local(s.p0), b = local(s.p1), n = unit(s.normal);
+      p0.insert(p0.end(), {a.x(), a.y(), a.z()});
+      p1.insert(p1.end(), {b.x(), b.y(), b.z()});
+      nrm.insert(nrm.end(), {snorm16(n.x()), snorm16(n.y()), snorm16(n.z())});
+      if (ends) {
+        const Vec3f e0 = unit(s.normal0), e1 = unit(s.normal1);
+        n0.insert(n0.end(), {snorm16(e0.x()), snorm16(e0.y()), snorm16(e0.z())});
+        n1.insert(n1.end(), {snorm16(e1.x()), snorm16(e1.y()), snorm16(e1.z())});
+      }
+      rad.push_back(s.radius * invR);
+      if (model.attributes.colors)
+        col.insert(col.end(), {unorm8(s.color.x()), unorm8(s.color.y()), unorm8(s.color.z()), unorm8(s.color.w())});
+    }
+    st.segments = rad.size();
+    if (st.segments) {
+      json segs = {{"count", st.segments},
+                   {"p0", blob.add(p0, "f32", 3)},
+                   {"p1", blob.add(p1, "f32", 3)},
+                   {"normal", blob.add(nrm, "i16", 3)},
+                   {"radius", blob.add(rad, "f32", 1)}};
+      if (ends) {
+        segs["normal0"] = blob.add(n0, "i16", 3);
+        segs["normal1"] = blob.add(n1, "i16", 3);
+      }
+      if (model.attributes.colors) segs["color"] = blob.add(col, "u8", 4);
+      meta["segments"] = segs;
+    }
+  }
+  if (st.points + st.segments == 0)
+    throw Error(Error::Kind::BadInput, o.name, "view",
+                "nothing to draw: no point or segment with finite coordinates and a positive radius");
+
+  const RenderOptions& r = o.render;
+  const float zThreshold = r.zThresholdMode == ZThresholdMode::PerPrimitive ? r.zThreshold : 0.5f;
+  meta["bytes"] = blob.bytes().size();
+  meta["sphere"] = {{"center", vec(centre)}, {"radius", sphere.radius}};
+  meta["upAxis"] = vec(o.upAxis.normalized());
+  meta["skipped"] = {{"points", st.skippedPoints}, {"segments", st.skippedSegments}};
+  meta["defaults"] = {{"azimuth", o.azimuth},
+                      {"elevation", o.elevation},
+                      {"fov", o.fovY},
+                      {"prefilter", r.prefilterVariance},
+                      {"cutoff", r.cutoffRadius},
+                      {"reconScale", r.reconstructionScale},
+                      {"zThreshold", zThreshold},
+                      {"ambient", r.material.ambient},
+                      {"diffuse", r.material.diffuse},
+                      {"specular", r.material.specular},
+                      {"shininess", r.material.shininess},
+                      {"light", vec(r.light.direction)},
+                      {"color", rgb(r.defaultColor)},
+                      {"background", rgb(r.background)}};
+  std::string metaText = meta.dump();
+  // JSON inside <script>: "</" would end the element early.
+  for (size_t at = 0; (at = metaText.find("</", at)) != std::string::npos; at += 3) metaText.replace(at, 2, "<\\/");
+
+  std::string page(web::kViewerHtml);
+  // From the end of the template backwards, so that no inserted text is searched for a marker.
+  fill(page, "@VIEWER_JS@", std::string(web::kViewerJs));
+  fill(page, "@DATA@", base64(blob.bytes()));
+  fill(page, "@META@", metaText);
+  st.bytes = page.size();
+  if (statsOut) *statsOut = st;
+  return page;
+}
+
+ViewerPageStats writeViewerPage(const std::filesystem::path& path, const HybridModel& model,
+                                const ViewerPageOptions& options) {
+  ViewerPageStats st;
+  const std::string page = viewerPage(model, options, &st);
+  writeFileAtomically(path, page);
+  return st;
+}
+
+}  // namespace linesurf

@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# Browser test of `linesurf view` (issue 16): headless Chromium (software GL: SwiftShader) loads
+# the viewer page of three models with a camera in the URL fragment, takes a screenshot, and
+# compares it with `linesurf render` from the same camera (SSIM >= 0.95 each). Also: a page with
+# damaged data shows a message (never a blank canvas) and a model over the budget is refused.
+# Usage: viewer_test.sh LINESURF SOURCE_DIR WORK_DIR. Exit 77 (CTest: skipped) without chromium.
+set -euo pipefail
+LS=$(realpath "$1")
+SRC=$(realpath "$2")
+WORK=$3
+MIN_SSIM=${MIN_SSIM:-0.95}
+CHROMIUM=${CHROMIUM:-$(command -v chromium || command -v chromium-browser || true)}
+if [ -z "$CHROMIUM" ]; then
+  echo "SKIP: chromium not found (scripts/setup.sh installs Debian's chromium)"
+  exit 77
+fi
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK"
+fail=0
+
+# chrome PAGE FRAGMENT ARGS...: one headless run with a fresh profile.
+chrome() {
+  local page=$1 frag=$2
+  shift 2
+  local profile
+  profile=$(mktemp -d "$WORK/profile.XXXXXX")
+  timeout 120 "$CHROMIUM" --headless --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader \
+    --disable-background-networking --disable-component-update --disable-sync --no-first-run \
+    --disable-default-apps --mute-audio --hide-scrollbars --force-device-scale-factor=1 \
+    --user-data-dir="$profile" "$@" "file://$WORK/$page#$frag" 2>>"$WORK/chromium.log"
+  rm -rf "$profile"
+}
+
+# case NAME MODEL X,Y,Z(eye) X,Y,Z(target) X,Y,Z(up) FOV
+check() {
+  local name=$1 model=$2 eye=$3 target=$4 up=$5 fov=$6
+  "$LS" view "$model" -o "$name.html" -q
+  chrome "$name.html" "eye=$eye&target=$target&up=$up&fov=$fov&ui=0" \
+    --window-size=512,512 --virtual-time-budget=10000 --screenshot="$WORK/${name}_viewer.png" >/dev/null
+  if [ ! -s "${name}_viewer.png" ]; then
+    echo "FAIL $name: chromium wrote no screenshot (see $WORK/chromium.log)"
+    fail=1
+    return
+  fi
+  "$LS" render "$model" -o "${name}_render.png" --size 512x512 --eye ${eye//,/ } --target ${target//,/ } \
+    --up ${up//,/ } --fov "$fov" -q
+  local ssim
+  ssim=$("$LS" compare "${name}_render.png" "${name}_viewer.png" --diff "${name}_diff.png" --json |
+    sed -n 's/.*"ssim": *\([0-9.eE+-]*\).*/\1/p')
+  if awk -v s="$ssim" -v m="$MIN_SSIM" 'BEGIN { exit !(s >= m) }'; then
+    echo "ok   $name: SSIM $ssim (viewer vs linesurf render, >= $MIN_SSIM)"
+  else
+    echo "FAIL $name: SSIM $ssim < $MIN_SSIM (images in $WORK)"
+    fail=1
+  fi
+}
+
+"$LS" extract shape-approx "$SRC/data/igea_points.ply" -o igea_greedy.ply -q
+"$LS" extract contour "$SRC/data/al_mesh.ply" -o al_contour.ply --seed 1 -q
+check igea_points "$SRC/data/igea_points.ply" 0.15,0.1,0.3 0,0,0 0,1,0 30
+check igea_greedy igea_greedy.ply -0.2,0.05,0.25 0,0,0 0,1,0 30
+check al_contour al_contour.ply 2.5,1.5,3 0,0.68,0 0,1,0 30
+
+# A damaged page shows its message instead of a blank canvas.
+# (the first 8 base64 characters of the model data cut: 6 bytes missing)
+sed -E 's|(<script id="linesurf-data" type="application/octet-stream">)[A-Za-z0-9+/]{8}|\1|' al_contour.html >damaged.html
+if cmp -s al_contour.html damaged.html; then echo "FAIL damaged: could not damage the page"; fail=1; fi
+dom=$(chrome damaged.html "" --window-size=512,512 --virtual-time-budget=5000 --dump-dom)
+if grep -q 'data-state="error"' <<<"$dom" && grep -q 'cannot draw this model' <<<"$dom"; then
+  echo "ok   damaged page: shows '$(tr '\n' ' ' <<<"$dom" | grep -o 'cannot draw this model[^<]*' | head -1)'"
+else
+  echo "FAIL damaged page: no visible error message"
+  fail=1
+fi
+
+# Over the page's budget: refused with a one-line error and exit code 2, no page written.
+set +e
+err=$("$LS" view "$SRC/data/igea_points.ply" -o over.html --max-primitives 1000 2>&1 >/dev/null)
+code=$?
+set -e
+if [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$err" | wc -l)" -eq 1 ] && [ ! -e over.html ] && grep -q budget <<<"$err"; then
+  echo "ok   over budget: exit $code, '$err'"
+else
+  echo "FAIL over budget: exit $code, '$err'"
+  fail=1
+fi
+exit $fail

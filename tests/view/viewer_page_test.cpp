@@ -1,0 +1,173 @@
+// The viewer page of `linesurf view` (issue 16): what it embeds and what it refuses. The page's
+// drawing is tested in a browser (tests/browser/viewer_test.sh).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstring>
+#include <fstream>
+
+#include "linesurf/core/error.h"
+#include "linesurf/render/camera.h"
+#include "linesurf/view/viewer_page.h"
+#include "test_util.h"
+
+namespace linesurf {
+namespace {
+
+using json = nlohmann::json;
+
+HybridModel smallHybrid() {
+  HybridModel m;
+  for (int i = 0; i < 5; ++i) {
+    Point p;
+    p.position = Vec3f(float(i), 2.0f, -1.0f);
+    p.normal = Vec3f(0, 0, 1);
+    p.radius = 0.5f;
+    m.points.push_back(p);
+  }
+  Segment s;
+  s.p0 = Vec3f(0, 0, 0);
+  s.p1 = Vec3f(4, 0, 0);
+  s.normal = Vec3f(0, 0, 1);
+  s.radius = 0.25f;
+  m.segments.push_back(s);
+  m.attributes.normals = m.attributes.radii = true;
+  return m;
+}
+
+// The text between `<script id="ID" ...>` and `</script>`.
+std::string scriptText(const std::string& page, const std::string& id) {
+  const size_t tag = page.find("<script id=\"" + id + "\"");
+  EXPECT_NE(tag, std::string::npos) << id;
+  const size_t start = page.find('>', tag) + 1;
+  return page.substr(start, page.find("</script>", start) - start);
+}
+
+std::vector<uint8_t> fromBase64(const std::string& s) {
+  auto val = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    return c == '+' ? 62 : c == '/' ? 63 : -1;
+  };
+  std::vector<uint8_t> out;
+  uint32_t acc = 0;
+  int bits = 0;
+  for (char c : s) {
+    const int v = val(c);
+    if (v < 0) continue;
+    acc = acc << 6 | uint32_t(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(uint8_t(acc >> bits));
+    }
+  }
+  return out;
+}
+
+TEST(ViewerPage, EmbedsEveryPrimitiveRelativeToTheBoundingSphere) {
+  const HybridModel m = smallHybrid();
+  ViewerPageStats st;
+  const std::string page = viewerPage(m, {.name = "small.ply"}, &st);
+  EXPECT_EQ(st.points, 5u);
+  EXPECT_EQ(st.segments, 1u);
+  EXPECT_EQ(st.bytes, page.size());
+  for (const char* marker : {"@META@", "@DATA@", "@VIEWER_JS@"}) EXPECT_EQ(page.find(marker), std::string::npos);
+  EXPECT_NE(page.find("getContext('webgl2'"), std::string::npos);  // the viewer's script is inlined
+  const json meta = json::parse(scriptText(page, "linesurf-meta"));
+  const std::vector<uint8_t> data = fromBase64(scriptText(page, "linesurf-data"));
+  ASSERT_EQ(data.size(), meta["bytes"].get<size_t>());
+  EXPECT_EQ(meta["points"]["count"], 5);
+  EXPECT_EQ(meta["segments"]["count"], 1);
+  const BoundingSphere sphere = boundingSphere(m);
+  EXPECT_NEAR(meta["sphere"]["radius"].get<float>(), sphere.radius, 1e-6f);
+  // point 3's position, float32 at the position array's offset
+  float p3[3];
+  std::memcpy(p3, data.data() + meta["points"]["position"]["offset"].get<size_t>() + 3 * 12, 12);
+  const Vec3f expect = (m.points[3].position - sphere.center) / sphere.radius;
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(p3[c], expect[c], 1e-6f);
+  float r;
+  std::memcpy(&r, data.data() + meta["segments"]["radius"]["offset"].get<size_t>(), 4);
+  EXPECT_NEAR(r, 0.25f / sphere.radius, 1e-7f);
+  // the defaults are the renderer's (one source of truth: RenderOptions)
+  const RenderOptions ro;
+  EXPECT_FLOAT_EQ(meta["defaults"]["cutoff"].get<float>(), ro.cutoffRadius);
+  EXPECT_FLOAT_EQ(meta["defaults"]["ambient"].get<float>(), ro.material.ambient);
+  EXPECT_FLOAT_EQ(meta["defaults"]["zThreshold"].get<float>(), ro.zThreshold);
+}
+
+TEST(ViewerPage, LeavesOutAndCountsUndrawablePrimitives) {
+  HybridModel m = smallHybrid();
+  m.points[1].radius = 0;
+  m.points[2].position.x() = NAN;
+  m.segments[0].p1 = m.segments[0].p0;  // zero length
+  ViewerPageStats st;
+  const std::string page = viewerPage(m, {}, &st);
+  EXPECT_EQ(st.points, 3u);
+  EXPECT_EQ(st.skippedPoints, 2u);
+  EXPECT_EQ(st.segments, 0u);
+  EXPECT_EQ(st.skippedSegments, 1u);
+  const json meta = json::parse(scriptText(page, "linesurf-meta"));
+  EXPECT_EQ(meta["points"]["count"], 3);
+  EXPECT_FALSE(meta.contains("segments"));
+}
+
+TEST(ViewerPage, RefusesAModelOverTheBudgetOrWithNothingToDraw) {
+  const HybridModel m = smallHybrid();
+  try {
+    viewerPage(m, {.name = "big.ply", .maxPrimitives = 5});
+    FAIL() << "a model over the budget must be refused";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), Error::Kind::BadInput);
+    EXPECT_EQ(e.path(), "big.ply");
+    EXPECT_NE(std::string(e.what()).find("budget of 5"), std::string::npos) << e.what();
+  }
+  HybridModel none = m;
+  for (Point& p : none.points) p.radius = 0;
+  none.segments.clear();
+  EXPECT_THROW(viewerPage(none), Error);
+  EXPECT_THROW(viewerPage(m, {.fovY = 0}), Error);
+}
+
+TEST(ViewerPage, NameCannotCloseTheScriptElement) {
+  const std::string page = viewerPage(smallHybrid(), {.name = "a</script><b>.ply"});
+  const std::string meta = scriptText(page, "linesurf-meta");
+  EXPECT_EQ(json::parse(meta)["name"], "a</script><b>.ply");
+  EXPECT_EQ(page.find("a</script>"), std::string::npos);
+}
+
+TEST(ViewerPage, CarriesEndpointNormalsAndClusterIds) {
+  HybridModel m = smallHybrid();
+  m.attributes.endpointNormals = true;
+  m.segments[0].normal0 = Vec3f(0, 0.6f, 0.8f);
+  m.segments[0].normal1 = Vec3f(0, -0.6f, 0.8f);
+  m.pointProperties["cluster"] = {0, 0, 1, 1, 2};
+  const json meta = json::parse(scriptText(viewerPage(m), "linesurf-meta"));
+  EXPECT_TRUE(meta["segments"].contains("normal0"));
+  EXPECT_TRUE(meta["segments"].contains("normal1"));
+  EXPECT_TRUE(meta["points"].contains("cluster"));
+}
+
+TEST(ViewCli, WritesAPageAndRefusesBadInput) {
+  const auto dir = test::scratchDir("view_cli");
+  auto ok = test::runCli("view " + (test::bundledData() / "rockerarm_points.ply").string() + " -o " +
+                         (dir / "r.html").string() + " --up-axis z");
+  EXPECT_EQ(ok.exitCode, 0) << ok.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "r.html"));
+  auto missing = test::runCli("view " + (dir / "missing.ply").string());
+  EXPECT_NE(missing.exitCode, 0);
+  std::ofstream(dir / "bad.ply") << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1\n";
+  auto bad = test::runCli("view " + (dir / "bad.ply").string() + " -o " + (dir / "bad.html").string());
+  EXPECT_EQ(bad.exitCode, 2) << bad.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.html"));
+  auto over = test::runCli("view " + (test::bundledData() / "rockerarm_points.ply").string() + " -o " +
+                           (dir / "over.html").string() + " --max-primitives 10");
+  EXPECT_EQ(over.exitCode, 2) << over.out;
+  EXPECT_NE(over.out.find("budget"), std::string::npos) << over.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "over.html"));
+}
+
+}  // namespace
+}  // namespace linesurf

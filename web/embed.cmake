@@ -1,0 +1,23 @@
+# Turns the viewer's web sources into a C++ header of string constants (cmake -P, run at build
+# time by CMakeLists.txt): -DOUT=header -DINPUTS="name1=file1;name2=file2".
+set(text "// Generated from web/ by web/embed.cmake: do not edit.\n#pragma once\n#include <string_view>\n\nnamespace linesurf::web {\n")
+foreach(pair IN LISTS INPUTS)
+  string(REPLACE "=" ";" parts "${pair}")
+  list(GET parts 0 name)
+  list(GET parts 1 file)
+  file(READ "${file}" content)
+  string(FIND "${content}" ")LSWEB\"" clash)
+  if(NOT clash EQUAL -1)
+    message(FATAL_ERROR "${file} contains the raw-string delimiter )LSWEB\"")
+  endif()
+  string(APPEND text "inline constexpr std::string_view ${name} = R\"LSWEB(${content})LSWEB\";\n")
+endforeach()
+string(APPEND text "}  // namespace linesurf::web\n")
+# Rewrite only when changed, so that unrelated builds do not recompile the page.
+if(EXISTS "${OUT}")
+  file(READ "${OUT}" old)
+  if(old STREQUAL text)
+    return()
+  endif()
+endif()
+file(WRITE "${OUT}" "${text}")

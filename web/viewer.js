@@ -1,0 +1,948 @@
+// linesurf view: WebGL2 splatting of points and line segments (thesis §4.2.2, §5, §6.2; the GPU
+// line-segment splatting of §9.3). Embedded in the page by `linesurf view`; no network access.
+//
+// Frame (Botsch, Hornung, Zwicker, Kobbelt 2005, "High-quality surface splatting on today's GPUs"):
+//  1. visibility: every splat writes its depth pushed back by its z threshold (depth only);
+//  2. accumulation: fragments not behind that depth add (w * colour, w) into a float target;
+//  3. normalisation: colour = sum(w c) / sum(w), background where nothing was drawn.
+// Each splat is a quad in its own tangent plane, so the GPU's perspective-correct interpolation
+// gives the exact ray-plane intersection at every pixel centre, as the CPU renderer computes it
+// (src/render/point_splat.cpp, segment_splat.cpp). Conventions follow include/linesurf/render/
+// camera.h and render_options.h, so a view here and `linesurf render` from the same camera agree.
+'use strict';
+(function () {
+  const $ = (id) => document.getElementById(id);
+
+  function fail(message) {
+    const e = $('error');
+    e.textContent = 'linesurf view cannot draw this model:\n' + message;
+    e.hidden = false;
+    document.title = 'linesurf view: error';
+    document.body.setAttribute('data-state', 'error');
+  }
+
+  // ---- model data -----------------------------------------------------------------------------
+
+  const TYPES = { f32: [Float32Array, 4], i16: [Int16Array, 2], u8: [Uint8Array, 1] };
+
+  function decodeBase64(text) {
+    const s = atob(text.replace(/\s+/g, ''));
+    const out = new Uint8Array(s.length);
+    for (let i = 0; i < s.length; ++i) out[i] = s.charCodeAt(i);
+    return out.buffer;
+  }
+
+  // A typed view of one embedded array, checked against the buffer.
+  function arrayOf(buffer, desc, count, what) {
+    if (!desc) return null;
+    const t = TYPES[desc.type];
+    if (!t) throw new Error(what + ': unknown element type ' + desc.type);
+    const comps = desc.components | 0;
+    if (!(comps >= 1 && comps <= 4)) throw new Error(what + ': bad component count');
+    const off = desc.offset;
+    if (!Number.isInteger(off) || off < 0 || off % t[1] !== 0) throw new Error(what + ': bad offset');
+    if (off + count * comps * t[1] > buffer.byteLength)
+      throw new Error(what + ': the embedded data is truncated (' + buffer.byteLength + ' bytes)');
+    return { data: new t[0](buffer, off, count * comps), desc: desc, comps: comps };
+  }
+
+  function loadModel() {
+    let meta;
+    try {
+      meta = JSON.parse($('linesurf-meta').textContent);
+    } catch (e) {
+      throw new Error('the model description is not valid JSON (' + e.message + ')');
+    }
+    if (!meta || meta.format !== 'linesurf-view' || meta.version !== 1)
+      throw new Error('not a linesurf view model (format/version)');
+    let buffer;
+    try {
+      buffer = decodeBase64($('linesurf-data').textContent);
+    } catch (e) {
+      throw new Error('the embedded model data is not valid base64');
+    }
+    if (buffer.byteLength !== meta.bytes)
+      throw new Error('the embedded data holds ' + buffer.byteLength + ' bytes, the description says ' + meta.bytes);
+    const s = meta.sphere;
+    if (!s || !(s.radius > 0) || !s.center || s.center.length !== 3 || !s.center.every(Number.isFinite))
+      throw new Error('bad bounding sphere');
+    const np = meta.points ? meta.points.count : 0, ns = meta.segments ? meta.segments.count : 0;
+    if (!Number.isInteger(np) || !Number.isInteger(ns) || np < 0 || ns < 0) throw new Error('bad primitive counts');
+    if (np + ns === 0) throw new Error('the model holds no drawable point or segment');
+    const model = { meta: meta, np: np, ns: ns };
+    const arrays = (desc, count, names, what) => {
+      const out = {};
+      for (const k of names) out[k] = arrayOf(buffer, desc[k], count, what + ' ' + k);
+      return out;
+    };
+    if (np) {
+      model.points = arrays(meta.points, np, ['position', 'normal', 'radius', 'color', 'cluster'], 'point');
+      if (!model.points.position || !model.points.normal || !model.points.radius)
+        throw new Error('points need positions, normals and radii');
+    }
+    if (ns) {
+      model.segments = arrays(meta.segments, ns, ['p0', 'p1', 'normal', 'normal0', 'normal1', 'radius', 'color'], 'segment');
+      if (!model.segments.p0 || !model.segments.p1 || !model.segments.normal || !model.segments.radius)
+        throw new Error('segments need endpoints, normals and radii');
+    }
+    return model;
+  }
+
+  // ---- shaders ----------------------------------------------------------------------------------
+
+  // Uniforms common to both splat kinds. Positions are in model units normalised to the bounding
+  // sphere (centre 0, radius 1); every length below is in those units, pixels where stated.
+  const COMMON = `#version 300 es
+precision highp float;
+precision highp int;
+uniform mat3 uRot;        // camera from world rotation (rows: right, up, back)
+uniform vec3 uTrans;      // camera from world translation
+uniform vec2 uHalf;       // principal point (cx, cy) = half the viewport, pixels
+uniform float uFocal;     // focal length, pixels: (height / 2) / tan(fovY / 2)
+uniform float uNear, uFar;
+uniform float uCutoff;    // resampling filter cut-off, standard deviations (RenderOptions 2)
+uniform float uRecon;     // sigma_r / radius (0.5)
+uniform float uVh;        // screen prefilter variance, pixels^2 (1)
+uniform float uRadScale;  // splat size scale
+uniform float uZThr;      // z threshold: multiple of the depth extent (PerPrimitive, 0.5)
+uniform int uColorMode;   // 0 model colour, 1 primitive kind, 2 cluster
+uniform vec3 uKindColor;
+const float kMaxStretch = 24.0;  // as point_splat.cpp / segment_splat.cpp
+const float kMinFacing = 2e-3;
+vec4 clipFromCamera(vec3 p) {
+  float A = -(uFar + uNear) / (uFar - uNear), B = -2.0 * uFar * uNear / (uFar - uNear);
+  return vec4(uFocal / uHalf.x * p.x, uFocal / uHalf.y * p.y, A * p.z + B, -p.z);
+}
+vec3 clusterColor(float id) {
+  uint h = uint(id) * 2654435761u;
+  h ^= h >> 15; h *= 2246822519u; h ^= h >> 13;
+  return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0 * 0.75 + 0.2;
+}
+`;
+
+  const CULL = 'gl_Position = vec4(2.0, 2.0, 2.0, 1.0); return;';
+
+  // Object-space EWA point splat (thesis §4.2.2), as preparePoint() in src/render/point_splat.cpp.
+  const POINT_VS = COMMON + `
+layout(location = 0) in vec3 aPos;
+layout(location = 1) in vec3 aNrm;
+layout(location = 2) in float aRad;
+layout(location = 3) in vec4 aCol;
+layout(location = 4) in float aCluster;
+out vec2 vST;          // position in the cut-off ellipse, standard deviations
+out vec3 vP;           // camera-space position
+flat out vec3 vN;
+flat out vec3 vAlbedo;
+flat out float vScale; // 1 / (r0 r1), §5.2.3.3
+flat out float vThr;
+void main() {
+  vST = vec2(0.0); vP = vec3(0.0); vN = vec3(0.0, 0.0, 1.0); vAlbedo = vec3(0.0); vScale = 0.0; vThr = 0.0;
+  vec3 c = uRot * aPos + uTrans;
+  float d = -c.z;
+  vec3 n = uRot * aNrm;
+  float nn = length(n), cn = length(c);
+  if (!(cn > 0.0)) { ${CULL} }
+  vec3 toEye = -c / cn;
+  n = nn > 0.0 ? n / nn : toEye;
+  float facing = dot(n, toEye);
+  if (!(facing >= kMinFacing)) { ${CULL} }  // back-facing (culled) or edge-on
+  float radius = aRad * uRadScale;
+  if (!(radius > 0.0)) { ${CULL} }
+  float sigma = uRecon * radius, R = uCutoff;
+  vec3 u = normalize(abs(n.x) < 0.9 ? cross(vec3(1.0, 0.0, 0.0), n) : cross(vec3(0.0, 1.0, 0.0), n));
+  vec3 v = cross(n, u);
+  float r0 = sigma, r1 = sigma;
+  vec2 e0 = vec2(1.0, 0.0);
+  if (d > 0.0) {
+    // V = sigma_r^2 I + V_h (J^T J)^-1, J the local Jacobian of the projection (§4.2.2)
+    vec3 gx = vec3(uFocal / d, 0.0, uFocal * c.x / (d * d));
+    vec3 gy = vec3(0.0, -uFocal / d, -uFocal * c.y / (d * d));
+    float j00 = dot(gx, u), j01 = dot(gx, v), j10 = dot(gy, u), j11 = dot(gy, v);
+    float a = j00 * j00 + j10 * j10, b = j00 * j01 + j10 * j11, cc = j01 * j01 + j11 * j11;
+    float det = a * cc - b * b;
+    float va = sigma * sigma, vb = 0.0, vc = sigma * sigma;
+    if (uVh > 0.0) {
+      if (!(det > 0.0)) { ${CULL} }
+      float k = uVh / det;
+      va += k * cc; vb -= k * b; vc += k * a;
+    }
+    float mean = 0.5 * (va + vc), diff = 0.5 * (va - vc);
+    float rad = sqrt(diff * diff + vb * vb);
+    float l0 = mean + rad, l1 = max(mean - rad, 1e-30);
+    if (abs(vb) > 1e-30 * (abs(va) + abs(vc)) && vb != 0.0) e0 = normalize(vec2(l0 - vc, vb));
+    else e0 = va >= vc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
+    r0 = min(sqrt(l0), kMaxStretch * sigma);
+    r1 = min(sqrt(l1), kMaxStretch * sigma);
+  }
+  vec3 E0 = e0.x * u + e0.y * v;
+  vec3 E1 = cross(n, E0);
+  vec2 corner = vec2((gl_VertexID & 1) == 1 ? 1.0 : -1.0, (gl_VertexID & 2) == 2 ? 1.0 : -1.0);
+  vec3 P = c + R * (corner.x * r0 * E0 + corner.y * r1 * E1);
+  vST = R * corner;
+  vP = P;
+  vN = n;
+  vScale = 1.0 / (r0 * r1);
+  // depth half-extent of the cut-off ellipse plus the radius (delta-z, §6.2.3.2)
+  vThr = uZThr * (R * sqrt(r0 * r0 * E0.z * E0.z + r1 * r1 * E1.z * E1.z) + radius);
+  vAlbedo = uColorMode == 1 ? uKindColor : uColorMode == 2 ? (aCluster >= 0.0 ? clusterColor(aCluster) : aCol.rgb) : aCol.rgb;
+  gl_Position = clipFromCamera(P);
+}
+`;
+
+  // Line-segment splat (thesis §5): the footprint box of the strip in its own plane; the fragment
+  // shader integrates the resampling Gaussian along the segment in closed form (ScreenSpace method
+  // of src/render/segment_splat.cpp with one sub-segment: Gaussian across times a difference of
+  // erf along, in the metric of the resampling covariance at the segment's middle).
+  const SEGMENT_VS = COMMON + `
+layout(location = 0) in vec3 aP0;
+layout(location = 1) in vec3 aP1;
+layout(location = 2) in vec3 aNrm;
+layout(location = 3) in float aRad;
+layout(location = 4) in vec4 aCol;
+layout(location = 5) in vec3 aN0;
+layout(location = 6) in vec3 aN1;
+out vec2 vAB;          // (along, across) in the strip's plane, from p0
+out vec3 vP;
+flat out vec3 vN, vN0, vN1;
+flat out vec3 vAlbedo;
+flat out vec4 vK;      // skew, across, 1/m00, sqrt(m00 / 2)
+flat out vec4 vS;      // scale0, slope, length, erf scale
+flat out vec2 vThr;    // z thresholds at p0, p1
+uniform bool uEndpointNormals;
+
+// Symmetric 2x2 (m00, m01, m11) with eigenvalues clamped to [lo, hi] (clampEigen).
+vec3 clampEigen(vec3 M, float lo, float hi) {
+  float a = M.x, b = M.y, c = M.z;
+  float mean = 0.5 * (a + c), diff = 0.5 * (a - c);
+  float rad = sqrt(diff * diff + b * b);
+  float l0 = mean + rad, l1 = mean - rad;
+  if (l0 <= hi && l1 >= lo) return M;
+  vec2 e0 = rad > 0.0 ? (abs(b) > 0.0 ? normalize(vec2(l0 - c, b)) : (a >= c ? vec2(1.0, 0.0) : vec2(0.0, 1.0)))
+                      : vec2(1.0, 0.0);
+  vec2 e1 = vec2(-e0.y, e0.x);
+  l0 = clamp(l0, lo, hi); l1 = clamp(l1, lo, hi);
+  return vec3(l0 * e0.x * e0.x + l1 * e1.x * e1.x, l0 * e0.x * e0.y + l1 * e1.x * e1.y,
+              l0 * e0.y * e0.y + l1 * e1.y * e1.y);
+}
+// Resampling covariance sigma_r^2 I + V_h J^-1 J^-T at camera-space p of the strip (e, s),
+// in (along, across) coordinates (§5.1.2; resamplingCovariance()).
+vec3 covarianceAt(vec3 p, vec3 e, vec3 s, float sigma) {
+  vec3 M = vec3(sigma * sigma, 0.0, sigma * sigma);
+  float d = -p.z;
+  float hi = (kMaxStretch * sigma) * (kMaxStretch * sigma);
+  if (d > 0.0 && uVh > 0.0) {
+    vec3 gx = vec3(uFocal / d, 0.0, uFocal * p.x / (d * d));
+    vec3 gy = vec3(0.0, -uFocal / d, -uFocal * p.y / (d * d));
+    float j00 = dot(gx, e), j01 = dot(gx, s), j10 = dot(gy, e), j11 = dot(gy, s);
+    float a = j00 * j00 + j10 * j10, b = j00 * j01 + j10 * j11, c = j01 * j01 + j11 * j11;
+    float det = a * c - b * b;
+    if (det > 0.0 && !isinf(det)) M += uVh / det * vec3(c, -b, a);
+    else return vec3(hi, 0.0, hi);
+  }
+  return clampEigen(M, sigma * sigma, hi);
+}
+float det2(vec3 M) { return M.x * M.z - M.y * M.y; }
+void main() {
+  vAB = vec2(0.0); vP = vec3(0.0); vN = vN0 = vN1 = vec3(0.0, 0.0, 1.0); vAlbedo = vec3(0.0);
+  vK = vec4(0.0); vS = vec4(0.0); vThr = vec2(0.0);
+  vec3 c0 = uRot * aP0 + uTrans, c1 = uRot * aP1 + uTrans;
+  float radius = aRad * uRadScale;
+  float L = length(c1 - c0);
+  if (!(radius > 0.0) || !(L > 1e-6 * radius)) { ${CULL} }
+  vec3 e = (c1 - c0) / L;
+  vec3 n = uRot * aNrm;
+  n -= dot(n, e) * e;
+  if (!(length(n) > 1e-3)) {  // no usable normal: the strip facing the viewer
+    vec3 toEye = -(c0 + 0.5 * L * e);
+    n = toEye - dot(toEye, e) * e;
+    if (!(length(n) > 0.0)) n = abs(e.x) < 0.9 ? cross(vec3(1.0, 0.0, 0.0), e) : cross(vec3(0.0, 1.0, 0.0), e);
+  }
+  n = normalize(n);
+  float D = -dot(n, c0);
+  if (D < 0.0) { ${CULL} }  // back-face culling: the strip faces away
+  {
+    float t = clamp(-dot(c0, e), 0.0, L);
+    float dist = length(c0 + t * e);
+    if (!(dist > 0.0) || D / dist < kMinFacing) { ${CULL} }
+  }
+  vec3 s = cross(e, n);
+  float R = uCutoff, sigma = uRecon * radius, h = radius;
+  vec3 M0 = covarianceAt(c0, e, s, sigma), M1 = covarianceAt(c1, e, s, sigma);
+  vec3 M = covarianceAt(c0 + 0.5 * L * e, e, s, sigma);
+  float dm = det2(M);
+  vec3 Mi = vec3(M.z, -M.y, M.x) / dm;
+  float scale0 = 1.0 / (h * sqrt(det2(M0))), scale1 = 1.0 / (h * sqrt(det2(M1)));
+  float slope = (scale1 - scale0) / L;
+  if (!(abs(slope) * L > 1e-4 * scale0)) slope = 0.0;
+  float reach = R * sqrt(M.x);
+  float aMin = min(0.0, -reach), aMax = max(L, L + reach), bMax = R * sqrt(M.z);
+  vec2 corner = vec2((gl_VertexID & 1) == 1 ? aMax : aMin, (gl_VertexID & 2) == 2 ? bMax : -bMax);
+  vec3 P = c0 + corner.x * e + corner.y * s;
+  vAB = corner;
+  vP = P;
+  vN = n;
+  if (uEndpointNormals) {
+    vec3 a0 = uRot * aN0, a1 = uRot * aN1;
+    vN0 = length(a0) > 0.0 ? normalize(a0) : n;
+    vN1 = length(a1) > 0.0 ? normalize(a1) : n;
+  } else {
+    vN0 = vN1 = n;
+  }
+  float k = sqrt(0.5 * Mi.x);
+  vK = vec4(Mi.y / Mi.x, Mi.z - Mi.y * Mi.y / Mi.x, 1.0 / Mi.x, k);
+  vS = vec4(scale0, slope, L, 0.886226925 / k);
+  vec2 g = vec2(e.z, s.z);
+  vThr = uZThr * (R * sqrt(vec2(dot(g, vec2(M0.x * g.x + M0.y * g.y, M0.y * g.x + M0.z * g.y)),
+                                dot(g, vec2(M1.x * g.x + M1.y * g.y, M1.y * g.x + M1.z * g.y)))) + radius);
+  vAlbedo = uColorMode == 1 ? uKindColor : aCol.rgb;
+  gl_Position = clipFromCamera(P);
+}
+`;
+
+  // Fragment side shared by both kinds: Phong (FrameContext::shade) and the pass logic.
+  const FRAG_COMMON = `#version 300 es
+precision highp float;
+precision highp int;
+uniform float uCutoff;
+uniform float uNear, uFar;
+uniform int uPass;          // 0 visibility (depth + threshold), 1 accumulation
+uniform float uWeightNorm;  // constant factor keeping weights near 1 (cancels in the division)
+uniform bool uLighting;
+uniform vec3 uLight;        // unit direction towards the light, camera space
+uniform vec4 uMaterial;     // ambient, diffuse, specular, shininess
+out vec4 outColor;
+vec3 shade(vec3 albedo, vec3 n, vec3 p) {
+  if (!uLighting) return albedo;
+  float ndl = max(0.0, dot(n, uLight));
+  vec3 c = albedo * (uMaterial.x + uMaterial.y * ndl);
+  if (uMaterial.z > 0.0 && ndl > 0.0) {
+    float pn = length(p);
+    vec3 v = pn > 0.0 ? -p / pn : vec3(0.0, 0.0, 1.0);
+    vec3 h = uLight + v;
+    float hn = length(h);
+    if (hn > 0.0) c += uMaterial.z * pow(max(0.0, dot(n, h / hn)), uMaterial.w);
+  }
+  return c;
+}
+// Linear depth -> depth buffer; [near, far] uses [0, 2/3) so a pushed-back depth stays below 1.
+float depthValue(float d) { return clamp((d - uNear) / (1.5 * (uFar - uNear)), 0.0, 0.999); }
+void emit(float w, float depth, float thr, vec3 color) {
+  if (uPass == 0) {
+    gl_FragDepth = depthValue(depth + thr);
+    outColor = vec4(0.0);
+  } else {
+    gl_FragDepth = depthValue(depth);
+    float ww = w * uWeightNorm;
+    outColor = vec4(color * ww, ww);
+  }
+}
+`;
+
+  const POINT_FS = FRAG_COMMON + `
+in vec2 vST;
+in vec3 vP;
+flat in vec3 vN;
+flat in vec3 vAlbedo;
+flat in float vScale;
+flat in float vThr;
+void main() {
+  float q = dot(vST, vST);
+  if (!(q <= uCutoff * uCutoff)) discard;
+  float w = exp(-0.5 * q) * vScale;
+  emit(w, -vP.z, vThr, uPass == 0 ? vec3(0.0) : shade(vAlbedo, vN, vP));
+}
+`;
+
+  const SEGMENT_FS = FRAG_COMMON + `
+in vec2 vAB;
+in vec3 vP;
+flat in vec3 vN, vN0, vN1;
+flat in vec3 vAlbedo;
+flat in vec4 vK;
+flat in vec4 vS;
+flat in vec2 vThr;
+// erf, Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7)
+float erf1(float x) {
+  float t = 1.0 / (1.0 + 0.3275911 * abs(x));
+  float y = 1.0 - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592) * t * exp(-x * x);
+  return x < 0.0 ? -y : y;
+}
+void main() {
+  float a = vAB.x, b = vAB.y;
+  float R2 = uCutoff * uCutoff;
+  float skew = vK.x, across = vK.y, invM00 = vK.z, k = vK.w;
+  float scale0 = vS.x, slope = vS.y, len = vS.z, erfScale = vS.w;
+  // q(tau) = m00 (tau - tau*)^2 + qmin; the kernel at tau counts where q <= R^2 (screenSpaceWeight)
+  float tauStar = a + skew * b;
+  float qmin = b * b * across;
+  if (!(qmin < R2)) discard;
+  float delta = sqrt((R2 - qmin) * invM00);
+  float t0 = max(0.0, tauStar - delta), t1 = min(len, tauStar + delta);
+  if (!(t1 > t0)) discard;
+  float u0 = k * (t0 - tauStar), u1 = k * (t1 - tauStar);
+  float g = exp(-0.5 * qmin);
+  float w = (scale0 + slope * tauStar) * erfScale * (erf1(u1) - erf1(u0)) * g;
+  if (slope != 0.0) w += slope * invM00 * g * (exp(-u0 * u0) - exp(-u1 * u1));
+  if (!(w > 0.0)) discard;
+  float u = clamp(a / len, 0.0, 1.0);
+  vec3 color = vec3(0.0);
+  if (uPass == 1) {
+    vec3 n = vN;
+    if (vN0 != vN1) {  // smooth line model: endpoint normals interpolated along the segment
+      vec3 m = mix(vN0, vN1, u);
+      n = length(m) > 0.0 ? normalize(m) : vN;
+    }
+    color = shade(vAlbedo, n, vP);
+  }
+  emit(w, -vP.z, mix(vThr.x, vThr.y, u), color);
+}
+`;
+
+  const RESOLVE_VS = `#version 300 es
+void main() {
+  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+`;
+  const RESOLVE_FS = `#version 300 es
+precision highp float;
+uniform highp sampler2D uAccum;
+uniform vec3 uBackground;
+out vec4 outColor;
+void main() {
+  vec4 acc = texelFetch(uAccum, ivec2(gl_FragCoord.xy), 0);
+  vec3 c = acc.a > 0.0 ? acc.rgb / acc.a : uBackground;
+  outColor = vec4(clamp(c, 0.0, 1.0), 1.0);
+}
+`;
+
+  function compile(gl, vs, fs, name) {
+    const prog = gl.createProgram();
+    for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
+      const sh = gl.createShader(type);
+      gl.shaderSource(sh, src);
+      gl.compileShader(sh);
+      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS) && !gl.isContextLost())
+        throw new Error('the ' + name + ' shader does not compile: ' + gl.getShaderInfoLog(sh));
+      gl.attachShader(prog, sh);
+    }
+    gl.linkProgram(prog);
+    if (!gl.getProgramParameter(prog, gl.LINK_STATUS) && !gl.isContextLost())
+      throw new Error('the ' + name + ' program does not link: ' + gl.getProgramInfoLog(prog));
+    const uniforms = {};
+    const n = gl.getProgramParameter(prog, gl.ACTIVE_UNIFORMS);
+    for (let i = 0; i < n; ++i) {
+      const info = gl.getActiveUniform(prog, i);
+      uniforms[info.name] = gl.getUniformLocation(prog, info.name);
+    }
+    return { prog: prog, u: uniforms };
+  }
+
+  // ---- camera (include/linesurf/render/camera.h) ------------------------------------------------
+
+  const V = {
+    add: (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]],
+    sub: (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]],
+    mul: (a, s) => [a[0] * s, a[1] * s, a[2] * s],
+    dot: (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2],
+    cross: (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]],
+    len: (a) => Math.hypot(a[0], a[1], a[2]),
+    norm: (a) => { const l = Math.hypot(a[0], a[1], a[2]); return l > 0 ? [a[0] / l, a[1] / l, a[2] / l] : [0, 0, 0]; },
+  };
+  // Rodrigues rotation of v about unit axis k by angle t.
+  function rotate(v, k, t) {
+    const c = Math.cos(t), s = Math.sin(t);
+    return V.add(V.add(V.mul(v, c), V.mul(V.cross(k, v), s)), V.mul(k, V.dot(k, v) * (1 - c)));
+  }
+
+  // Camera::lookAt + update(): rows right, trueUp, back; near/far as `linesurf render --eye`.
+  function cameraFrame(cam, sphere) {
+    const back = V.norm(V.sub(cam.eye, cam.target));
+    let up = cam.up;
+    if (V.len(up) === 0 || V.len(V.cross(V.norm(up), back)) < 1e-4) {
+      const a = back.map(Math.abs);
+      up = a[0] <= a[1] && a[0] <= a[2] ? [1, 0, 0] : (a[1] <= a[2] ? [0, 1, 0] : [0, 0, 1]);
+    }
+    const right = V.norm(V.cross(up, back));
+    const trueUp = V.cross(back, right);
+    const dist = V.len(V.sub(cam.eye, cam.target));
+    const nearD = Math.max(1e-4 * dist, dist - 1.5 * sphere.radius);
+    const farD = Math.max(dist + 1.5 * sphere.radius, 2 * nearD);
+    return { right: right, up: trueUp, back: back, dist: dist, near: nearD, far: farD };
+  }
+
+  function frontAxis(u) {
+    let f = Math.abs(u[1]) > 0.9 ? [0, 0, 1] : u[2] > 0.9 ? [0, -1, 0] : u[2] < -0.9 ? [0, 1, 0] : [0, 0, 1];
+    return V.norm(V.sub(f, V.mul(u, V.dot(f, u))));
+  }
+
+  // Camera::orbit with distance 0 (framed): the default view of `linesurf render`.
+  function orbitCamera(sphere, azDeg, elDeg, fovDeg, width, height, upAxis) {
+    const r = sphere.radius;
+    const halfY = 0.5 * fovDeg * Math.PI / 180;
+    const halfX = Math.atan(Math.tan(halfY) * width / height);
+    const dist = 1.05 * r / Math.sin(Math.min(halfX, halfY));
+    const az = azDeg * Math.PI / 180, el = elDeg * Math.PI / 180;
+    const U = V.norm(upAxis), F = frontAxis(U), Rt = V.cross(U, F);
+    const dir = V.add(V.mul(V.add(V.mul(F, Math.cos(az)), V.mul(Rt, Math.sin(az))), Math.cos(el)), V.mul(U, Math.sin(el)));
+    return { eye: V.add(sphere.center, V.mul(dir, dist)), target: sphere.center.slice(), up: U.slice(), fov: fovDeg };
+  }
+
+  function parseFragment(hash) {
+    const out = {};
+    for (const part of hash.replace(/^#/, '').split('&')) {
+      if (!part) continue;
+      const i = part.indexOf('=');
+      const key = decodeURIComponent(i < 0 ? part : part.slice(0, i));
+      out[key] = decodeURIComponent(i < 0 ? '' : part.slice(i + 1));
+    }
+    return out;
+  }
+  function vec3Param(s, what) {
+    const v = s.split(',').map(Number);
+    if (v.length !== 3 || !v.every(Number.isFinite)) throw new Error('URL fragment: ' + what + ' needs three numbers X,Y,Z');
+    return v;
+  }
+  const fmt = (x) => {
+    const s = Number(x).toPrecision(7);
+    return String(Number(s));
+  };
+
+  // ---- the viewer -------------------------------------------------------------------------------
+
+  function main() {
+    const model = loadModel();
+    const meta = model.meta;
+    const D = meta.defaults;
+    const sphere = { center: meta.sphere.center, radius: meta.sphere.radius };
+    const upAxis = meta.upAxis || [0, 1, 0];
+    const canvas = $('gl');
+    const gl = canvas.getContext('webgl2', { antialias: false, alpha: false, depth: false, preserveDrawingBuffer: true,
+                                             powerPreference: 'high-performance' });
+    if (!gl) throw new Error('this browser offers no WebGL2 (needed to draw splats on the GPU)');
+    if (!gl.getExtension('EXT_color_buffer_float'))
+      throw new Error('WebGL2 is there but without EXT_color_buffer_float (float render targets)');
+    const floatBlend = !!gl.getExtension('EXT_float_blend');
+    canvas.addEventListener('webglcontextlost', (e) => { e.preventDefault(); fail('the WebGL context was lost'); });
+
+    const pointProg = model.np ? compile(gl, POINT_VS, POINT_FS, 'point splat') : null;
+    const segProg = model.ns ? compile(gl, SEGMENT_VS, SEGMENT_FS, 'segment splat') : null;
+    const resolveProg = compile(gl, RESOLVE_VS, RESOLVE_FS, 'normalisation');
+
+    // Buffers: one per attribute, each splat's values repeated at its 4 corner vertices, and an
+    // index buffer of 2 triangles per splat (corner = gl_VertexID & 3). Not instancing: software
+    // GL (SwiftShader) runs every instance as a draw of its own, ~30x slower.
+    function attrib(loc, arr, normalized) {
+      const src = arr.data, c = arr.comps, n = src.length / c;
+      const dst = new src.constructor(src.length * 4);
+      for (let i = 0; i < n; ++i)
+        for (let v = 0; v < 4; ++v)
+          for (let j = 0; j < c; ++j) dst[(4 * i + v) * c + j] = src[i * c + j];
+      const buf = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+      gl.bufferData(gl.ARRAY_BUFFER, dst, gl.STATIC_DRAW);
+      const type = src instanceof Float32Array ? gl.FLOAT : src instanceof Int16Array ? gl.SHORT : gl.UNSIGNED_BYTE;
+      gl.enableVertexAttribArray(loc);
+      gl.vertexAttribPointer(loc, c, type, normalized, 0, 0);
+    }
+    function quadIndices(n) {
+      const idx = new Uint32Array(6 * n);
+      for (let i = 0, k = 0; i < n; ++i, k += 6) {
+        const b = 4 * i;
+        idx[k] = b; idx[k + 1] = b + 1; idx[k + 2] = b + 2; idx[k + 3] = b + 2; idx[k + 4] = b + 1; idx[k + 5] = b + 3;
+      }
+      const buf = gl.createBuffer();
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, buf);
+      gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
+    }
+    const defaultColor = D.color;
+    let pointVao = null, segVao = null;
+    if (model.np) {
+      const P = model.points;
+      pointVao = gl.createVertexArray();
+      gl.bindVertexArray(pointVao);
+      attrib(0, P.position, false);
+      attrib(1, P.normal, true);
+      attrib(2, P.radius, false);
+      if (P.color) attrib(3, P.color, true);
+      else { gl.disableVertexAttribArray(3); gl.vertexAttrib4f(3, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
+      if (P.cluster) attrib(4, P.cluster, false);
+      else { gl.disableVertexAttribArray(4); gl.vertexAttrib1f(4, -1); }
+      quadIndices(model.np);
+    }
+    if (model.ns) {
+      const S = model.segments;
+      segVao = gl.createVertexArray();
+      gl.bindVertexArray(segVao);
+      attrib(0, S.p0, false);
+      attrib(1, S.p1, false);
+      attrib(2, S.normal, true);
+      attrib(3, S.radius, false);
+      if (S.color) attrib(4, S.color, true);
+      else { gl.disableVertexAttribArray(4); gl.vertexAttrib4f(4, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
+      if (S.normal0 && S.normal1) { attrib(5, S.normal0, true); attrib(6, S.normal1, true); }
+      else { gl.disableVertexAttribArray(5); gl.disableVertexAttribArray(6); }
+      quadIndices(model.ns);
+    }
+    gl.bindVertexArray(null);
+    const emptyVao = gl.createVertexArray();
+
+    // Weights are 1/length^2 (§5.2.3.3); a constant factor keeps them near 1 in the float target.
+    let meanRadius = 0, nr = 0;
+    for (const arr of [model.points && model.points.radius, model.segments && model.segments.radius]) {
+      if (!arr) continue;
+      const step = Math.max(1, Math.floor(arr.data.length / 4096));
+      for (let i = 0; i < arr.data.length; i += step) if (arr.data[i] > 0) { meanRadius += arr.data[i]; ++nr; }
+    }
+    meanRadius = nr ? meanRadius / nr : 1;
+
+    // Render targets: float accumulation + depth.
+    let fbo = null, accumTex = null, depthRb = null, fbW = 0, fbH = 0;
+    function ensureTargets(w, h) {
+      if (fbo && fbW === w && fbH === h) return;
+      if (fbo) { gl.deleteFramebuffer(fbo); gl.deleteTexture(accumTex); gl.deleteRenderbuffer(depthRb); }
+      accumTex = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, accumTex);
+      gl.texStorage2D(gl.TEXTURE_2D, 1, floatBlend ? gl.RGBA32F : gl.RGBA16F, w, h);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      depthRb = gl.createRenderbuffer();
+      gl.bindRenderbuffer(gl.RENDERBUFFER, depthRb);
+      gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT32F, w, h);
+      fbo = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, accumTex, 0);
+      gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depthRb);
+      const st = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
+      if (st !== gl.FRAMEBUFFER_COMPLETE) throw new Error('float render target unsupported (status 0x' + st.toString(16) + ')');
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      fbW = w; fbH = h;
+    }
+
+    // ---- state -------------------------------------------------------------------------------
+    const params = parseFragment(location.hash);
+    const state = {
+      showPoints: params.points !== '0',
+      showSegments: params.segments !== '0',
+      lighting: params.light !== '0',
+      colorMode: params.color === 'kind' ? 1 : params.color === 'cluster' ? 2 : 0,
+      radiusScale: params.scale ? Math.min(4, Math.max(0.25, Number(params.scale) || 1)) : 1,
+      camera: null,
+    };
+    if (params.ui === '0') $('ui').classList.add('hidden');
+    $('name').textContent = meta.name || '';
+    if (meta.name) document.title = meta.name + ' - linesurf view';
+    if (!model.np || !(model.points.cluster)) $('clusterOption').disabled = true;
+    if (state.colorMode === 2 && $('clusterOption').disabled) state.colorMode = 0;
+
+    function defaultCamera(w, h) {
+      return orbitCamera(sphere, D.azimuth, D.elevation, D.fov, w, h, upAxis);
+    }
+    function cameraFromFragment() {
+      if (!params.eye && !params.target && !params.up && !params.fov) return null;
+      const cam = defaultCamera(canvas.width || 512, canvas.height || 512);
+      if (params.eye) cam.eye = vec3Param(params.eye, 'eye');
+      if (params.target) cam.target = vec3Param(params.target, 'target');
+      if (params.up) cam.up = vec3Param(params.up, 'up');
+      if (params.eye && !params.target) cam.target = sphere.center.slice();
+      if (params.eye && !params.up) cam.up = [0, 1, 0];
+      if (params.fov) {
+        cam.fov = Number(params.fov);
+        if (!(cam.fov >= 1 && cam.fov <= 170)) throw new Error('URL fragment: fov must be in [1, 170] degrees');
+      }
+      if (V.len(V.sub(cam.eye, cam.target)) === 0) throw new Error('URL fragment: eye and target must differ');
+      return cam;
+    }
+
+    // ---- drawing -----------------------------------------------------------------------------
+    const light = V.norm(D.light);
+    let lastFrameMs = 0, counts = { points: 0, segments: 0 };
+
+    // Front-facing primitives in front of the camera (the GPU culls the others in its vertex stage).
+    function countDrawn(f) {
+      const c = { points: 0, segments: 0 };
+      const eyeN = V.mul(V.sub(state.camera.eye, sphere.center), 1 / sphere.radius);
+      if (model.np && state.showPoints) {
+        const p = model.points.position.data, n = model.points.normal.data;
+        for (let i = 0, j = 0; i < model.np; ++i, j += 3)
+          if ((eyeN[0] - p[j]) * n[j] + (eyeN[1] - p[j + 1]) * n[j + 1] + (eyeN[2] - p[j + 2]) * n[j + 2] > 0) ++c.points;
+      }
+      if (model.ns && state.showSegments) {
+        const p = model.segments.p0.data, n = model.segments.normal.data;
+        for (let i = 0, j = 0; i < model.ns; ++i, j += 3)
+          if ((eyeN[0] - p[j]) * n[j] + (eyeN[1] - p[j + 1]) * n[j + 1] + (eyeN[2] - p[j + 2]) * n[j + 2] > 0) ++c.segments;
+      }
+      return c;
+    }
+
+    function setCommon(p, f, w, h) {
+      const u = p.u;
+      // world -> camera in normalised model units: x_n = (x - centre) / radius
+      const rot = [f.right, f.up, f.back];
+      const eyeN = V.mul(V.sub(state.camera.eye, sphere.center), 1 / sphere.radius);
+      const trans = rot.map((row) => -V.dot(row, eyeN));
+      // mat3 is column-major: column j holds rot[.][j]
+      gl.uniformMatrix3fv(u.uRot, false, [rot[0][0], rot[1][0], rot[2][0], rot[0][1], rot[1][1], rot[2][1],
+                                          rot[0][2], rot[1][2], rot[2][2]]);
+      gl.uniform3fv(u.uTrans, trans);
+      gl.uniform2f(u.uHalf, 0.5 * w, 0.5 * h);
+      gl.uniform1f(u.uFocal, 0.5 * h / Math.tan(0.5 * state.camera.fov * Math.PI / 180));
+      gl.uniform1f(u.uNear, f.near / sphere.radius);
+      gl.uniform1f(u.uFar, f.far / sphere.radius);
+      gl.uniform1f(u.uCutoff, D.cutoff);
+      gl.uniform1f(u.uRecon, D.reconScale);
+      gl.uniform1f(u.uVh, D.prefilter);
+      gl.uniform1f(u.uRadScale, state.radiusScale);
+      gl.uniform1f(u.uZThr, D.zThreshold);
+      gl.uniform1i(u.uColorMode, state.colorMode);
+      const sig = D.reconScale * meanRadius * state.radiusScale;
+      gl.uniform1f(u.uWeightNorm, sig * sig);
+      gl.uniform1i(u.uLighting, state.lighting ? 1 : 0);
+      gl.uniform3fv(u.uLight, light);
+      gl.uniform4f(u.uMaterial, D.ambient, D.diffuse, D.specular, D.shininess);
+    }
+
+    function drawSplats(pass, f, w, h) {
+      if (pointProg && state.showPoints) {
+        gl.useProgram(pointProg.prog);
+        setCommon(pointProg, f, w, h);
+        gl.uniform1i(pointProg.u.uPass, pass);
+        gl.uniform3f(pointProg.u.uKindColor, 0.62, 0.64, 0.68);
+        gl.bindVertexArray(pointVao);
+        gl.drawElements(gl.TRIANGLES, 6 * model.np, gl.UNSIGNED_INT, 0);
+      }
+      if (segProg && state.showSegments) {
+        gl.useProgram(segProg.prog);
+        setCommon(segProg, f, w, h);
+        gl.uniform1i(segProg.u.uPass, pass);
+        gl.uniform3f(segProg.u.uKindColor, 0.93, 0.55, 0.18);
+        gl.uniform1i(segProg.u.uEndpointNormals, model.segments.normal0 ? 1 : 0);
+        gl.bindVertexArray(segVao);
+        gl.drawElements(gl.TRIANGLES, 6 * model.ns, gl.UNSIGNED_INT, 0);
+      }
+    }
+
+    function renderFrame() {
+      const w = canvas.width, h = canvas.height;
+      ensureTargets(w, h);
+      const f = cameraFrame(state.camera, sphere);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
+      gl.viewport(0, 0, w, h);
+      gl.disable(gl.CULL_FACE);
+      gl.enable(gl.DEPTH_TEST);
+      gl.clearColor(0, 0, 0, 0);
+      gl.clearDepth(1);
+      gl.depthMask(true);
+      gl.colorMask(true, true, true, true);
+      gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+      // 1. visibility
+      gl.disable(gl.BLEND);
+      gl.colorMask(false, false, false, false);
+      gl.depthFunc(gl.LESS);
+      drawSplats(0, f, w, h);
+      // 2. accumulation
+      gl.colorMask(true, true, true, true);
+      gl.depthMask(false);
+      gl.depthFunc(gl.LEQUAL);
+      gl.enable(gl.BLEND);
+      gl.blendEquation(gl.FUNC_ADD);
+      gl.blendFunc(gl.ONE, gl.ONE);
+      drawSplats(1, f, w, h);
+      // 3. normalisation
+      gl.disable(gl.BLEND);
+      gl.disable(gl.DEPTH_TEST);
+      gl.depthMask(true);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.viewport(0, 0, w, h);
+      gl.useProgram(resolveProg.prog);
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, accumTex);
+      gl.uniform1i(resolveProg.u.uAccum, 0);
+      gl.uniform3fv(resolveProg.u.uBackground, D.background);
+      gl.bindVertexArray(emptyVao);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      gl.bindVertexArray(null);
+    }
+
+    function describeCamera() {
+      const c = state.camera;
+      const v3 = (a) => a.map(fmt).join(' ');
+      const args = `--size ${canvas.width}x${canvas.height} --eye ${v3(c.eye)} --target ${v3(c.target)} --up ${v3(c.up)} --fov ${fmt(c.fov)}`;
+      $('camera').textContent = 'linesurf render MODEL ' + args;
+      const frag = `eye=${c.eye.map(fmt).join(',')}&target=${c.target.map(fmt).join(',')}&up=${c.up.map(fmt).join(',')}&fov=${fmt(c.fov)}`;
+      const keep = Object.keys(params).filter((k) => !['eye', 'target', 'up', 'fov'].includes(k))
+        .map((k) => encodeURIComponent(k) + '=' + encodeURIComponent(params[k]));
+      try { history.replaceState(null, '', '#' + [frag].concat(keep).join('&')); } catch (e) { /* file:// in some browsers */ }
+    }
+
+    // Waits for the GPU: gl.finish() returns at once in Chrome; reading a pixel back does not.
+    const pixel = new Uint8Array(4);
+    function sync() { gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel); }
+
+    function draw() {
+      const t0 = performance.now();
+      renderFrame();
+      sync();
+      lastFrameMs = performance.now() - t0;
+      counts = countDrawn();
+      const pct = (a, b) => b ? ' (' + (100 * a / b).toFixed(0) + '%)' : '';
+      const parts = [];
+      if (model.np) parts.push(state.showPoints ? `${counts.points.toLocaleString('en')} of ${model.np.toLocaleString('en')} points${pct(counts.points, model.np)}` : 'points hidden');
+      if (model.ns) parts.push(state.showSegments ? `${counts.segments.toLocaleString('en')} of ${model.ns.toLocaleString('en')} segments${pct(counts.segments, model.ns)}` : 'segments hidden');
+      $('counts').textContent = 'front-facing: ' + parts.join(', ');
+      $('frameTime').textContent = `frame ${lastFrameMs.toFixed(1)} ms at ${canvas.width}x${canvas.height}` +
+        (floatBlend ? '' : ' (half-float accumulation)');
+      describeCamera();
+      document.body.setAttribute('data-state', 'drawn');
+    }
+
+    let pending = false;
+    function requestDraw() {
+      if (pending) return;
+      pending = true;
+      requestAnimationFrame(() => { pending = false; try { draw(); } catch (e) { fail(e.message); } });
+    }
+
+    function resize() {
+      const dpr = window.devicePixelRatio || 1;
+      const w = Math.max(1, Math.round(window.innerWidth * dpr)), h = Math.max(1, Math.round(window.innerHeight * dpr));
+      if (canvas.width !== w || canvas.height !== h) {
+        canvas.width = w;
+        canvas.height = h;
+      }
+      // the default view frames the model for the window's aspect, as `linesurf render --size`
+      if (!state.camera || state.autoFramed) { state.camera = defaultCamera(w, h); state.autoFramed = true; }
+    }
+
+    state.camera = cameraFromFragment();
+    state.autoFramed = !state.camera;
+    resize();
+
+    // ---- controls ----------------------------------------------------------------------------
+    function orbit(dx, dy) {
+      const c = state.camera;
+      const up = V.norm(c.up);
+      let off = V.sub(c.eye, c.target);
+      off = rotate(off, up, -dx * 0.008);
+      const f = cameraFrame({ eye: V.add(c.target, off), target: c.target, up: c.up }, sphere);
+      const rotated = rotate(off, f.right, -dy * 0.008);
+      // keep away from the poles of the up axis (turntable)
+      if (Math.abs(V.dot(V.norm(rotated), up)) < 0.995) off = rotated;
+      c.eye = V.add(c.target, off);
+      state.autoFramed = false;
+    }
+    function pan(dx, dy) {
+      const c = state.camera;
+      const f = cameraFrame(c, sphere);
+      const perPixel = 2 * f.dist * Math.tan(0.5 * c.fov * Math.PI / 180) / canvas.height * (window.devicePixelRatio || 1);
+      const move = V.add(V.mul(f.right, -dx * perPixel), V.mul(f.up, dy * perPixel));
+      c.eye = V.add(c.eye, move);
+      c.target = V.add(c.target, move);
+      state.autoFramed = false;
+    }
+    function zoom(factor) {
+      const c = state.camera;
+      const off = V.sub(c.eye, c.target);
+      const d = V.len(off);
+      const nd = Math.min(Math.max(d * factor, 1e-3 * sphere.radius), 1e3 * sphere.radius);
+      c.eye = V.add(c.target, V.mul(off, nd / d));
+      state.autoFramed = false;
+    }
+    const pointers = new Map();
+    let gesture = null;
+    canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+    canvas.addEventListener('pointerdown', (e) => {
+      canvas.setPointerCapture(e.pointerId);
+      pointers.set(e.pointerId, { x: e.clientX, y: e.clientY, button: e.button, shift: e.shiftKey });
+      gesture = null;
+    });
+    const release = (e) => { pointers.delete(e.pointerId); gesture = null; };
+    canvas.addEventListener('pointerup', release);
+    canvas.addEventListener('pointercancel', release);
+    canvas.addEventListener('pointermove', (e) => {
+      const p = pointers.get(e.pointerId);
+      if (!p) return;
+      if (pointers.size === 1) {
+        const dx = e.clientX - p.x, dy = e.clientY - p.y;
+        if (p.button === 2 || p.button === 1 || p.shift || e.shiftKey) pan(dx, dy);
+        else orbit(dx, dy);
+      } else if (pointers.size === 2) {
+        const others = [...pointers.entries()].filter(([id]) => id !== e.pointerId);
+        const q = others[0][1];
+        const before = Math.hypot(p.x - q.x, p.y - q.y), after = Math.hypot(e.clientX - q.x, e.clientY - q.y);
+        if (before > 0 && after > 0) zoom(before / after);
+        pan((e.clientX - p.x) / 2, (e.clientY - p.y) / 2);
+      }
+      p.x = e.clientX;
+      p.y = e.clientY;
+      requestDraw();
+    });
+    canvas.addEventListener('wheel', (e) => {
+      e.preventDefault();
+      const dy = e.deltaMode === 1 ? e.deltaY * 33 : e.deltaMode === 2 ? e.deltaY * 400 : e.deltaY;
+      zoom(Math.exp(dy * 0.0015));
+      requestDraw();
+    }, { passive: false });
+    $('reset').addEventListener('click', () => {
+      state.camera = defaultCamera(canvas.width, canvas.height);
+      state.autoFramed = true;
+      requestDraw();
+    });
+    const bind = (id, key, conv) => {
+      const el = $(id);
+      const prop = el.type === 'checkbox' ? 'checked' : 'value';
+      el[prop] = el.type === 'checkbox' ? state[key] : String(key === 'radiusScale' ? Math.log2(state[key]) : state[key]);
+      el.addEventListener('input', () => { state[key] = conv(el[prop]); syncLabels(); requestDraw(); });
+    };
+    function syncLabels() { $('radiusScaleValue').textContent = state.radiusScale.toFixed(2); }
+    bind('showPoints', 'showPoints', Boolean);
+    bind('showSegments', 'showSegments', Boolean);
+    bind('lighting', 'lighting', Boolean);
+    bind('colorMode', 'colorMode', Number);
+    bind('radiusScale', 'radiusScale', (v) => Math.pow(2, Number(v)));
+    syncLabels();
+    if (!model.np) $('showPoints').disabled = true;
+    if (!model.ns) $('showSegments').disabled = true;
+    window.addEventListener('resize', () => { resize(); requestDraw(); });
+    window.addEventListener('hashchange', () => {
+      const p = parseFragment(location.hash);
+      if (p.eye || p.target || p.up || p.fov) {
+        Object.assign(params, p);
+        try { state.camera = cameraFromFragment(); state.autoFramed = false; requestDraw(); } catch (e) { fail(e.message); }
+      }
+    });
+
+    // Benchmark: #bench=N renders N frames (each finished) and reports the median frame time.
+    if (params.bench) {
+      const n = Math.max(1, Math.min(1000, parseInt(params.bench, 10) || 10));
+      if (params.size) {
+        const m = /^(\d+)x(\d+)$/.exec(params.size);
+        if (m) { canvas.width = +m[1]; canvas.height = +m[2]; if (state.autoFramed) state.camera = defaultCamera(+m[1], +m[2]); }
+      }
+      draw();
+      const times = [];
+      for (let i = 0; i < n; ++i) {
+        const t0 = performance.now();
+        renderFrame();
+        sync();
+        times.push(performance.now() - t0);
+      }
+      times.sort((a, b) => a - b);
+      const med = times[Math.floor(times.length / 2)];
+      const out = document.createElement('pre');
+      out.id = 'bench';
+      out.textContent = `bench frames=${n} size=${canvas.width}x${canvas.height} median_ms=${med.toFixed(2)} ` +
+        `min_ms=${times[0].toFixed(2)} max_ms=${times[times.length - 1].toFixed(2)} points=${model.np} segments=${model.ns} ` +
+        `renderer=${gl.getParameter(gl.RENDERER)}`;
+      document.body.appendChild(out);
+      return;
+    }
+    draw();
+  }
+
+  try {
+    main();
+  } catch (e) {
+    fail(e && e.message ? e.message : String(e));
+  }
+})();
