@@ -15,7 +15,7 @@ struct ContourArgs {
   std::string mesh, output;
   float spacing = 0, spacingScale = 1.0f, radiusScale = 0.75f, pointsBelow = 0, familySwitchSine = 1.0f;
   uint64_t seed = 1;
-  bool allPoints = false, vertexNormals = false, ascii = false;
+  bool allPoints = false, vertexNormals = false, ascii = false, flat = false;
 };
 
 void run(const ContourArgs& a) {
@@ -35,6 +35,7 @@ void run(const ContourArgs& a) {
   o.pointsBelow = a.pointsBelow;
   o.allPoints = a.allPoints;
   o.vertexNormals = a.vertexNormals;
+  o.endpointNormals = !a.flat;
   o.familySwitchSine = a.familySwitchSine;
   o.progress = progressBar();
   ContourStats s;
@@ -84,6 +85,8 @@ RegisterCommand reg(33, [](CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_flag("--vertex-normals", a->vertexNormals, "Interpolate the mesh's vertex normals instead of the face normal");
+  sub->add_flag("--flat", a->flat,
+                "One normal per segment (the thesis) instead of interpolated vertex normals at both endpoints");
   sub->add_option("--family-switch-sine", a->familySwitchSine,
                   "Use P= unless its sin(theta) is below this and P|| cuts steeper (1: steeper family always; 0: P= only)")
       ->check(CLI::Range(0.0f, 1.0f))

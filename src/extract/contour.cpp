@@ -11,6 +11,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
+#include "linesurf/geometry/mesh_normals.h"
 
 namespace linesurf {
 namespace {
@@ -292,16 +293,11 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
     throwBadParameter("spacing", fmt::format("d = {:.6g} is too small for coordinates up to {:.6g} (plane indices beyond 2^50)",
                                              d, maxValue * d));
 
-  std::vector<Vec3f> unitVertexNormals;
+  // Unit vertex normals: the mesh's own, or area-weighted ones for smooth line models.
   const bool useVertexNormals = options.vertexNormals && mesh.normals.size() == nv && nv > 0;
-  if (useVertexNormals) {
-    unitVertexNormals.resize(nv);
-    parallelFor(0, nv, [&](size_t v) {
-      const Vec3f& n = mesh.normals[v];
-      float len = n.norm();
-      unitVertexNormals[v] = (std::isfinite(len) && len > 0) ? Vec3f(n / len) : Vec3f::Zero();
-    }, 4096);
-  }
+  const bool smooth = options.endpointNormals && nv > 0;
+  std::vector<Vec3f> unitVertexNormals;
+  if (useVertexNormals || smooth) unitVertexNormals = meshVertexNormals(mesh);
 
   const bool convert = options.allPoints || options.pointsBelow > 0;
   Cutter cutter(mesh, options, d, values);
@@ -430,6 +426,16 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
           vn -= vn.dot(dir) * dir;  // a segment's normal is perpendicular to it
           if (vn.norm() > 1e-6) s.normal = vn.normalized().cast<float>();
         }
+        if (smooth) {  // interpolated vertex normals at the endpoints, perpendicular to the segment
+          const Vec3d dir = (p1 - p0).cast<double>().normalized();
+          auto endNormal = [&](const double w[3]) {
+            Vec3d vn = interp.vertexNormal(f, w);
+            vn -= vn.dot(dir) * dir;
+            return vn.norm() > 1e-6 ? Vec3f(vn.normalized().cast<float>()) : s.normal;
+          };
+          s.normal0 = endNormal(w0);
+          s.normal1 = endNormal(w1);
+        }
         s.color = interp.color(f, wm);
         s.radius = radius;
         if (texcoords) {
@@ -446,6 +452,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   model.attributes.radii = true;
   model.attributes.colors = interp.textured || interp.vertexColors;
   model.attributes.texcoords = texcoords && !model.segments.empty();
+  model.attributes.endpointNormals = smooth && !model.segments.empty();
   if (texcoords) model.texture = mesh.texture;
   model.comments.push_back(fmt::format("linesurf extract contour (thesis §3.3): spacing d = {:.9g}, radius = {:.9g}, "
                                        "planes n0 = ({:.6f}, {:.6f}, {:.6f}), n1 = ({:.6f}, {:.6f}, {:.6f})",

@@ -13,6 +13,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
+#include "detail/endpoint_normals.h"
 
 namespace linesurf {
 namespace {
@@ -365,6 +366,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
   out.attributes.normals = true;
   out.attributes.radii = true;
   out.attributes.colors = cloud.attributes.colors;
+  out.attributes.endpointNormals = options.endpointNormals;
   out.comments = cloud.comments;
   auto radiusOf = [&](size_t j) -> double {
     if (cloud.attributes.radii && cloud.points[j].radius > 0) return cloud.points[j].radius;
@@ -388,13 +390,14 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     Line line;
     seedLine(ctx.pos[i], nid, ctx.pos[dir.k], line);
     double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin, radius = 0;
+    uint32_t jmin = i, jmax = i;  // the points at the two ends (their normals: smooth line models)
     Eigen::Vector4d colour = Eigen::Vector4d::Zero();
     for (uint32_t j : members) {
       avail[j] = 0;
       Vec3d w = ctx.pos[j] - line.origin;
       double t = w.dot(line.dir);
-      tmin = std::min(tmin, t);
-      tmax = std::max(tmax, t);
+      if (t < tmin) tmin = t, jmin = j;
+      if (t > tmax) tmax = t, jmax = j;
       radius = std::max(radius, radiusOf(j) + (w - t * line.dir).norm());
       colour += cloud.points[j].color.cast<double>();
     }
@@ -415,6 +418,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     fdir = fdir.norm() > 0 ? Vec3d(fdir.normalized()) : line.dir;
     Vec3d nn = nid - nid.dot(fdir) * fdir;
     s.normal = nn.normalized().cast<float>();
+    if (options.endpointNormals) detail::setEndpointNormals(s, geometry.normals[jmin], geometry.normals[jmax]);
     s.color = cloud.attributes.colors ? Color((colour / double(members.size())).cast<float>()) : Color(1, 1, 1, 1);
     s.radius = float(radius);
     out.segments.push_back(s);

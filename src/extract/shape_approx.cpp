@@ -10,6 +10,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
+#include "detail/endpoint_normals.h"
 #include "linesurf/geometry/point_geometry.h"
 
 namespace linesurf {
@@ -259,6 +260,7 @@ ClusterOutput extractCluster(size_t c, const Context& ctx) {
       s.p0 = ps.cast<float>();
       s.p1 = pe.cast<float>();
       s.normal = nseg.normalized().cast<float>();
+      if (opt.endpointNormals) detail::setEndpointNormals(s, g.normals[members[ls]], g.normals[members[le]]);
       s.color = colors ? Color((col / double(count)).cast<float>()) : Color(1, 1, 1, 1);
       s.radius = float(opt.radiusScale * std::clamp(sliceWidth, dAvgX, 2.0 * dAvgX));
       out.segments.push_back(s);
@@ -328,6 +330,7 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
   out.attributes.normals = true;
   out.attributes.colors = cloud.attributes.colors;
   out.attributes.radii = true;
+  out.attributes.endpointNormals = options.endpointNormals;
   out.comments = cloud.comments;
   out.comments.push_back(std::string("linesurf: shape-approximation extraction (§3.2), ") +
                          (options.method == ClusteringMethod::Hierarchical ? "hierarchical" : "greedy") +

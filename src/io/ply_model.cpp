@@ -24,7 +24,8 @@ namespace {
 
 const std::set<std::string_view> kPointNames = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "radius"};
 const std::set<std::string_view> kSegmentNames = {"x0", "y0", "z0", "x1", "y1", "z1", "nx", "ny", "nz", "red",
-                                                  "green", "blue", "alpha", "radius", "u0", "v0", "u1", "v1"};
+                                                  "green", "blue", "alpha", "radius", "u0", "v0", "u1", "v1",
+                                                  "nx0", "ny0", "nz0", "nx1", "ny1", "nz1"};
 constexpr std::string_view kTextureKey = "TextureFile";
 
 std::string lineAt(int line) { return "line " + std::to_string(line); }
@@ -154,7 +155,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     vAlpha = group(e, {"alpha"}, path);
     vRadius = group(e, {"radius"}, path);
   }
-  bool sNormals = false, sColors = false, sAlpha = false, sRadius = false, sUV = false;
+  bool sNormals = false, sColors = false, sAlpha = false, sRadius = false, sUV = false, sEndNormals = false;
   if (si >= 0) {
     const Element& e = h.elements[size_t(si)];
     requireGroup(e, {"x0", "y0", "z0", "x1", "y1", "z1"}, path);
@@ -163,6 +164,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     sAlpha = group(e, {"alpha"}, path);
     sRadius = group(e, {"radius"}, path);
     sUV = group(e, {"u0", "v0", "u1", "v1"}, path);
+    sEndNormals = group(e, {"nx0", "ny0", "nz0", "nx1", "ny1", "nz1"}, path);
     int pi = e.find("provenance");
     if (pi >= 0) {
       const Property& p = e.properties[size_t(pi)];
@@ -261,6 +263,13 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
         m.segments[i].uv1 = Vec2f(float(u1[i]), float(v1[i]));
       }
     }
+    if (sEndNormals) {  // smooth line models (issue 14)
+      const double *a0 = col("nx0"), *b0 = col("ny0"), *c0 = col("nz0"), *a1 = col("nx1"), *b1 = col("ny1"), *c1 = col("nz1");
+      for (size_t i = 0; i < n; ++i) {
+        m.segments[i].normal0 = Vec3f(float(a0[i]), float(b0[i]), float(c0[i]));
+        m.segments[i].normal1 = Vec3f(float(a1[i]), float(b1[i]), float(c1[i]));
+      }
+    }
     if (const ListColumn* pc = d->list("provenance")) {
       m.provenance.resize(n);
       for (size_t i = 0; i < n; ++i) {
@@ -278,6 +287,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
   m.attributes.colors = (vColors || vAlpha || sColors || sAlpha);
   m.attributes.radii = (vRadius || sRadius);
   m.attributes.texcoords = sUV;
+  m.attributes.endpointNormals = sEndNormals;
   m.comments = keptComments(h);
   m.texture = loadTexture(h, path, textureDir);
   return m;
@@ -493,6 +503,8 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
     if (a.colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
     if (a.radii) h += "property float radius\n";
     if (a.texcoords) h += "property float u0\nproperty float v0\nproperty float u1\nproperty float v1\n";
+    if (a.endpointNormals)
+      h += "property float nx0\nproperty float ny0\nproperty float nz0\nproperty float nx1\nproperty float ny1\nproperty float nz1\n";
     if (!m.provenance.empty()) h += "property list uint uint provenance\n";
   }
   h += "end_header\n";
@@ -520,6 +532,8 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
       for (int c = 0; c < 4; ++c) b.u8(toByte(s.color[c]));
     if (a.radii) b.f(s.radius);
     if (a.texcoords) b.f(s.uv0.x()), b.f(s.uv0.y()), b.f(s.uv1.x()), b.f(s.uv1.y());
+    if (a.endpointNormals)
+      for (const Vec3f* v : {&s.normal0, &s.normal1}) b.f(v->x()), b.f(v->y()), b.f(v->z());
     if (!m.provenance.empty()) {
       b.u32(uint32_t(m.provenance[i].size()));
       for (uint32_t v : m.provenance[i]) b.u32(v);

@@ -50,6 +50,12 @@ struct ContourOptions {
   /// Segment normal from the vertex normals interpolated at the midpoint (made perpendicular to
   /// the segment) instead of the triangle's normal (thesis). Ignored when the mesh has none.
   bool vertexNormals = false;
+  /// Smooth line models (beyond the thesis): every segment also carries the vertex normals
+  /// interpolated at its endpoints (Segment::normal0/normal1, made perpendicular to it);
+  /// area-weighted vertex normals are computed when the mesh has none. The segment's own
+  /// `normal` (its strip's plane, culling) stays the triangle's, or as vertexNormals says; points
+  /// keep the triangle's normal (interpolated ones cull splats at silhouettes: holes).
+  bool endpointNormals = true;
   /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.
   float pointsBelow = 0;
   /// Every segment becomes ⌈l/d⌉+1 points at regular intervals: pure point model (Table 5).

@@ -48,6 +48,9 @@ struct EpsDeltaOptions {
   /// Record, per segment, the input indices it replaced (HybridModel::provenance); the anchor
   /// comes first, the rest in increasing position along the segment.
   bool provenance = false;
+  /// Smooth line models (beyond the thesis): each segment also carries the normals of the
+  /// points at its two ends (Segment::normal0/normal1, made perpendicular to it).
+  bool endpointNormals = true;
   EpsDeltaUpdate update = EpsDeltaUpdate::Lazy;
   ProgressFn progress;
 };

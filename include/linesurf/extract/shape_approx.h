@@ -42,6 +42,9 @@ struct ShapeApproxOptions {
   /// (d_avg,x); > 0. See docs/decisions.md for the hole-free rule.
   float radiusScale = 1.0f;
   bool provenance = false;  ///< fill HybridModel::provenance with the points each segment replaced
+  /// Smooth line models (beyond the thesis): each segment also carries the normals of the
+  /// points at its two ends (Segment::normal0/normal1, made perpendicular to it).
+  bool endpointNormals = true;
   ProgressFn progress;      ///< optional progress callback
 };
 
