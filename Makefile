@@ -34,7 +34,7 @@ test-sanitize: setup
 	  ctest --output-on-failure -j $(JOBS) -E '^Shared'
 
 fuzz: setup
-	bash scripts/fuzz.sh 60
+	bash scripts/fuzz.sh 30
 
 test: test-fast test-sanitize fuzz
 

@@ -2,6 +2,8 @@
 // point) model from a triangle mesh, thesis §3.3.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "command.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
@@ -26,6 +28,30 @@ void run(const ContourArgs& a) {
   say(fmt::format("{}: {} vertices, {} faces{}{} ({:.2f} s)", a.mesh, mesh.positions.size(), mesh.faces.size(),
                   mesh.cornerUVs.empty() ? "" : ", per-corner uvs", mesh.texture ? ", texture" : "", readSeconds));
   if (mesh.faces.empty()) throwBadInput(a.mesh, "", "the file holds no faces: contour extraction needs a triangle mesh");
+
+  // Size guard before any cutting: a face of longest edge L meets about L/d + 1 planes; with
+  // --all-points a segment of length l gives l/d + 1 points (about area/d^2 over the mesh).
+  {
+    double edgeSum = 0, longest = 0, area = 0;
+    size_t edges = 0;
+    for (const auto& f : mesh.faces) {
+      const Vec3d p0 = mesh.positions[f[0]].cast<double>(), p1 = mesh.positions[f[1]].cast<double>(),
+                  p2 = mesh.positions[f[2]].cast<double>();
+      const double l[3] = {(p1 - p0).norm(), (p2 - p1).norm(), (p0 - p2).norm()};
+      edgeSum += l[0] + l[1] + l[2];
+      edges += 3;
+      longest += std::max({l[0], l[1], l[2]});
+      area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
+    }
+    const double d = a.spacing > 0 ? double(a.spacing) : double(a.spacingScale) * edgeSum / double(std::max<size_t>(edges, 1));
+    if (d > 0) {
+      const double segments = longest / d + double(mesh.faces.size());
+      const double points = a.allPoints || a.pointsBelow > 0 ? area / (d * d) + segments : 0;
+      checkSize(a.spacing > 0 ? "--spacing" : "--spacing-scale", 120.0 * segments + 60.0 * points,
+                fmt::format("contour output at d = {:.3g} (about {:.3g} segments{})", d, segments,
+                            points > 0 ? fmt::format(", {:.3g} points", points) : std::string()));
+    }
+  }
 
   ContourOptions o;
   o.spacing = a.spacing;

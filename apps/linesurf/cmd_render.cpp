@@ -14,6 +14,7 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/image_io.h"
+#include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/io/model_validate.h"
 #include "linesurf/render/camera.h"
@@ -132,6 +133,12 @@ void run(const RenderArgs& a) {
     model = readModel(a.model);
   }
   if (!triMesh && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
+  // Scale-free (model_frame.h): a model far from unit size is rendered in a normalised frame;
+  // camera positions and distances given in object units are mapped into it.
+  const ModelFrame frame = normalizingFrame(triMesh ? triMesh->bounds() : model.bounds());
+  toFrame(model, frame);
+  if (triMesh) toFrame(*triMesh, frame);
+  const float distance = float(a.distance / frame.scale);
 
   if (size_t n = estimateSegmentRadii(model))
     say(fmt::format("{} segments without a radius: estimated from the spacing of their neighbours", n));
@@ -196,8 +203,8 @@ void run(const RenderArgs& a) {
   }
   std::vector<Camera> cams;
   if (!a.eye.empty() || !a.target.empty()) {
-    Vec3f eye = a.eye.empty() ? Vec3f(sphere.center + Vec3f(0, 0, 3 * sphere.radius)) : vec3(a.eye, "--eye");
-    Vec3f target = a.target.empty() ? sphere.center : vec3(a.target, "--target");
+    Vec3f eye = a.eye.empty() ? Vec3f(sphere.center + Vec3f(0, 0, 3 * sphere.radius)) : frame.toNormalized(vec3(a.eye, "--eye"));
+    Vec3f target = a.target.empty() ? sphere.center : frame.toNormalized(vec3(a.target, "--target"));
     Vec3f up = a.up.empty() ? Vec3f(0, 1, 0) : vec3(a.up, "--up");
     float dist = (eye - target).norm();
     float nearD = std::max(1e-4f * dist, dist - 1.5f * sphere.radius);
@@ -205,13 +212,13 @@ void run(const RenderArgs& a) {
     cams.push_back(Camera::lookAt(eye, target, up, a.fov, w, h, nearD, farD));
   } else if (a.views > 0) {
     for (const Vec2f& ang : Camera::spreadViewAngles(a.views)) {
-      Camera c = Camera::orbit(sphere, ang.x(), ang.y(), a.distance, w, h, a.fov, upAxis);
+      Camera c = Camera::orbit(sphere, ang.x(), ang.y(), distance, w, h, a.fov, upAxis);
       if (a.zoom != 1)
         c = Camera::orbit(sphere, ang.x(), ang.y(), (c.eye() - c.target()).norm() / a.zoom, w, h, a.fov, upAxis);
       cams.push_back(c);
     }
   } else {
-    Camera c = Camera::orbit(sphere, a.azimuth, a.elevation, a.distance, w, h, a.fov, upAxis);
+    Camera c = Camera::orbit(sphere, a.azimuth, a.elevation, distance, w, h, a.fov, upAxis);
     if (a.zoom != 1)
       c = Camera::orbit(sphere, a.azimuth, a.elevation, (c.eye() - c.target()).norm() / a.zoom, w, h, a.fov, upAxis);
     cams.push_back(c);

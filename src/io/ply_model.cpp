@@ -211,7 +211,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     if (vRadius) {
       const double* r = col("radius");
       for (size_t i = 0; i < n; ++i) {
-        if (!(r[i] > 0)) throwBadInput(path, d->where(i), fmt::format("vertex {}: radius {:g} is not positive", i, r[i]));
+        if (r[i] < 0) throwBadInput(path, d->where(i), fmt::format("vertex {}: radius {:g} is negative (0 = unknown)", i, r[i]));
         m.points[i].radius = float(r[i]);
       }
     }
@@ -252,7 +252,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     if (sRadius) {
       const double* r = col("radius");
       for (size_t i = 0; i < n; ++i) {
-        if (!(r[i] > 0)) throwBadInput(path, d->where(i), fmt::format("segment {}: radius {:g} is not positive", i, r[i]));
+        if (r[i] < 0) throwBadInput(path, d->where(i), fmt::format("segment {}: radius {:g} is negative (0 = unknown)", i, r[i]));
         m.segments[i].radius = float(r[i]);
       }
     }
