@@ -8,7 +8,9 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <system_error>
+#include <tuple>
 
 #include <time.h>
 
@@ -19,6 +21,7 @@
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/render/camera.h"
+#include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
 
 namespace linesurf {
@@ -70,6 +73,8 @@ void ExperimentOptions::validate() const {
     throwBadParameter("mesh-views", "must be in [1, 100000], got " + std::to_string(meshViews));
   if (size < 16 || size > 8192) throwBadParameter("size", "must be in [16, 8192] pixels, got " + std::to_string(size));
   if (imageViews < 0) throwBadParameter("image-views", "must be >= 0");
+  if (groundTruthSupersampling < 1 || groundTruthSupersampling > 16)
+    throwBadParameter("ground-truth supersampling", "must be in [1, 16]");
   linesurf::validate(render);
 }
 
@@ -165,6 +170,50 @@ void summarise(MethodResult& m) {
   m.candidateRasterMedian = med(&ExperimentView::candidateRasterSeconds);
 }
 
+TruthSummary summariseTruth(const std::vector<ExperimentView>& views, bool candidate) {
+  TruthSummary t;
+  std::vector<double> mse, ssim, mad;
+  uint64_t bad = 0, covered = 0;
+  t.minSsim = std::numeric_limits<double>::infinity();
+  for (const ExperimentView& v : views) {
+    const ImageMetrics& m = candidate ? v.candidateVsTruth : v.referenceVsTruth;
+    const uint64_t b = candidate ? v.candidateBadPixels : v.referenceBadPixels;
+    const uint64_t c = candidate ? v.coveredPixels : v.referenceCoveredPixels;
+    mse.push_back(m.mse);
+    ssim.push_back(m.ssim);
+    mad.push_back(m.meanAbsDiff);
+    t.minSsim = std::min(t.minSsim, m.ssim);
+    bad += b;
+    covered += c;
+    if (c) t.maxBadFraction = std::max(t.maxBadFraction, double(b) / double(c));
+  }
+  if (views.empty()) t.minSsim = 0;
+  const double meanMse = meanStd(mse).mean;
+  t.psnr = meanMse > 0 ? 10 * std::log10(1.0 / meanMse) : std::numeric_limits<double>::infinity();
+  t.ssim = meanStd(ssim).mean;
+  t.meanAbsDiff = meanStd(mad).mean;
+  t.badFraction = covered ? double(bad) / double(covered) : 0.0;
+  return t;
+}
+
+/// Pixels covered (alpha > 0) in either image, and among them those whose 8-bit colours differ
+/// by more than 64 grey levels in any channel.
+std::pair<uint64_t, uint64_t> badPixels(const Image& truth, const Image& truthAlpha, const Image& img,
+                                        const Image& imgAlpha) {
+  uint64_t covered = 0, bad = 0;
+  auto q = [](float v) { return int(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
+  for (size_t i = 0; i < truth.pixels.size(); ++i) {
+    if (!(truthAlpha.pixels[i].w() > 0) && !(imgAlpha.pixels[i].w() > 0)) continue;
+    ++covered;
+    for (int c = 0; c < 3; ++c)
+      if (std::abs(q(truth.pixels[i][c]) - q(img.pixels[i][c])) > 64) {
+        ++bad;
+        break;
+      }
+  }
+  return {covered, bad};
+}
+
 double dataReduction(size_t referencePoints, size_t points, size_t segments) {
   return referencePoints ? 1.0 - (6.0 * double(points) + 9.0 * double(segments)) / (6.0 * double(referencePoints)) : 0.0;
 }
@@ -210,12 +259,21 @@ std::string viewName(int v) { return fmt::format("view_{:03d}", v); }
 /// timings see the same machine state; writes the first imageViews images when outDir is set.
 void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const HybridModel& reference,
                       std::vector<Candidate>& candidates, int views, const ModelProgress& progress, double lo,
-                      double hi) {
+                      double hi, const TriangleMesh* truthMesh = nullptr) {
   const int size = o.size;
   const BoundingSphere sphere = boundingSphere(reference);
   const std::vector<Camera> cams = Camera::spreadViews(sphere, views, size, size);
-  Renderer ref(reference, o.render);
-  for (Candidate& c : candidates) c.renderer = std::make_unique<Renderer>(*c.model, o.render);
+  // With a ground truth, every image also gets its coverage (alpha; the colours are unchanged).
+  RenderOptions ro = o.render;
+  if (truthMesh) ro.alphaBuffer = true;
+  Renderer ref(reference, ro);
+  for (Candidate& c : candidates) c.renderer = std::make_unique<Renderer>(*c.model, ro);
+  std::unique_ptr<MeshRenderer> truth;
+  if (truthMesh) {
+    MeshRenderOptions mo;
+    mo.supersampling = o.groundTruthSupersampling;
+    truth = std::make_unique<MeshRenderer>(*truthMesh, ro, mo);
+  }
   const bool images = !o.outDir.empty();
   const fs::path modelDir = o.outDir / model.name;
   if (images && o.imageViews > 0) {
@@ -234,6 +292,15 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
       writePng(o.outDir / rel, rr.color, false);
       model.referenceImages.push_back(rel);
     }
+    std::optional<MeshRenderResult> meshImg;
+    if (truth) {
+      meshImg = truth->render(cams[size_t(v)]);
+      if (keep) {
+        const std::string rel = model.name + "/" + viewName(v) + "_mesh.png";
+        writePng(o.outDir / rel, meshImg->color, false);
+        model.truthImages.push_back(rel);
+      }
+    }
     for (Candidate& c : candidates) {
       Timer tc;
       cpu0 = processCpuSeconds();
@@ -250,6 +317,13 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
       ev.referenceRasterSeconds = rr.stats.rasterSeconds;
       ev.candidateRasterSeconds = rc.stats.rasterSeconds;
       ev.metrics = compareImages(rr.color, rc.color);
+      if (meshImg) {
+        ev.hasTruth = true;
+        ev.candidateVsTruth = compareImages(meshImg->color, rc.color);
+        ev.referenceVsTruth = compareImages(meshImg->color, rr.color);
+        std::tie(ev.coveredPixels, ev.candidateBadPixels) = badPixels(meshImg->color, *meshImg->alpha, rc.color, *rc.alpha);
+        std::tie(ev.referenceCoveredPixels, ev.referenceBadPixels) = badPixels(meshImg->color, *meshImg->alpha, rr.color, *rr.alpha);
+      }
       c.result->views.push_back(ev);
       if (keep) {
         const std::string base = model.name + "/" + experimentMethodName(c.result->method) + "/" + viewName(v);
@@ -263,6 +337,11 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
   for (Candidate& c : candidates) {
     c.renderer.reset();
     summarise(*c.result);
+    if (truth) {
+      c.result->hasTruth = true;
+      c.result->candidateTruth = summariseTruth(c.result->views, true);
+      c.result->referenceTruth = summariseTruth(c.result->views, false);
+    }
   }
   // Which primitives are segments: the candidate from the first view, points grey, segments orange.
   if (images && o.imageViews > 0 && !cams.empty())
@@ -394,7 +473,7 @@ void runMesh(const ExperimentOptions& o, const fs::path& file, ModelResult& mode
                                 lineStats.degenerateTriangles));
   std::vector<Candidate> candidates;
   candidates.push_back({&r, std::move(lines), nullptr});
-  renderAndCompare(o, model, points, candidates, o.meshViews, progress, 0.3, 0.98);
+  renderAndCompare(o, model, points, candidates, o.meshViews, progress, 0.3, 0.98, o.groundTruth ? &mesh : nullptr);
 }
 
 }  // namespace

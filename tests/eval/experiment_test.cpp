@@ -110,6 +110,20 @@ TEST(Experiment, SmokeRunOnBundledModels) {
       ASSERT_EQ(mr.images.size(), 1u);
       EXPECT_TRUE(fs::exists(o.outDir / mr.images[0]));
       EXPECT_TRUE(fs::exists(o.outDir / mr.diffImages[0]));
+      // meshes: both models against the mesh rendered itself (ground truth); the line and the
+      // point model of Al look like the mesh (SSIM 0.71 / 0.70 at 128x128 over 2 views, 0.86 /
+      // 0.84 at 512x512 over 20) but far from a pixel match; a broken camera or framing < 0.5
+      EXPECT_EQ(mr.hasTruth, m.isMesh);
+      if (m.isMesh) {
+        ASSERT_EQ(m.truthImages.size(), 1u);
+        EXPECT_TRUE(fs::exists(o.outDir / m.truthImages[0]));
+        EXPECT_TRUE(mr.views[0].hasTruth);
+        EXPECT_GT(mr.views[0].coveredPixels, 128u * 128u / 10);
+        EXPECT_GT(mr.candidateTruth.ssim, 0.65);
+        EXPECT_GT(mr.referenceTruth.ssim, 0.65);
+        EXPECT_LT(mr.candidateTruth.badFraction, 0.3);
+        EXPECT_LT(mr.referenceTruth.badFraction, 0.3);
+      }
     }
   }
 
@@ -127,6 +141,10 @@ TEST(Experiment, SmokeRunOnBundledModels) {
   const std::string html = slurp(o.outDir / "index.html");
   EXPECT_NE(html.find("santa_points/shape-greedy/clusters.png"), std::string::npos);
   EXPECT_NE(html.find("rockerarm_points/view_000_points.png"), std::string::npos);
+  EXPECT_NE(html.find("al_mesh/view_000_mesh.png"), std::string::npos);
+  EXPECT_NE(md.find("Against the mesh"), std::string::npos);
+  EXPECT_TRUE(j["models"][0]["methods"][0].contains("candidate_vs_mesh"));
+  EXPECT_TRUE(j["models"][0]["methods"][0]["views"][0].contains("reference_vs_mesh"));
 }
 
 TEST(Experiment, BadFileIsRecordedAndTheRunContinues) {

@@ -62,6 +62,10 @@ struct ExperimentOptions {
   ShapeApproxOptions shapeApprox; ///< §7.2 defaults: delta_n = 0.008; method is set per run
   ContourOptions contour;         ///< §3.3 defaults (d = mean edge length, seed 1)
   RenderOptions render;           ///< renderer defaults; the same for every image
+  /// Meshes: also render the mesh itself (render/mesh_render.h, the ground truth) from the same
+  /// views and compare the line model and the point model with it (issue 14).
+  bool groundTruth = true;
+  int groundTruthSupersampling = 4;  ///< samples per pixel side of the mesh image, [1, 16]
 
   std::vector<ExperimentMethod> effectiveMethods() const;
   /// Throws linesurf::Error (BadParameter) naming the first absurd field.
@@ -80,6 +84,23 @@ struct ExperimentView {
   uint64_t referenceFragments = 0, candidateFragments = 0;
   double referencePrepareSeconds = 0, candidatePrepareSeconds = 0;
   double referenceRasterSeconds = 0, candidateRasterSeconds = 0;
+  /// Meshes with ExperimentOptions::groundTruth: the mesh image (truth) against the candidate
+  /// (line model) and the reference (point model), and how many pixels differ from it by more
+  /// than 64 grey levels (any channel) among the covered ones (covered in either image).
+  bool hasTruth = false;
+  ImageMetrics candidateVsTruth, referenceVsTruth;
+  uint64_t coveredPixels = 0, candidateBadPixels = 0;          ///< candidate vs truth
+  uint64_t referenceCoveredPixels = 0, referenceBadPixels = 0; ///< reference vs truth
+};
+
+/// Agreement of a model's images with the mesh images over the views (ground truth, issue 14).
+struct TruthSummary {
+  double psnr = 0;        ///< 10 log10(1 / mean mse) over the views
+  double ssim = 0;        ///< mean over the views
+  double minSsim = 0;     ///< worst view
+  double meanAbsDiff = 0; ///< mean over the views, grey levels
+  /// Pixels differing by > 64 grey levels / covered pixels, pooled over the views; and the worst view.
+  double badFraction = 0, maxBadFraction = 0;
 };
 
 /// Mean and standard deviation of a per-view quantity.
@@ -120,6 +141,9 @@ struct MethodResult {
   double referenceRasterMedian = 0, candidateRasterMedian = 0;
 
   std::vector<ExperimentView> views;
+  bool hasTruth = false;                ///< meshes: the two summaries below are filled
+  TruthSummary candidateTruth;          ///< line model vs the mesh image
+  TruthSummary referenceTruth;          ///< point model vs the mesh image
   std::vector<std::string> images;      ///< candidate images, relative to outDir
   std::vector<std::string> diffImages;  ///< difference heat-maps, relative to outDir
   std::string clustersImage;            ///< shape approximation: clusters picture (§3.2.3, Fig. 22)
@@ -141,6 +165,7 @@ struct ModelResult {
   double loadSeconds = 0, geometrySeconds = 0;
   double averageSpacing = 0;       ///< clouds: §6.1 stage 5
   std::vector<std::string> referenceImages;  ///< point-model images, relative to outDir
+  std::vector<std::string> truthImages;      ///< meshes: mesh images (ground truth), relative to outDir
   std::vector<MethodResult> methods;
 };
 
