@@ -23,6 +23,7 @@
 #include "linesurf/render/camera.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
+#include "linesurf/view/viewer_page.h"
 
 namespace linesurf {
 namespace fs = std::filesystem;
@@ -355,6 +356,19 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
       writePng(o.outDir / rel, renderImage(painted, cams.front(), o.render).color, false);
       c.result->structureImage = rel;
     }
+  // Interactive viewer pages (linesurf view) beside the images, linked from the report's rows.
+  if (images && o.imageViews > 0) {
+    ViewerPageOptions vo;
+    vo.render = o.render;
+    vo.name = model.name + " (points)";
+    model.referenceViewer = model.name + "/points.html";
+    writeViewerPage(o.outDir / model.referenceViewer, reference, vo);
+    for (Candidate& c : candidates) {
+      vo.name = model.name + " (" + experimentMethodName(c.result->method) + ")";
+      c.result->viewerPage = model.name + "/" + experimentMethodName(c.result->method) + "/viewer.html";
+      writeViewerPage(o.outDir / c.result->viewerPage, *c.model, vo);
+    }
+  }
 }
 
 bool isPointMethod(ExperimentMethod m) { return m != ExperimentMethod::Contour; }

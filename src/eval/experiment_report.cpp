@@ -423,15 +423,21 @@ void writeExperimentHtml(const ExperimentResults& results, const std::filesystem
       h += fmt::format("<p class=\"failed\">failed: {}</p>\n", esc(m.error));
       continue;
     }
+    // 3D: the viewer pages (linesurf view) are separate files, opened only when clicked.
+    auto viewerLink = [](const std::string& page, const char* text) {
+      return page.empty() ? std::string() : fmt::format("<a href=\"{}\" target=\"_blank\">{}</a>", esc(page), text);
+    };
     h += "<table><tr><th>method</th><th>reference points</th><th>points</th><th>segments</th><th>clusters</th>"
          "<th>data reduction</th><th>mse</th><th>nccm</th><th>SSIM</th><th>mean |A-B|</th><th>std |A-B|</th>"
-         "<th>speedup</th></tr>\n";
+         "<th>speedup</th><th>3D viewer</th></tr>\n";
     for (const MethodResult& r : m.methods)
       h += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.6f}</td><td>{:.4f}"
-                       "</td><td>{:.4f}</td><td>{:.2f}</td><td>{:.2f}</td><td>{}</td></tr>\n",
+                       "</td><td>{:.4f}</td><td>{:.2f}</td><td>{:.2f}</td><td>{}</td><td>{}{}{}</td></tr>\n",
                        experimentMethodName(r.method), r.referencePoints, r.points, r.segments,
                        r.clusters ? std::to_string(r.clusters) : "", pct(r.dataReduction), r.mse, r.nccm, r.ssim,
-                       r.meanAbsDiff.mean, r.stdAbsDiff.mean, pct(r.speedup));
+                       r.meanAbsDiff.mean, r.stdAbsDiff.mean, pct(r.speedup), viewerLink(r.viewerPage, m.isMesh ? "lines" : "hybrid"),
+                       r.viewerPage.empty() || m.referenceViewer.empty() ? "" : " &middot; ",
+                       viewerLink(m.referenceViewer, "points"));
     h += "</table>\n";
     for (const MethodResult& r : m.methods)
       if (r.hasTruth)

@@ -107,6 +107,8 @@ TEST(Experiment, SmokeRunOnBundledModels) {
       }
       ASSERT_FALSE(mr.structureImage.empty());
       EXPECT_TRUE(fs::exists(o.outDir / mr.structureImage));
+      ASSERT_FALSE(mr.viewerPage.empty());  // the 3D viewer page linked from the report
+      EXPECT_TRUE(fs::exists(o.outDir / mr.viewerPage));
       ASSERT_EQ(mr.images.size(), 1u);
       EXPECT_TRUE(fs::exists(o.outDir / mr.images[0]));
       EXPECT_TRUE(fs::exists(o.outDir / mr.diffImages[0]));
@@ -145,6 +147,8 @@ TEST(Experiment, SmokeRunOnBundledModels) {
   EXPECT_NE(md.find("Against the mesh"), std::string::npos);
   EXPECT_TRUE(j["models"][0]["methods"][0].contains("candidate_vs_mesh"));
   EXPECT_TRUE(j["models"][0]["methods"][0]["views"][0].contains("reference_vs_mesh"));
+  EXPECT_NE(html.find("href=\"rockerarm_points/points.html\""), std::string::npos);
+  EXPECT_NE(html.find("href=\"santa_points/shape-greedy/viewer.html\""), std::string::npos);
 }
 
 TEST(Experiment, BadFileIsRecordedAndTheRunContinues) {

@@ -149,6 +149,8 @@ struct MethodResult {
   std::string clustersImage;            ///< shape approximation: clusters picture (§3.2.3, Fig. 22)
   /// The candidate from the first view with points grey and segments orange (thesis Figs. 23-26).
   std::string structureImage;
+  /// Interactive WebGL viewer page of the candidate (linesurf view), relative to outDir.
+  std::string viewerPage;
   std::vector<std::string> notes;       ///< extraction diagnostics worth reading
 };
 
@@ -166,6 +168,7 @@ struct ModelResult {
   double averageSpacing = 0;       ///< clouds: §6.1 stage 5
   std::vector<std::string> referenceImages;  ///< point-model images, relative to outDir
   std::vector<std::string> truthImages;      ///< meshes: mesh images (ground truth), relative to outDir
+  std::string referenceViewer;  ///< viewer page of the point model (linesurf view), relative to outDir
   std::vector<MethodResult> methods;
 };
 
