@@ -7,6 +7,7 @@ PKGS=(
   libstb-dev libcli11-dev libfmt-dev nlohmann-json3-dev libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium  # headless browser test of `linesurf view` (tests/browser)
+  libhwy-dev
 )
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi

@@ -4,13 +4,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "detail/splat_math.h"
 #include "linesurf/core/error.h"
 
 namespace linesurf {
 
 namespace {
-constexpr float kPi = 3.14159265358979323846f;
-float radians(float deg) { return deg * kPi / 180.0f; }
+float radians(float deg) { return float(deg * detail::kPi / 180.0); }
 }  // namespace
 
 BoundingSphere boundingSphere(const HybridModel& model) {
@@ -146,12 +146,12 @@ std::vector<Vec2f> Camera::spreadViewAngles(int n) {
     return out;
   }
   // Fibonacci lattice on the sphere with the "y" axis up; rotated so that view 0 is azimuth 0.
-  const double golden = 3.14159265358979323846 * (3.0 - std::sqrt(5.0));
+  const double golden = detail::kPi * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < n; ++i) {
     double y = 1.0 - 2.0 * (i + 0.5) / n;           // from top to bottom
-    double az = std::fmod(golden * i, 2 * 3.14159265358979323846);
+    double az = std::fmod(golden * i, 2 * detail::kPi);
     double el = std::asin(std::clamp(y, -1.0, 1.0));
-    out.emplace_back(float(az * 180.0 / 3.14159265358979323846), float(el * 180.0 / 3.14159265358979323846));
+    out.emplace_back(float(az * 180.0 / detail::kPi), float(el * 180.0 / detail::kPi));
   }
   // Start with the view closest to the equator (a front view), keep the lattice order after it.
   size_t best = 0;

@@ -1,22 +1,200 @@
 // Object-space EWA point splats, thesis §4.2.2 and §6.2.2 (see point_splat.h).
-#include "detail/splat_math.h"
-#include "linesurf/render/point_splat.h"
+#include "point_splat.h"
 
 #include <algorithm>
 #include <cmath>
+
+#include "detail/splat_math.h"
 
 namespace linesurf {
 
 namespace {
 
-// Largest stretch of the resampling filter relative to the reconstruction sigma. Near edge-on
-// splats the warped prefilter J^-1 V_h J^-T grows without bound (the plane projects to a line);
-// past this stretch the splat is cut, which costs nothing visible (its screen width stays below
-// a pixel) and keeps the footprint finite.
-constexpr float kMaxStretch = 24.0f;
-// Splats seen closer to edge-on than this |cos| are dropped as culled (they project to a line).
-constexpr float kMinFacing = 2e-3f;
+using detail::Affine2;
+using detail::kMaxStretch;
+using detail::kMinFacing;
 
+// The splat in camera space after culling and warping: centre, unit normal facing the viewer,
+// plane axes scaled so that q = (axis0.(p - c))^2 + (axis1.(p - c))^2 is the Mahalanobis
+// distance in the resampling filter V, weight scale 1/sqrt(det V), depth half-extent of the
+// cutoff ellipse.
+struct Warped {
+  Vec3f c, n, axis0, axis1;
+  Vec3f B0, B1;  ///< plane vectors of unit plane coordinates: p = c + s B0 + t B1
+  float weightScale = 0, depthExtent = 0;
+};
+
+// ray/plane constants of a warped splat (point_splat.h, detail::PointRaster)
+void planeRaster(const Camera& cam, const Warped& s, detail::PointRaster& r) {
+  const Affine2 N = detail::rayDot(cam, s.n), A0 = detail::rayDot(cam, s.axis0), A1 = detail::rayDot(cam, s.axis1);
+  const float nc = s.n.dot(s.c), a0c = s.axis0.dot(s.c), a1c = s.axis1.dot(s.c);
+  // s = (a0.(t r - c)) with t = nc / N:  s = (nc A0 - a0c N) / N
+  auto comb = [](float k, const Affine2& f, float l, const Affine2& g) {
+    return Affine2{k * f.dx - l * g.dx, k * f.dy - l * g.dy, k * f.c - l * g.c};
+  };
+  r.N = N;
+  r.S = comb(nc, A0, a0c, N);
+  r.T = comb(nc, A1, a1c, N);
+  r.depthNum = nc;
+  r.weightScale = s.weightScale;
+}
+
+// Screen bounding box of the conic S^2 + T^2 <= c N^2 (the projected cutoff ellipse); false when
+// it is not a bounded ellipse. Double precision: the coefficients cancel for small splats.
+bool conicBounds(const detail::PointRaster& r, double c, double& x0, double& y0, double& x1, double& y1) {
+  const Affine2 &S = r.S, &T = r.T, &N = r.N;
+  auto dot = [](double a0, double a1, double b0, double b1) { return a0 * b0 + a1 * b1; };
+  const double a00 = dot(S.dx, T.dx, S.dx, T.dx) - c * double(N.dx) * N.dx;
+  const double a01 = dot(S.dx, T.dx, S.dy, T.dy) - c * double(N.dx) * N.dy;
+  const double a11 = dot(S.dy, T.dy, S.dy, T.dy) - c * double(N.dy) * N.dy;
+  const double b0 = dot(S.dx, T.dx, S.c, T.c) - c * double(N.dx) * N.c;
+  const double b1 = dot(S.dy, T.dy, S.c, T.c) - c * double(N.dy) * N.c;
+  const double m = dot(S.c, T.c, S.c, T.c) - c * double(N.c) * N.c;
+  const double det = a00 * a11 - a01 * a01;
+  if (!(a00 > 0 && det > 0)) return false;
+  const double cx = (a01 * b1 - a11 * b0) / det, cy = (a01 * b0 - a00 * b1) / det;
+  const double k = -(m + b0 * cx + b1 * cy);  // the ellipse is (p - centre)^T A (p - centre) <= k
+  if (!(k > 0)) return false;
+  const double hx = std::sqrt(k * a11 / det), hy = std::sqrt(k * a00 / det);
+  const double slack = 0.01 + 1e-4 * (hx + hy);  // against the float rounding of the per-pixel test
+  x0 = cx - hx - slack, x1 = cx + hx + slack, y0 = cy - hy - slack, y1 = cy + hy + slack;
+  return std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1);
+}
+
+// Pixels whose centres (i + 0.5) lie in [x0, x1] x [y0, y1], clamped to the view; `cut` tells
+// whether the view clamped them.
+PixelRect pixelBounds(const Camera& cam, double x0, double y0, double x1, double y1, bool& cut) {
+  const double lim = 1e7;
+  auto lo = [&](double v) { return int(std::ceil(std::clamp(v, -lim, lim) - 0.5)); };
+  auto hi = [&](double v) { return int(std::floor(std::clamp(v, -lim, lim) - 0.5)) + 1; };
+  const PixelRect bb{lo(x0), lo(y0), hi(x1), hi(y1)};
+  const PixelRect out = bb.intersect(PixelRect{0, 0, cam.width(), cam.height()});
+  cut = out.x0 != bb.x0 || out.y0 != bb.y0 || out.x1 != bb.x1 || out.y1 != bb.y1;
+  return out;
+}
+
+// Closed-form warp (common case): V^-1 = L L^T. False when the exact path must run instead
+// (stretched past kMaxStretch, centre behind the eye, cutoff ellipse crossing near or far).
+bool warpClosedForm(const Camera& cam, const RenderOptions& opt, float sigmaR, const Vec3f& u, const Vec3f& v,
+                    Warped& s, bool& degenerate) {
+  const float d = -s.c.z();
+  if (!(d > 0)) return false;
+  const float s2 = sigmaR * sigmaR;
+  float a = s2, b = 0, cc = s2;
+  if (opt.prefilterVariance > 0) {
+    const float f = cam.focalPixels();
+    const Vec3f gx(f / d, 0, f * s.c.x() / (d * d)), gy(0, -f / d, -f * s.c.y() / (d * d));
+    const float j00 = gx.dot(u), j01 = gx.dot(v), j10 = gy.dot(u), j11 = gy.dot(v);
+    // V = sigma_r^2 I + V_h (J^T J)^-1 (object-space EWA resampling filter, §4.2.2)
+    const float p = j00 * j00 + j10 * j10, q = j00 * j01 + j10 * j11, r = j01 * j01 + j11 * j11;
+    const float det = p * r - q * q;
+    if (!(det > 0)) {
+      degenerate = true;  // edge-on: culled as before
+      return false;
+    }
+    const float k = opt.prefilterVariance / det;
+    a += k * r, b -= k * q, cc += k * p;
+  }
+  const float mean = 0.5f * (a + cc), diff = 0.5f * (a - cc);
+  const float maxStretch2 = (kMaxStretch * sigmaR) * (kMaxStretch * sigmaR);
+  if (!(mean + std::sqrt(diff * diff + b * b) <= maxStretch2)) return false;
+  const float detV = a * cc - b * b;
+  if (!(detV > 0)) return false;
+  // V^-1 = [cc -b; -b a] / detV = L L^T
+  const float l00 = std::sqrt(cc / detV), l10 = -b / detV / l00, l11 = std::sqrt(std::max(a / detV - l10 * l10, 0.0f));
+  if (!(l11 > 0)) return false;
+  s.axis0 = l00 * u + l10 * v;
+  s.axis1 = l11 * v;
+  s.B0 = u / l00;
+  s.B1 = (v - (l10 / l00) * u) / l11;
+  s.weightScale = 1.0f / std::sqrt(detV);  // §5.2.3.3 weight scaling 1/(r0 r1)
+  const float gu = u.z(), gv = v.z();
+  s.depthExtent = opt.cutoffRadius * std::sqrt(std::max(0.0f, a * gu * gu + 2 * b * gu * gv + cc * gv * gv));
+  return d - s.depthExtent >= cam.nearDepth() && d + s.depthExtent <= cam.farDepth();
+}
+
+// The thesis's construction (exact path): eigen-decomposition of V with the stretch clamp, the
+// bounding quadrilateral of the cutoff ellipse, clipped against the frustum.
+PrimitiveStatus warpExact(const FrameContext& frame, float sigmaR, const Vec3f& u, const Vec3f& v, Warped& s,
+                          PixelRect& bounds, bool& clipped) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  const float R = opt.cutoffRadius, d = -s.c.z();
+  float r0, r1;
+  Vec2f e0;
+  if (d > 0) {
+    const float f = cam.focalPixels();
+    const Vec3f gx(f / d, 0, f * s.c.x() / (d * d)), gy(0, -f / d, -f * s.c.y() / (d * d));
+    Eigen::Matrix2f J;
+    J << gx.dot(u), gx.dot(v), gy.dot(u), gy.dot(v);
+    const Eigen::Matrix2f JtJ = J.transpose() * J;
+    const float det = JtJ.determinant();
+    Eigen::Matrix2f V = Eigen::Matrix2f::Identity() * (sigmaR * sigmaR);
+    if (opt.prefilterVariance > 0) {
+      if (!(det > 0)) return PrimitiveStatus::Culled;
+      Eigen::Matrix2f inv;
+      inv << JtJ(1, 1), -JtJ(0, 1), -JtJ(1, 0), JtJ(0, 0);
+      V += (opt.prefilterVariance / det) * inv;
+    }
+    // Rot(theta) Lambda^2 Rot(theta)^T (§5.2.3.1): closed-form symmetric 2x2 eigen-decomposition
+    const float a = V(0, 0), b = V(0, 1), cc = V(1, 1);
+    const float mean = 0.5f * (a + cc), diff = 0.5f * (a - cc);
+    const float rad = std::sqrt(diff * diff + b * b);
+    const float l0 = mean + rad, l1 = std::max(mean - rad, 1e-30f);
+    e0 = std::abs(b) > 1e-30f * (std::abs(a) + std::abs(cc)) && b != 0 ? Vec2f(Vec2f(l0 - cc, b).normalized())
+                                                                       : (a >= cc ? Vec2f(1, 0) : Vec2f(0, 1));
+    r0 = std::min(std::sqrt(l0), kMaxStretch * sigmaR);
+    r1 = std::min(std::sqrt(l1), kMaxStretch * sigmaR);
+  } else {  // centre behind the eye (only its edge can be visible): no prefilter
+    e0 = Vec2f(1, 0);
+    r0 = r1 = sigmaR;
+  }
+  const Vec3f E0 = e0.x() * u + e0.y() * v, E1 = s.n.cross(E0);
+  if (!(r0 > 0 && r1 > 0) || !E0.allFinite()) return PrimitiveStatus::Degenerate;
+  s.axis0 = E0 / r0;
+  s.axis1 = E1 / r1;
+  s.B0 = r0 * E0;
+  s.B1 = r1 * E1;
+  s.weightScale = 1.0f / (r0 * r1);
+  s.depthExtent = R * std::sqrt(r0 * r0 * E0.z() * E0.z() + r1 * r1 * E1.z() * E1.z());
+  const Vec3f quad[4] = {s.c - R * r0 * E0 - R * r1 * E1, s.c + R * r0 * E0 - R * r1 * E1,
+                         s.c + R * r0 * E0 + R * r1 * E1, s.c - R * r0 * E0 + R * r1 * E1};
+  for (const Vec4f& pl : frame.frustum) {  // all corners outside one side plane: outside
+    bool allOut = true;
+    for (const Vec3f& q : quad)
+      if (pl.head<3>().dot(q) + pl.w() >= 0) { allOut = false; break; }
+    if (allOut) return PrimitiveStatus::Outside;
+  }
+  float x0, y0, x1, y1;
+  bool depthClipped = false, cut = false;
+  if (!detail::clippedScreenBounds(cam, quad, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
+  bounds = pixelBounds(cam, x0, y0, x1, y1, cut);
+  if (bounds.empty()) return PrimitiveStatus::Outside;
+  clipped = depthClipped;
+  return depthClipped || cut ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
+}
+
+// Gouraud lighting (§6.2.2) at the corners (s, t) = (+-R, +-R) of the bounding quadrilateral,
+// as the bilinear polynomial C0 + Cs s + Ct t + Cst s t; small splats are lit once.
+void light(const FrameContext& frame, const Warped& s, PreparedPoint& out) {
+  const Vec3f albedo(out.attr[0], out.attr[1], out.attr[2]);
+  const bool flat = out.bounds.width() <= PreparedPoint::kFlatShadeSpan && out.bounds.height() <= PreparedPoint::kFlatShadeSpan;
+  out.gouraud = !flat;
+  if (flat) {
+    const Vec3f c = frame.shade(albedo, s.n, s.c);
+    out.attr[0] = c.x(), out.attr[1] = c.y(), out.attr[2] = c.z();
+    return;
+  }
+  const float R = frame.opt().cutoffRadius;
+  const Vec3f k00 = frame.shade(albedo, s.n, s.c - R * s.B0 - R * s.B1), k10 = frame.shade(albedo, s.n, s.c + R * s.B0 - R * s.B1),
+              k01 = frame.shade(albedo, s.n, s.c - R * s.B0 + R * s.B1), k11 = frame.shade(albedo, s.n, s.c + R * s.B0 + R * s.B1);
+  // bilinear in u = s/2R + 1/2, v = t/2R + 1/2; inside the cutoff |s|, |t| <= R (no clamping)
+  const float inv2R = 0.5f / R;
+  out.C0 = 0.25f * (k00 + k10 + k01 + k11);
+  out.Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
+  out.Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
+  out.Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
+}
 
 }  // namespace
 
@@ -28,215 +206,101 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   if (!(point.radius > 0) || !std::isfinite(point.radius) || !point.position.allFinite() || !point.normal.allFinite())
     return PrimitiveStatus::Degenerate;
 
-  // model-view transform
-  const Vec3f c = cam.toCamera(point.position);
-  const float d = -c.z();
+  // model-view transform and back-face culling, before anything else
+  Warped s;
+  s.c = cam.toCamera(point.position);
   Vec3f n = cam.rotation() * point.normal;
-  float nn = n.norm();
-  const float cn = c.norm();
+  const float nn2 = n.squaredNorm(), nDotEye = -n.dot(s.c);
+  if (opt.backfaceCulling && nn2 > 0 && nDotEye < 0) return PrimitiveStatus::Culled;
+  const float cn = s.c.norm();
   if (!(cn > 0)) return PrimitiveStatus::Outside;
-  const Vec3f toEye = -c / cn;
-  if (nn > 0) {
-    n /= nn;
+  // no normal: a disc facing the viewer (raw scans; the CLI computes normals first)
+  float facing = 1;
+  if (nn2 > 0) {
+    const float inv = 1.0f / std::sqrt(nn2);
+    n *= inv;
+    facing = nDotEye * inv / cn;
+    if (facing < 0) {  // two-sided: lit from the viewer's side
+      n = -n;
+      facing = -facing;
+    }
   } else {
-    n = toEye;  // no normal: a disc facing the viewer (raw scans; the CLI computes normals first)
-  }
-  // back-face culling
-  float facing = n.dot(toEye);
-  if (facing < 0) {
-    if (opt.backfaceCulling) return PrimitiveStatus::Culled;
-    n = -n;
-    facing = -facing;
+    n = -s.c / cn;
   }
   if (facing < kMinFacing) return PrimitiveStatus::Culled;
-  // Cheap rejection by the bounding sphere of the largest possible footprint.
+  s.n = n;
+  // cheap rejection by depth with the largest possible footprint
   const float sigmaR = opt.reconstructionScale * point.radius;
-  const float R = opt.cutoffRadius;
-  {
-    float reach = R * sigmaR * kMaxStretch;
-    if (d + reach < cam.nearDepth() || d - reach > cam.farDepth()) return PrimitiveStatus::Outside;
-  }
+  const float d = -s.c.z(), reach = opt.cutoffRadius * sigmaR * kMaxStretch;
+  if (d + reach < cam.nearDepth() || d - reach > cam.farDepth()) return PrimitiveStatus::Outside;
 
   // local parameterisation: tangent frame (u, v) of the normal
   Vec3f u = std::abs(n.x()) < 0.9f ? Vec3f(Vec3f::UnitX().cross(n)) : Vec3f(Vec3f::UnitY().cross(n));
   u.normalize();
-  Vec3f v = n.cross(u);
+  const Vec3f v = n.cross(u);
 
-  // warping: local Jacobian of (plane coords) -> screen at the centre (perspective projection)
-  float r0, r1;
-  Vec2f e0;
-  if (d > 0) {
-    const float f = cam.focalPixels();
-    const Vec3f gx(f / d, 0, f * c.x() / (d * d));    // d sx / d p
-    const Vec3f gy(0, -f / d, -f * c.y() / (d * d));  // d sy / d p
-    Eigen::Matrix2f J;
-    J << gx.dot(u), gx.dot(v), gy.dot(u), gy.dot(v);
-    // V = sigma_r^2 I + V_h (J^T J)^-1   (object-space EWA resampling filter, §4.2.2)
-    Eigen::Matrix2f JtJ = J.transpose() * J;
-    float det = JtJ.determinant();
-    Eigen::Matrix2f V = Eigen::Matrix2f::Identity() * (sigmaR * sigmaR);
-    if (opt.prefilterVariance > 0) {
-      if (!(det > 0)) return PrimitiveStatus::Culled;
-      Eigen::Matrix2f inv;
-      inv << JtJ(1, 1), -JtJ(0, 1), -JtJ(1, 0), JtJ(0, 0);
-      V += (opt.prefilterVariance / det) * inv;
+  // warping and screen bounds: closed form, or the exact path
+  PrimitiveStatus status = PrimitiveStatus::Drawn;
+  bool clipped = false, degenerate = false, exact = true;
+  if (warpClosedForm(cam, opt, sigmaR, u, v, s, degenerate)) {
+    planeRaster(cam, s, out.raster);
+    double x0, y0, x1, y1;
+    bool cut = false;
+    if (conicBounds(out.raster, double(frame.cutoffQ), x0, y0, x1, y1)) {
+      exact = false;
+      out.bounds = pixelBounds(cam, x0, y0, x1, y1, cut);
+      if (out.bounds.empty()) return PrimitiveStatus::Outside;
+      if (cut) status = PrimitiveStatus::Clipped;
     }
-    // Rot(theta) Lambda^2 Rot(theta)^T (§5.2.3.1): closed-form symmetric 2x2 eigen-decomposition
-    float a = V(0, 0), b = V(0, 1), cc = V(1, 1);
-    float mean = 0.5f * (a + cc), diff = 0.5f * (a - cc);
-    float rad = std::sqrt(diff * diff + b * b);
-    float l0 = mean + rad, l1 = std::max(mean - rad, 1e-30f);
-    if (std::abs(b) > 1e-30f * (std::abs(a) + std::abs(cc)) && b != 0) {
-      e0 = Vec2f(l0 - cc, b).normalized();
-    } else {
-      e0 = a >= cc ? Vec2f(1, 0) : Vec2f(0, 1);
+  } else if (degenerate) {
+    return PrimitiveStatus::Culled;
+  }
+  if (exact) {
+    status = warpExact(frame, sigmaR, u, v, s, out.bounds, clipped);
+    if (status != PrimitiveStatus::Drawn && status != PrimitiveStatus::Clipped) {
+      out.bounds = {};
+      return status;
     }
-    r0 = std::min(std::sqrt(l0), kMaxStretch * sigmaR);
-    r1 = std::min(std::sqrt(l1), kMaxStretch * sigmaR);
-  } else {
-    // centre behind the eye (only its edge can be visible): no prefilter
-    e0 = Vec2f(1, 0);
-    r0 = r1 = sigmaR;
+    planeRaster(cam, s, out.raster);
   }
-  const Vec3f E0 = e0.x() * u + e0.y() * v;
-  const Vec3f E1 = n.cross(E0);
-  if (!(r0 > 0 && r1 > 0) || !E0.allFinite()) return PrimitiveStatus::Degenerate;
-
-  // bounding quadrilateral of the cutoff ellipse (§5.2.3.1) and frustum clipping
-  Vec3f quad[4] = {c - R * r0 * E0 - R * r1 * E1, c + R * r0 * E0 - R * r1 * E1, c - R * r0 * E0 + R * r1 * E1,
-                   c + R * r0 * E0 + R * r1 * E1};
-  // side planes: all corners outside one plane -> outside
-  for (const Vec4f& pl : frame.frustum) {
-    bool allOut = true;
-    for (const Vec3f& q : quad)
-      if (pl.head<3>().dot(q) + pl.w() >= 0) { allOut = false; break; }
-    if (allOut) return PrimitiveStatus::Outside;
-  }
-  const Vec3f quadCycle[4] = {quad[0], quad[1], quad[3], quad[2]};
-  float x0, y0, x1, y1;
-  bool depthClipped = false;
-  if (!detail::clippedScreenBounds(cam, quadCycle, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
-  // pixel centres (i + 0.5) inside [x0, x1]; clamp first so that the int conversion is defined
-  const float lim = 1e7f;
-  x0 = std::clamp(x0, -lim, lim), x1 = std::clamp(x1, -lim, lim), y0 = std::clamp(y0, -lim, lim), y1 = std::clamp(y1, -lim, lim);
-  PixelRect bb{int(std::floor(x0 - 0.5f)) + 1, int(std::floor(y0 - 0.5f)) + 1, int(std::floor(x1 - 0.5f)) + 1,
-               int(std::floor(y1 - 0.5f)) + 1};
-  PixelRect view{0, 0, cam.width(), cam.height()};
-  out.bounds = bb.intersect(view);
-  if (out.bounds.empty()) return PrimitiveStatus::Outside;
-  const bool sideClipped = out.bounds.x0 != bb.x0 || out.bounds.y0 != bb.y0 || out.bounds.x1 != bb.x1 ||
-                           out.bounds.y1 != bb.y1;
-
-  out.center = c;
-  out.normal = n;
-  out.axis0 = E0 / r0;
-  out.axis1 = E1 / r1;
-  out.weightScale = 1.0f / (r0 * r1);  // §5.2.3.3 weight scaling 1/(r0 r1)
-  // depth half-extent of the cutoff ellipse, plus the primitive radius (delta-z, §6.2.3.2)
-  const float extent = R * std::sqrt(r0 * r0 * E0.z() * E0.z() + r1 * r1 * E1.z() * E1.z()) + point.radius;
-  out.zThreshold = frame.zThreshold(extent);
+  out.raster.cutoffQ = frame.cutoffQ;
+  out.raster.clipDepth = clipped;
+  out.raster.nearD = cam.nearDepth();
+  out.raster.farD = cam.farDepth();
+  // depth half-extent of the cutoff ellipse plus the primitive radius (delta-z, §6.2.3.2)
+  out.zThreshold = frame.zThreshold(s.depthExtent + point.radius);
   const Color col = frame.primitiveColor(point.color);
-  out.albedo = col.head<3>();
-  out.alpha = std::clamp(col.w(), 0.0f, 1.0f);
-  out.clipped = depthClipped;
-  out.flat = out.bounds.width() <= PreparedPoint::kFlatShadeSpan && out.bounds.height() <= PreparedPoint::kFlatShadeSpan;
-  if (!opt.perPixelLighting) {  // Gouraud at the quad's vertices (§6.2.2)
-    if (out.flat)
-      out.cornerColor[0] = frame.shade(out.albedo, n, c);
-    else
-      for (int i = 0; i < 4; ++i) out.cornerColor[i] = frame.shade(out.albedo, n, quad[i]);
-  }
-  return depthClipped || sideClipped ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
+  const float attr[Z3Tile::kAttrs] = {col.x(), col.y(), col.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, n.x(), n.y(), n.z()};
+  std::copy(attr, attr + Z3Tile::kAttrs, out.attr);
+  if (!opt.perPixelLighting) light(frame, s, out);
+  return status;
 }
 
 void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);
   if (r.empty()) return;
-  const Camera& cam = ctx.frame.cam();
-  const float f = cam.focalPixels();
-  const Vec2f pp = cam.principalPoint();
-  const float cutoffQ = ctx.frame.cutoffQ;
-  const float R = ctx.frame.opt().cutoffRadius;
-  const bool perPixel = ctx.frame.opt().perPixelLighting;
-  const float nearD = cam.nearDepth(), farD = cam.farDepth();
-  // Along the ray r(x, y) = ((x - cx)/f, -(y - cy)/f, -1) (depth 1) the tangent plane is hit at
-  // depth t = (n.c) / N with N = n.r, at plane coordinates s = S / N, t' = T / N where
-  // S = (n.c)(a0.r) - (a0.c) N and T likewise: N, S, T are affine in the pixel position. The
-  // cutoff ellipse q = (S^2 + T^2) / N^2 <= cutoff^2 is therefore a conic in the pixel plane; each
-  // row is clipped to the exact span where S^2 + T^2 - cutoff^2 N^2 <= 0 (a quadratic in x), so
-  // only pixels inside the splat are visited (the thesis rasterises the bounding quad and reads
-  // the weight texture; this is equivalent and perspective-exact).
-  const Vec3f& n = sp.normal;
-  const float nc = n.dot(sp.center);
-  const float a0c = sp.axis0.dot(sp.center), a1c = sp.axis1.dot(sp.center);
-  auto lin = [&](const Vec3f& k, float& dx, float& dy, float& c0) {
-    dx = k.x() / f;
-    dy = -k.y() / f;
-    c0 = -k.x() * pp.x() / f + k.y() * pp.y() / f - k.z();
-  };
-  float ndx, ndy, nc0, adx, ady, ac0, bdx, bdy, bc0;
-  lin(n, ndx, ndy, nc0);
-  lin(sp.axis0, adx, ady, ac0);
-  lin(sp.axis1, bdx, bdy, bc0);
-  const float Sx = nc * adx - a0c * ndx, Sy = nc * ady - a0c * ndy, Sc = nc * ac0 - a0c * nc0;
-  const float Tx = nc * bdx - a1c * ndx, Ty = nc * bdy - a1c * ndy, Tc = nc * bc0 - a1c * nc0;
-  Fragment fr;
-  fr.zThreshold = sp.zThreshold;
-  fr.alpha = sp.alpha;
-  fr.normal = n;
-  // Gouraud: bilinear in the quad's corner colours with u = s/2R + 1/2, v = t'/2R + 1/2; inside
-  // the cutoff |s|, |t'| <= R, so it is the polynomial C0 + Cs s + Ct t' + Cst s t' (no clamping).
-  const float inv2R = 0.5f / R;
-  const Vec3f& k00 = sp.cornerColor[0];
-  const Vec3f& k10 = sp.cornerColor[1];
-  const Vec3f& k01 = sp.cornerColor[2];
-  const Vec3f& k11 = sp.cornerColor[3];
-  const Vec3f C0 = 0.25f * (k00 + k10 + k01 + k11);
-  const Vec3f Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
-  const Vec3f Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
-  const Vec3f Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
-  const detail::GaussTable& gauss = detail::kGaussTable;
-  const bool flat = sp.flat && !perPixel;
-  if (flat) fr.color = sp.cornerColor[0];
-  const float qa = Sx * Sx + Tx * Tx - cutoffQ * ndx * ndx;
-  for (int y = r.y0; y < r.y1; ++y) {
-    const float py = float(y) + 0.5f;
-    const float S0 = Sy * py + Sc, T0 = Ty * py + Tc, N0 = ndy * py + nc0;
-    int xb = r.x0, xe = r.x1;
-    if (qa > 0) {
-      // span of the row inside the conic: qa x^2 + qb x + qc <= 0 (x = pixel centre)
-      const float qb = 2 * (Sx * S0 + Tx * T0 - cutoffQ * ndx * N0);
-      const float qc = S0 * S0 + T0 * T0 - cutoffQ * N0 * N0;
-      const float disc = qb * qb - 4 * qa * qc;
-      if (!(disc > 0)) continue;
-      const float sq = std::sqrt(disc), inv = 0.5f / qa;
-      const float xl = (-qb - sq) * inv, xr = (-qb + sq) * inv;
-      // pixel centres x + 0.5 in [xl, xr], widened by a pixel against rounding
-      // (fmax/fmin also drop NaN from an overflowing discriminant and keep int() defined)
-      xb = std::max(xb, int(std::floor(std::fmax(xl - 0.5f, float(xb) - 1.0f))));
-      xe = std::min(xe, int(std::floor(std::fmin(xr - 0.5f, float(xe)))) + 2);
-    }
-    for (int x = xb; x < xe; ++x) {
-      const float px = float(x) + 0.5f;
-      const float N = ndx * px + N0;
-      if (!(N < 0)) continue;  // ray parallel to or leaving the facing plane
-      const float S = Sx * px + S0, T = Tx * px + T0;
-      const float iN = 1.0f / N;
-      const float s = S * iN, tt = T * iN;
-      const float q = s * s + tt * tt;
-      if (!(q <= cutoffQ)) continue;
-      const float t = nc * iN;
-      if (sp.clipped && (t < nearD || t > farD)) continue;
-      fr.depth = t;
-      fr.weight = gauss(q) * sp.weightScale;
-      if (flat) {
-      } else if (perPixel) {
-        const Vec3f p = t * Vec3f((px - pp.x()) / f, -(py - pp.y()) / f, -1.0f);
-        fr.color = ctx.frame.shade(sp.albedo, n, p);
-      } else {
-        fr.color = C0 + s * Cs + tt * Ct + (s * tt) * Cst;  // bilinear Gouraud over the quad
+  float attr[Z3Tile::kAttrs];
+  std::copy(sp.attr, sp.attr + Z3Tile::kAttrs, attr);
+  constexpr int kPad = detail::kBlock + detail::kMaxLanes;
+  alignas(64) float w[kPad], depth[kPad], s[kPad], t[kPad];
+  const int W = r.width(), total = W * r.height();
+  for (int k0 = 0; k0 < total; k0 += detail::kBlock) {
+    const int count = std::min(detail::kBlock, total - k0);
+    detail::pointWeights(sp.raster, r.x0, r.y0, W, k0, count, w, depth, sp.gouraud ? s : nullptr,
+                         sp.gouraud ? t : nullptr);
+    int x = r.x0 + k0 % W, y = r.y0 + k0 / W;
+    for (int i = 0; i < count; ++i) {
+      if (w[i] > 0) {
+        if (sp.gouraud) {  // bilinear Gouraud over the quad
+          const Vec3f c = sp.C0 + s[i] * sp.Cs + t[i] * sp.Ct + (s[i] * t[i]) * sp.Cst;
+          attr[0] = c.x(), attr[1] = c.y(), attr[2] = c.z();
+        }
+        ctx.tile.insert(x, y, depth[i], sp.zThreshold, w[i], attr);
       }
-      ctx.tile.insert(x, y, fr);
+      if (++x == r.x1) {
+        x = r.x0;
+        ++y;
+      }
     }
   }
 }

@@ -7,7 +7,8 @@
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
-#include "linesurf/render/point_splat.h"
+#include "detail/splat_rows.h"
+#include "point_splat.h"
 #include "linesurf/render/segment_splat.h"
 #include "linesurf/render/splat_context.h"
 
@@ -18,7 +19,7 @@ Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
   validate(options_);
 }
 
-const char* renderSimdTarget() { return "scalar"; }
+const char* renderSimdTarget() { return detail::simdTargetName(); }
 
 RenderResult renderImage(const HybridModel& model, const Camera& camera, const RenderOptions& options) {
   return Renderer(model, options).render(camera);
@@ -124,8 +125,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     const int tx = int(tile % size_t(tilesX)), ty = int(tile / size_t(tilesX));
     PixelRect rect{tx * T, ty * T, std::min(cam.width(), (tx + 1) * T), std::min(cam.height(), (ty + 1) * T)};
     thread_local std::unique_ptr<Z3Tile> buffer;
-    if (!buffer || buffer->layers() != opt.layers || buffer->keepsNormals() != opt.normalBuffer)
-      buffer = std::make_unique<Z3Tile>(rect, opt.layers, opt.normalBuffer);
+    if (!buffer || buffer->layers() != opt.layers)
+      buffer = std::make_unique<Z3Tile>(rect, opt.layers);
     else buffer->reset(rect);
     Z3Tile& z3 = *buffer;
     SplatContext ctx{frame, rect, z3};
@@ -137,7 +138,15 @@ RenderResult Renderer::render(const Camera& cam) const {
     for (int y = rect.y0; y < rect.y1; ++y)
       for (int x = rect.x0; x < rect.x1; ++x) {
         if (z3.layerCount(x, y) == 0) continue;
-        ResolvedPixel px = z3.resolve(x, y);
+        // per-pixel lighting is deferred: each layer lit once, with its blended normal, at this
+        // pixel's ray and the layer's depth; otherwise the fragments carry Gouraud colours
+        const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);
+        const ResolvedPixel px =
+            opt.perPixelLighting ? z3.resolve(x, y, [&](const Vec3f& albedo, const Vec3f& n, float depth) {
+              const float nn = n.norm();
+              return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
+            })
+                                 : z3.resolve(x, y);
         const float a = px.color.w();
         Color c = px.color;
         c.head<3>() += (1 - a) * bg.w() * bg.head<3>();

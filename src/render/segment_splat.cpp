@@ -3,6 +3,7 @@
 // quadrilaterals (§5.2.3, Approx), a per-pixel closed form in erf over sub-segments (after §9.3,
 // ScreenSpace) and per-pixel quadrature (Reference).
 #include "detail/splat_math.h"
+#include "detail/splat_rows.h"
 #include "linesurf/render/segment_splat.h"
 
 #include <algorithm>
@@ -20,13 +21,11 @@ namespace {
 
 using Mat2d = Eigen::Matrix2d;
 using Vec2dd = Eigen::Vector2d;
-constexpr double kPi = 3.14159265358979323846;
-
-// Same limits as point splats (point_splat.cpp) so that points and segments of one model are cut
-// and culled alike: the resampling filter is never stretched beyond 24 sigma_r, and strips seen
-// closer to edge-on than |cos| = 2e-3 everywhere are culled.
-constexpr double kMaxStretch = 24.0;
-constexpr double kMinFacing = 2e-3;
+using detail::kPi;
+// Same limits as point splats (detail/splat_math.h): the resampling filter is never stretched
+// beyond kMaxStretch sigma_r, and strips seen closer to edge-on than kMinFacing everywhere are culled.
+constexpr double kMaxStretch = detail::kMaxStretch;
+constexpr double kMinFacing = detail::kMinFacing;
 // ScreenSpace subdivision: a new sub-segment wherever M changes by more than this (relative
 // Frobenius norm) from one end of the sub-segment to the other.
 constexpr double kPieceTolerance = 0.04;
@@ -392,10 +391,10 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   out.fallback = false;
   out.smooth = false;
   out.pieces.clear();
-  out.nodes.clear();
-  out.quads.clear();
   out.diffuse.clear();
   out.specular.clear();
+  out.nodes.clear();
+  out.quads.clear();
   if (!(seg.radius > 0) || !std::isfinite(seg.radius) || !seg.p0.allFinite() || !seg.p1.allFinite() ||
       !seg.normal.allFinite())
     return PrimitiveStatus::Degenerate;
@@ -441,7 +440,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   }
   auto covAt = [&](double a) { return resamplingCovariance(c0 + a * e, e, s, sigmaR, Vh, f); };
 
-  // ScreenSpace sub-segments (also the Approx fallback and the lighting stations).
+  // ScreenSpace sub-segments (also the Approx fallback).
   const Mat2d M0 = covAt(0), M1 = covAt(L), Mmid = covAt(0.5 * L);
   int K = 1;
   {
@@ -733,90 +732,144 @@ float segmentWeightAt(const PreparedSegment& sp, const FrameContext& frame, cons
   return weightAt(sp, sp.along.dot(P), sp.across.dot(P), R * R);
 }
 
+namespace {
+
+// Pixel centres of row y (py = y + 0.5) inside the projected footprint quad, within r: [xb, xe).
+// False when the row misses it.
+bool rowSpan(const PreparedSegment& sp, const PixelRect& r, float py, int& xb, int& xe) {
+  xb = r.x0, xe = r.x1;
+  if (!sp.useSpans) return true;
+  float lo = INFINITY, hi = -INFINITY;
+  for (int i = 0; i < 4; ++i) {
+    const Vec2f& p = sp.screenQuad[i];
+    const Vec2f& q = sp.screenQuad[(i + 1) % 4];
+    if ((p.y() <= py) == (q.y() <= py)) continue;
+    const float xi = p.x() + (py - p.y()) / (q.y() - p.y()) * (q.x() - p.x());
+    lo = std::min(lo, xi);
+    hi = std::max(hi, xi);
+  }
+  if (!(hi >= lo)) return false;
+  // centres x + 0.5 in [lo, hi], widened by kSpanSlack pixel against rounding: a centre farther
+  // out lies outside the footprint box, where the weight is zero
+  xb = std::max(r.x0, int(std::ceil(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
+  xe = std::min(r.x1, int(std::floor(std::min(hi, 1e8f) - 0.5f + kSpanSlack)) + 1);
+  return xe > xb;
+}
+
+// The blended attributes of a segment fragment at along-parameter u (Z3Tile::Attr): the Gouraud
+// colour between the lighting stations (or the albedo when lighting is deferred to the
+// resolve), alpha, 1, normal.
+struct SegmentShading {
+  const PreparedSegment& sp;
+  const FrameContext& frame;
+  void at(float u, float* attr) const {
+    Vec3f c = sp.albedo;
+    if (sp.textured) {  // §5.2.4: interpolated between the endpoints, constant beyond
+      const Vec2f uv = sp.uv0 + u * (sp.uv1 - sp.uv0);
+      c = frame.texture->sampleBilinear(uv.x(), uv.y()).head<3>();
+    }
+    if (!sp.diffuse.empty()) {
+      const int stations = int(sp.diffuse.size());
+      const float fs = u * float(stations - 1);
+      const int k = std::min(int(fs), stations - 2);
+      const float v = fs - float(k);
+      const Vec3f dif = (1 - v) * sp.diffuse[k] + v * sp.diffuse[k + 1];
+      const Vec3f spec = (1 - v) * sp.specular[k] + v * sp.specular[k + 1];
+      c = c.cwiseProduct(dif) + spec;
+    }
+    const Vec3f n = sp.smooth ? sp.shadingNormal(u) : sp.normal;
+    attr[Z3Tile::kR] = c.x(), attr[Z3Tile::kG] = c.y(), attr[Z3Tile::kB] = c.z();
+    attr[Z3Tile::kA] = sp.alpha;
+    attr[Z3Tile::kW] = 1.0f;
+    attr[Z3Tile::kNx] = n.x(), attr[Z3Tile::kNy] = n.y(), attr[Z3Tile::kNz] = n.z();
+  }
+  /// Same attributes for every fragment: deferred lighting of an untextured, one-normal segment.
+  bool constant() const { return !sp.textured && !sp.smooth && sp.diffuse.empty(); }
+};
+
+// ScreenSpace segments of one sub-segment (nearly all of them): the closed form evaluated in
+// SIMD over each row's span (detail/splat_rows.h).
+void rasterizeSingleSpan(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
+  const FrameContext& frame = ctx.frame;
+  const Camera& cam = frame.cam();
+  const SegmentPiece& piece = sp.pieces[0];
+  detail::SegmentRaster k;
+  const float no = sp.normal.dot(sp.origin);
+  auto scaled = [](float s, detail::Affine2 f) { return detail::Affine2{s * f.dx, s * f.dy, s * f.c}; };
+  k.N = detail::rayDot(cam, sp.normal);
+  k.A = scaled(no, detail::rayDot(cam, sp.along));
+  k.B = scaled(no, detail::rayDot(cam, sp.across));
+  k.depthNum = no;
+  k.a0 = sp.along.dot(sp.origin);
+  k.b0 = sp.across.dot(sp.origin);
+  k.length = sp.length;
+  k.R2 = frame.cutoffQ;
+  k.aMin = sp.aMin, k.aMax = sp.aMax, k.bMax = sp.bMax;
+  k.skew = piece.skew, k.across = piece.across, k.invM00 = piece.invM00, k.k = piece.k, k.erfScale = piece.erfScale;
+  k.scale0 = piece.scale0, k.slope = piece.slope;
+  k.zThreshold0 = sp.zThreshold0, k.zThreshold1 = sp.zThreshold1;
+  k.nearD = cam.nearDepth(), k.farD = cam.farDepth();
+  k.clipDepth = sp.clipped;
+  const SegmentShading shading{sp, frame};
+  float attr[Z3Tile::kAttrs];
+  if (shading.constant()) shading.at(0, attr);
+  constexpr int kPad = detail::kBlock + detail::kMaxLanes;
+  alignas(64) float w[kPad], depth[kPad], u[kPad], thr[kPad];
+  for (int y = r.y0; y < r.y1; ++y) {
+    int xb, xe;
+    if (!rowSpan(sp, r, float(y) + 0.5f, xb, xe)) continue;
+    for (int x0 = xb; x0 < xe; x0 += detail::kBlock) {
+      const int count = std::min(detail::kBlock, xe - x0);
+      detail::segmentWeights(k, x0, y, count, 0, count, w, depth, u, thr);
+      for (int i = 0; i < count; ++i) {
+        if (!(w[i] > 0)) continue;
+        if (!shading.constant()) shading.at(u[i], attr);
+        ctx.tile.insert(x0 + i, y, depth[i], thr[i], w[i], attr);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);
   if (r.empty()) return;
+  if (sp.method == SegmentMethod::ScreenSpace && sp.pieces.size() == 1) return rasterizeSingleSpan(sp, ctx, r);
   const FrameContext& frame = ctx.frame;
   const Camera& cam = frame.cam();
-  const float f = cam.focalPixels();
-  const Vec2f pp = cam.principalPoint();
   const float R = frame.opt().cutoffRadius;
   const float R2 = R * R;
-  const bool perPixel = frame.opt().perPixelLighting;
   const float nearD = cam.nearDepth(), farD = cam.farDepth();
   // Ray through pixel (px, py) at depth 1: r = ((px - cx)/f, -(py - cy)/f, -1); the plane
   // n.(P - o) = 0 is hit at depth t = (n.o)/(n.r), a = t (e.r) - e.o, b = t (s.r) - s.o.
-  const Vec3f& n = sp.normal;
-  const float no = n.dot(sp.origin), eo = sp.along.dot(sp.origin), so = sp.across.dot(sp.origin);
-  auto lin = [&](const Vec3f& k, float& dx, float& dy, float& c0) {
-    dx = k.x() / f;
-    dy = -k.y() / f;
-    c0 = -k.x() * pp.x() / f + k.y() * pp.y() / f - k.z();
-  };
-  float ndx, ndy, nc0, edx, edy, ec0, sdx, sdy, sc0;
-  lin(n, ndx, ndy, nc0);
-  lin(sp.along, edx, edy, ec0);
-  lin(sp.across, sdx, sdy, sc0);
-  Fragment fr;
-  fr.alpha = sp.alpha;
-  fr.normal = n;
+  const float no = sp.normal.dot(sp.origin), eo = sp.along.dot(sp.origin), so = sp.across.dot(sp.origin);
+  const detail::Affine2 N = detail::rayDot(cam, sp.normal), E = detail::rayDot(cam, sp.along),
+                        S = detail::rayDot(cam, sp.across);
+  const SegmentShading shading{sp, frame};
+  float attr[Z3Tile::kAttrs];
   const float L = sp.length;
-  const int stations = int(sp.diffuse.size());
   const bool screenSpace = sp.method == SegmentMethod::ScreenSpace;
   for (int y = r.y0; y < r.y1; ++y) {
     const float py = float(y) + 0.5f;
-    int xb = r.x0, xe = r.x1;
-    if (sp.useSpans) {  // this row's pixel centres inside the projected footprint quad
-      float lo = INFINITY, hi = -INFINITY;
-      for (int i = 0; i < 4; ++i) {
-        const Vec2f& p = sp.screenQuad[i];
-        const Vec2f& q = sp.screenQuad[(i + 1) % 4];
-        if ((p.y() <= py) == (q.y() <= py)) continue;
-        const float xi = p.x() + (py - p.y()) / (q.y() - p.y()) * (q.x() - p.x());
-        lo = std::min(lo, xi);
-        hi = std::max(hi, xi);
-      }
-      if (!(hi >= lo)) continue;
-      // centres x + 0.5 in [lo, hi], widened by kSpanSlack pixel against rounding: a centre
-      // farther out lies outside the footprint box, where the weight is zero
-      xb = std::max(r.x0, int(std::ceil(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
-      xe = std::min(r.x1, int(std::floor(std::min(hi, 1e8f) - 0.5f + kSpanSlack)) + 1);
-    }
+    int xb, xe;
+    if (!rowSpan(sp, r, py, xb, xe)) continue;
     for (int x = xb; x < xe; ++x) {
       const float px = float(x) + 0.5f;
-      const float nr = ndx * px + ndy * py + nc0;
+      const float nr = N.at(px, py);
       if (!(nr < 0)) continue;  // ray parallel to or leaving the facing plane
       const float t = no / nr;
-      const float b = t * (sdx * px + sdy * py + sc0) - so;
+      const float b = t * S.at(px, py) - so;
       if (std::abs(b) > sp.bMax) continue;
-      const float a = t * (edx * px + edy * py + ec0) - eo;
+      const float a = t * E.at(px, py) - eo;
       if (a < sp.aMin || a > sp.aMax) continue;
       if (sp.clipped && (t < nearD || t > farD)) continue;
       // (the footprint box test of weightAt is already done above)
       const float w = screenSpace ? screenSpaceWeight(sp, a, b, R2) : weightAt(sp, a, b, R2);
       if (!(w > 0)) continue;
       const float u = std::clamp(a / L, 0.0f, 1.0f);
-      fr.depth = t;
-      fr.weight = w;
-      fr.zThreshold = sp.zThreshold0 + u * (sp.zThreshold1 - sp.zThreshold0);
-      if (sp.smooth) fr.normal = sp.shadingNormal(u);
-      Vec3f albedo = sp.albedo;
-      if (sp.textured) {  // §5.2.4: interpolated between the endpoints, constant beyond
-        const Vec2f uv = sp.uv0 + u * (sp.uv1 - sp.uv0);
-        albedo = frame.texture->sampleBilinear(uv.x(), uv.y()).head<3>();
-      }
-      if (perPixel) {
-        const Vec3f P = t * Vec3f((px - pp.x()) / f, -(py - pp.y()) / f, -1.0f);
-        fr.color = frame.shade(albedo, fr.normal, P);
-      } else {
-        const float fs = u * float(stations - 1);
-        const int k = std::min(int(fs), stations - 2);
-        const float v = fs - float(k);
-        const Vec3f dif = (1 - v) * sp.diffuse[k] + v * sp.diffuse[k + 1];
-        const Vec3f spec = (1 - v) * sp.specular[k] + v * sp.specular[k + 1];
-        fr.color = albedo.cwiseProduct(dif) + spec;
-      }
-      ctx.tile.insert(x, y, fr);
+      shading.at(u, attr);
+      ctx.tile.insert(x, y, t, sp.zThreshold0 + u * (sp.zThreshold1 - sp.zThreshold0), w, attr);
     }
   }
 }

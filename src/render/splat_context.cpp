@@ -50,6 +50,13 @@ FrameContext FrameContext::make(const Camera& camera, const RenderOptions& optio
   f.fixedZThreshold = options.zThreshold * (sphere.radius > 0 ? sphere.radius : 1.0f);
   f.cutoffQ = options.cutoffRadius * options.cutoffRadius;
   f.frustum = camera.frustumPlanes();
+  const Material& m = options.material;
+  if (m.specular > 0 && m.shininess <= 128) {
+    auto table = std::make_shared<std::vector<float>>(kSpecularTable + 2);
+    for (int i = 0; i <= kSpecularTable + 1; ++i)
+      (*table)[i] = std::pow(std::min(1.0f, float(i) / kSpecularTable), m.shininess);
+    f.specularPow = std::move(table);
+  }
   return f;
 }
 
@@ -64,8 +71,17 @@ Vec3f FrameContext::shade(const Vec3f& albedo, const Vec3f& n, const Vec3f& p) c
     Vec3f h = (l + v);
     float hn = h.norm();
     if (hn > 0) {
-      float ndh = std::max(0.0f, n.dot(h / hn));
-      out.array() += m.specular * std::pow(ndh, m.shininess);
+      const float ndh = std::clamp(n.dot(h) / hn, 0.0f, 1.0f);
+      float power;
+      if (specularPow) {
+        const float x = ndh * kSpecularTable;
+        const int i = int(x);
+        const float* t = specularPow->data();
+        power = t[i] + (x - float(i)) * (t[i + 1] - t[i]);
+      } else {
+        power = std::pow(ndh, m.shininess);
+      }
+      out.array() += m.specular * power;
     }
   }
   return out.cwiseProduct(options->light.color);

@@ -3,14 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "linesurf/render/render_options.h"
 
 namespace linesurf {
 
-Z3Tile::Z3Tile(const PixelRect& rect, int layers, bool keepNormals)
-    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)), keepNormals_(keepNormals),
-      stride_(size_t(kFields) * size_t(layers_)) {
+Z3Tile::Z3Tile(const PixelRect& rect, int layers)
+    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)), stride_(size_t(kStride) * size_t(layers_)) {
   reset(rect);
 }
 
@@ -23,59 +23,51 @@ void Z3Tile::reset(const PixelRect& rect) {
 }
 
 namespace {
-// Moves layer s to slot d (all fields) within one pixel block.
-inline void moveLayer(float* px, int L, int d, int s) {
-  for (int f = 0; f < 11; ++f) px[f * L + d] = px[f * L + s];
-}
+constexpr int kRecord = 16;  // floats per layer record (Z3Tile::kStride)
+// Moves layer s to slot d within one pixel block.
+inline void moveLayer(float* px, int d, int s) { std::memcpy(px + d * kRecord, px + s * kRecord, sizeof(float) * kRecord); }
 }  // namespace
 
 // Composites the adjacent pair of layers (i, i+1) with the smallest depth gap into one (step c).
 // The merged layer keeps the pair's total weight W so that later fragments merge into it in
 // proportion (the thesis sets w_m = 1, which makes later merges depend on the weight scale).
+// With deferred shading the colour sums are albedos: they are composited alike.
 void Z3Tile::compress(float* px, int& n) {
-  const int L = layers_;
-  float* z = px + kZ * L;
   int best = 0;
   float bestGap = INFINITY;
   for (int i = 0; i + 1 < n; ++i) {
-    float gap = z[i + 1] - z[i];
+    const float gap = px[(i + 1) * kStride + kZ] - px[i * kStride + kZ];
     if (gap < bestGap) { bestGap = gap; best = i; }
   }
-  const int f = best, b = best + 1;
-  float* w = px + kW * L;
-  float* a = px + kA * L;
-  const float iwf = 1.0f / w[f], iwb = 1.0f / w[b];
-  const float af = a[f] * iwf, ab = a[b] * iwb;
+  float* F = px + best * kStride;
+  const float* B = F + kStride;
+  const float iwf = 1.0f / F[kW], iwb = 1.0f / B[kW];
+  const float af = F[kA] * iwf, ab = B[kA] * iwb;
   const float tb = ab * (1 - af);
   const float am = af + tb;
-  const float W = w[f] + w[b];
+  const float W = F[kW] + B[kW];
   const float s = am > 0 ? W / am : 0;  // store straight colour times W
-  for (int c = kR; c <= kB; ++c) {
-    float* ch = px + c * L;
-    ch[f] = (ch[f] * iwf * af + ch[b] * iwb * tb) * s;
-  }
-  a[f] = am * W;
-  for (int c = kNx; c <= kNz; ++c) px[c * L + f] *= W * iwf;  // normal of the front layer
-  z[f] = 0.5f * (z[f] + z[b]);
-  px[kThr * L + f] = std::max(px[kThr * L + f], px[kThr * L + b]);
-  w[f] = W;
-  px[kOpaque * L + f] = am >= 1.0f ? 1.0f : 0.0f;
-  for (int i = b; i + 1 < n; ++i) moveLayer(px, L, i, i + 1);
+  for (int c = kR; c <= kB; ++c) F[c] = (F[c] * iwf * af + B[c] * iwb * tb) * s;
+  F[kA] = am * W;
+  for (int c = kNx; c <= kNz; ++c) F[c] *= W * iwf;  // normal of the front layer
+  F[kZ] = 0.5f * (F[kZ] + B[kZ]);
+  F[kThr] = std::max(F[kThr], B[kThr]);
+  F[kW] = W;
+  F[kOpaque] = am >= 1.0f ? 1.0f : 0.0f;
+  for (int i = best + 1; i + 1 < n; ++i) moveLayer(px, i, i + 1);
   --n;
-  if (px[kOpaque * L + f] != 0) n = f + 1;  // an opaque merged layer hides everything behind it
+  if (F[kOpaque] != 0) n = best + 1;  // an opaque merged layer hides everything behind it
   ++counters_.compressed;
 }
 
-void Z3Tile::insertNew(size_t p, const Fragment& fr) {
+void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const float* attr) {
   ++counters_.fragments;
   float* px = block(p);
   const int L = layers_;
   int n = count_[p];
-  const float w = fr.weight;
-  float* z = px + kZ * L;
-  float* thr = px + kThr * L;
+  const float alpha = attr[kA];
   // behind an opaque layer (always the last one): occluded
-  if (n > 0 && px[kOpaque * L + n - 1] != 0 && fr.depth > z[n - 1]) {
+  if (n > 0 && px[(n - 1) * kStride + kOpaque] != 0 && depth > px[(n - 1) * kStride + kZ]) {
     ++counters_.occluded;
     return;
   }
@@ -83,21 +75,21 @@ void Z3Tile::insertNew(size_t p, const Fragment& fr) {
   if (n == L) {
     if (n == 1) {
       // One layer: composite the fragment with it directly, in depth order.
-      const float wl = px[kW], al = px[kA] / wl, af = fr.alpha;
-      const Vec3f cl(px[kR] / wl, px[kG] / wl, px[kB] / wl);
-      const bool front = fr.depth < z[0];
+      const float wl = px[kW], al = px[kA] / wl, af = alpha;
+      const Vec3f cl(px[kR] / wl, px[kG] / wl, px[kB] / wl), cf(attr[kR], attr[kG], attr[kB]);
+      const bool front = depth < px[kZ];
       const float aFront = front ? af : al, aBack = front ? al : af;
-      const Vec3f cFront = front ? fr.color : cl, cBack = front ? cl : fr.color;
+      const Vec3f cFront = front ? cf : cl, cBack = front ? cl : cf;
       const float am = aFront + aBack * (1 - aFront);
       const Vec3f cm = cFront * aFront + cBack * (aBack * (1 - aFront));
       const float W = wl + w;
       const float sc = am > 0 ? W / am : 0;
       px[kR] = cm.x() * sc; px[kG] = cm.y() * sc; px[kB] = cm.z() * sc;
       px[kA] = am * W;
-      if (front) { px[kNx] = fr.normal.x() * W; px[kNy] = fr.normal.y() * W; px[kNz] = fr.normal.z() * W; }
+      if (front) { px[kNx] = attr[kNx] * W; px[kNy] = attr[kNy] * W; px[kNz] = attr[kNz] * W; }
       else { px[kNx] *= W / wl; px[kNy] *= W / wl; px[kNz] *= W / wl; }
-      z[0] = 0.5f * (z[0] + fr.depth);
-      thr[0] = std::max(thr[0], fr.zThreshold);
+      px[kZ] = 0.5f * (px[kZ] + depth);
+      px[kThr] = std::max(px[kThr], zThreshold);
       px[kW] = W;
       px[kOpaque] = am >= 1.0f ? 1.0f : 0.0f;
       ++counters_.compressed;
@@ -105,7 +97,8 @@ void Z3Tile::insertNew(size_t p, const Fragment& fr) {
     }
     compress(px, n);
     // the compression may have produced an opaque layer in front of the fragment
-    if (px[kOpaque * L + n - 1] != 0 && fr.depth > z[n - 1] + std::max(fr.zThreshold, thr[n - 1])) {
+    const float* last = px + (n - 1) * kStride;
+    if (last[kOpaque] != 0 && depth > last[kZ] + std::max(zThreshold, last[kThr])) {
       count_[p] = uint8_t(n);
       ++counters_.occluded;
       return;
@@ -113,48 +106,17 @@ void Z3Tile::insertNew(size_t p, const Fragment& fr) {
   }
   // b. allocation, keeping the layers sorted front to back
   int pos = n;
-  while (pos > 0 && z[pos - 1] > fr.depth) --pos;
-  const bool opaque = fr.alpha >= 1.0f;
+  while (pos > 0 && px[(pos - 1) * kStride + kZ] > depth) --pos;
+  const bool opaque = alpha >= 1.0f;
   if (opaque) n = pos;  // everything behind an opaque fragment is occluded: free it
-  for (int i = n; i > pos; --i) moveLayer(px, L, i, i - 1);
-  z[pos] = fr.depth;
-  thr[pos] = fr.zThreshold;
-  px[kR * L + pos] = w * fr.color.x();
-  px[kG * L + pos] = w * fr.color.y();
-  px[kB * L + pos] = w * fr.color.z();
-  px[kA * L + pos] = w * fr.alpha;
-  px[kW * L + pos] = w;
-  px[kNx * L + pos] = w * fr.normal.x();
-  px[kNy * L + pos] = w * fr.normal.y();
-  px[kNz * L + pos] = w * fr.normal.z();
-  px[kOpaque * L + pos] = opaque ? 1.0f : 0.0f;
+  for (int i = n; i > pos; --i) moveLayer(px, i, i - 1);
+  float* ly = px + pos * kStride;
+  for (int k = 0; k < kAttrs; ++k) ly[k] = w * attr[k];
+  ly[kZ] = depth;
+  ly[kThr] = zThreshold;
+  ly[kOpaque] = opaque ? 1.0f : 0.0f;
   count_[p] = uint8_t(n + 1);
   ++counters_.allocated;
-}
-
-ResolvedPixel Z3Tile::resolve(int x, int y) const {
-  ResolvedPixel out;
-  const size_t p = index(x, y);
-  const int n = count_[p];
-  if (n == 0) return out;
-  const float* px = block(p);
-  const int L = layers_;
-  // Front-to-back "under" compositing of the normalised layers == the thesis's back-to-front merge.
-  Vec3f c = Vec3f::Zero();
-  float a = 0;
-  for (int i = 0; i < n && a < 1.0f; ++i) {
-    const float iw = 1.0f / px[kW * L + i];
-    const float al = std::clamp(px[kA * L + i] * iw, 0.0f, 1.0f);
-    const float t = (1 - a) * al;
-    c += t * iw * Vec3f(px[kR * L + i], px[kG * L + i], px[kB * L + i]);
-    a += t;
-  }
-  out.color = Color(c.x(), c.y(), c.z(), a);
-  out.depth = px[kZ * L];
-  Vec3f nrm(px[kNx * L], px[kNy * L], px[kNz * L]);
-  const float nn = nrm.norm();
-  out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
-  return out;
 }
 
 }  // namespace linesurf

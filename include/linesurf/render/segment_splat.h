@@ -10,7 +10,7 @@
 /// with M(t) = sigma_r^2 I + V_h J(t)^-1 J(t)^-T the object-space resampling covariance of the
 /// point p(t) (Jacobian J(t) recomputed along the segment, §5.1.2), q_t the Mahalanobis distance
 /// in M(t) of the pixel's ray/plane intersection from p(t), each point kernel cut off at
-/// q <= cutoffRadius^2 exactly as point splats are (point_splat.h: weight exp(-q/2)/(r0 r1)).
+/// q <= cutoffRadius^2 exactly as point splats are (src/render/point_splat.h: weight exp(-q/2)/(r0 r1)).
 /// A row of points at spacing h and a segment through them therefore give the same weight
 /// profile, and points and segments blend into one surface through Z^3.
 ///
@@ -42,8 +42,9 @@
 ///    frame.zThreshold(depth extent), interpolated along the segment in PerPrimitive mode.
 ///  - Texture (§5.2.4): uv interpolated between the endpoints and held constant beyond them
 ///    (the thesis assigns the endpoint's uv to points 1, 4, 5, 9, 11, 18); sampled per pixel.
-///  - Lighting: Phong at stations along the segment interpolated along it (Gouraud, §6.2.2),
-///    or per pixel with RenderOptions::perPixelLighting.
+///  - Lighting: Phong at stations along the segment interpolated along it (Gouraud, §6.2.2), or
+///    per pixel with RenderOptions::perPixelLighting (deferred: the fragments carry albedo and
+///    normal, lit once per pixel and Z^3 layer at the resolve, renderer.cpp).
 ///  - Smooth line models (beyond the thesis): when the model has Attributes::endpointNormals
 ///    (FrameContext::endpointNormals) and both of a segment's normal0/normal1 are usable, the
 ///    shading normal is interpolated between them along the segment (normalize(lerp(n0, n1, u)),
@@ -53,7 +54,6 @@
 #include <vector>
 
 #include "linesurf/core/model.h"
-#include "linesurf/render/point_splat.h"
 #include "linesurf/render/splat_context.h"
 
 namespace linesurf {

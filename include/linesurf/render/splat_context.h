@@ -14,9 +14,11 @@
 ///         void rasterizeK(const PreparedK& prepared, const SplatContext& ctx);
 ///     A rasteriser only writes into ctx.tile, so the image is the same for any thread count.
 ///
-/// Points: point_splat.h. Line segments: segment_splat.h.
+/// Points: src/render/point_splat.h. Line segments: segment_splat.h.
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <vector>
 
 #include "linesurf/core/image.h"
 #include "linesurf/core/math.h"
@@ -82,7 +84,12 @@ struct FrameContext {
 
   /// Phong shading (Material) of `albedo` at a camera-space surface point with camera-space
   /// unit normal facing the viewer (flip it first for two-sided lighting). Returns linear RGB.
+  /// The specular power comes from specularPow when make() built it.
   Vec3f shade(const Vec3f& albedo, const Vec3f& normalCamera, const Vec3f& pointCamera) const;
+  /// x^shininess on [0, 1] at kSpecularTable + 2 samples, linearly interpolated (error below 1e-4
+  /// up to shininess 128; null above, where std::pow is used).
+  std::shared_ptr<const std::vector<float>> specularPow;
+  static constexpr int kSpecularTable = 4096;
 
   /// Builds the context for one frame (normalises the light, computes fixedZThreshold, cutoffQ).
   static FrameContext make(const Camera& camera, const RenderOptions& options, const BoundingSphere& sphere,

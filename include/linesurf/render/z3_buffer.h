@@ -11,11 +11,18 @@
 ///     then on rejects) everything farther than its own threshold (step b);
 ///  c. compression: when all layers are taken, the two nearest (front-most) layers are
 ///     composited into one (normalised colours, "over" operator, W = 1; step c);
-///  2. resolve: layers normalised (C/W, A/W) and composited back to front.
-/// Storage is SoA with a fixed number of layers per pixel (no allocation per fragment).
+///  2. resolve: layers normalised (C/W, A/W), lit when shading is deferred (C is then the
+///     weighted albedo, lit once per layer with the normalised N), composited back to front.
+/// Storage: a fixed number of layers per pixel, one 64-byte record per layer whose first eight
+/// floats are the blended sums, so a merge is one 8-wide multiply-add (no allocation per fragment).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "linesurf/core/image.h"
 #include "linesurf/core/math.h"
@@ -38,15 +45,15 @@ struct PixelRect {
 struct Fragment {
   float depth = 0;        ///< linear camera depth (camera.h), > 0
   float zThreshold = 0;   ///< merge tolerance in depth units (FrameContext::zThreshold)
-  Vec3f color = Vec3f::Zero();   ///< shaded linear RGB, straight (not weighted, not premultiplied)
+  Vec3f color = Vec3f::Zero();   ///< linear RGB, straight: shaded, or the albedo when shading is deferred
   float alpha = 1;        ///< opacity in [0, 1]; 1 = opaque
   float weight = 0;       ///< resampling-filter weight (> 0; fragments with weight <= 0 are ignored)
-  Vec3f normal = Vec3f::Zero();  ///< camera-space unit normal, for the normal buffer (may be zero)
+  Vec3f normal = Vec3f::Zero();  ///< camera-space unit normal (deferred lighting, normal buffer; may be zero)
 };
 
 /// Counters of one tile (summed into RenderStats).
 struct Z3Counters {
-  uint64_t fragments = 0;   ///< insert() calls with positive weight
+  uint64_t fragments = 0;   ///< insertions with positive weight
   uint64_t merged = 0;      ///< merged into an existing layer (step a)
   uint64_t allocated = 0;   ///< started a new layer (step b)
   uint64_t occluded = 0;    ///< rejected behind an opaque layer
@@ -62,69 +69,98 @@ struct ResolvedPixel {
 
 class Z3Tile {
  public:
+  /// The blended attributes of a fragment, in the order a layer stores their weighted sums:
+  /// colour (or albedo), alpha, 1 (the weight itself), normal.
+  enum Attr { kR, kG, kB, kA, kW, kNx, kNy, kNz, kAttrs };
   /// A tile covering `rect` with `layers` layers per pixel (1..RenderOptions::kMaxLayers).
-  /// keepNormals = false skips the weighted normal sums of merged fragments (ResolvedPixel::normal
-  /// is then the normal of the fragment that opened the layer).
-  Z3Tile(const PixelRect& rect, int layers, bool keepNormals = true);
+  Z3Tile(const PixelRect& rect, int layers);
   /// Clears the tile and moves it to `rect` (no reallocation when it is not larger).
   void reset(const PixelRect& rect);
 
   const PixelRect& rect() const { return rect_; }
   int layers() const { return layers_; }
 
-  bool keepsNormals() const { return keepNormals_; }
-
-  /// Inserts a fragment at absolute pixel (x, y), which must lie inside rect().
+  /// Inserts a fragment at absolute pixel (x, y), which must lie inside rect(): weight > 0 (else
+  /// ignored), linear depth, z threshold, attr[kAttrs] = (r, g, b, alpha, 1, nx, ny, nz).
   /// The common case (merge into an existing layer, step a) is inline.
-  void insert(int x, int y, const Fragment& f) {
-    if (!(f.weight > 0)) return;
+  void insert(int x, int y, float depth, float zThreshold, float weight, const float* attr) {
+    if (!(weight > 0)) return;
     const size_t p = index(x, y);
     float* px = block(p);
-    const int L = layers_, n = count_[p];
+    const int n = count_[p];
     int hit = -1;
     float hitDz = INFINITY;
     for (int i = 0; i < n; ++i) {
-      const float dz = std::abs(f.depth - px[kZ * L + i]);
-      const float t = f.zThreshold > px[kThr * L + i] ? f.zThreshold : px[kThr * L + i];
+      const float* ly = px + i * kStride;
+      const float dz = std::abs(depth - ly[kZ]);
+      const float t = zThreshold > ly[kThr] ? zThreshold : ly[kThr];
       if (dz <= t && dz < hitDz) { hit = i; hitDz = dz; }
     }
-    if (hit < 0) return insertNew(p, f);
-    const float w = f.weight;
-    px[kR * L + hit] += w * f.color.x();
-    px[kG * L + hit] += w * f.color.y();
-    px[kB * L + hit] += w * f.color.z();
-    px[kA * L + hit] += w * f.alpha;
-    px[kW * L + hit] += w;
-    if (keepNormals_) {
-      px[kNx * L + hit] += w * f.normal.x();
-      px[kNy * L + hit] += w * f.normal.y();
-      px[kNz * L + hit] += w * f.normal.z();
-    }
-    if (f.alpha < 1.0f) px[kOpaque * L + hit] = 0;
+    if (hit < 0) return insertNew(p, depth, zThreshold, weight, attr);
+    float* ly = px + hit * kStride;
+#if defined(__SSE2__)
+    const __m128 wv = _mm_set1_ps(weight);  // the sums: two 4-wide multiply-adds
+    _mm_storeu_ps(ly, _mm_add_ps(_mm_loadu_ps(ly), _mm_mul_ps(wv, _mm_loadu_ps(attr))));
+    _mm_storeu_ps(ly + 4, _mm_add_ps(_mm_loadu_ps(ly + 4), _mm_mul_ps(wv, _mm_loadu_ps(attr + 4))));
+#else
+    for (int k = 0; k < kAttrs; ++k) ly[k] += weight * attr[k];
+#endif
+    if (attr[kA] < 1.0f) ly[kOpaque] = 0;
     ++counters_.fragments;
     ++counters_.merged;
   }
+  void insert(int x, int y, const Fragment& f) {
+    const float attr[kAttrs] = {f.color.x(), f.color.y(), f.color.z(), f.alpha, 1.0f, f.normal.x(), f.normal.y(), f.normal.z()};
+    insert(x, y, f.depth, f.zThreshold, f.weight, attr);
+  }
 
-  /// Resolves pixel (x, y) (absolute, inside rect()): back-to-front composite of its layers.
-  ResolvedPixel resolve(int x, int y) const;
+  /// Resolves pixel (x, y) (absolute, inside rect()): front-to-back "under" compositing of its
+  /// normalised layers (== the thesis's back-to-front merge). Layer colours as stored.
+  ResolvedPixel resolve(int x, int y) const {
+    return resolve(x, y, [](const Vec3f& c, const Vec3f&, float) { return c; });
+  }
+  /// The same with deferred shading: each layer's colour is shade(albedo, normal sum (not
+  /// normalised), layer depth).
+  template <class Shade>
+  ResolvedPixel resolve(int x, int y, Shade&& shade) const {
+    ResolvedPixel out;
+    const size_t p = index(x, y);
+    const int n = count_[p];
+    if (n == 0) return out;
+    const float* px = block(p);
+    Vec3f c = Vec3f::Zero();
+    float a = 0;
+    for (int i = 0; i < n && a < 1.0f; ++i) {
+      const float* ly = px + i * kStride;
+      const float iw = 1.0f / ly[kW];
+      const float al = std::clamp(ly[kA] * iw, 0.0f, 1.0f);
+      const float t = (1 - a) * al;
+      c += t * shade(Vec3f(ly[kR] * iw, ly[kG] * iw, ly[kB] * iw), Vec3f(ly[kNx], ly[kNy], ly[kNz]), ly[kZ]);
+      a += t;
+    }
+    out.color = Color(c.x(), c.y(), c.z(), a);
+    out.depth = px[kZ];
+    const Vec3f nrm(px[kNx], px[kNy], px[kNz]);
+    const float nn = nrm.norm();
+    out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
+    return out;
+  }
   /// Number of layers in use at (x, y).
   int layerCount(int x, int y) const { return count_[index(x, y)]; }
 
   const Z3Counters& counters() const { return counters_; }
 
  private:
-  // One contiguous block per pixel: field-major arrays over the layers (SoA inside the pixel),
-  // so an insertion touches a few adjacent cache lines.
-  enum Field { kZ, kThr, kR, kG, kB, kA, kW, kNx, kNy, kNz, kOpaque, kFields };
+  // Layer record: the kAttrs sums, then depth, threshold and the opaque flag; 16 floats.
+  enum Field { kZ = kAttrs, kThr, kOpaque, kStride = 16 };
   size_t index(int x, int y) const { return size_t(y - rect_.y0) * size_t(rect_.width()) + size_t(x - rect_.x0); }
   float* block(size_t pixel) { return data_.data() + pixel * stride_; }
   const float* block(size_t pixel) const { return data_.data() + pixel * stride_; }
   void compress(float* px, int& n);
-  void insertNew(size_t pixel, const Fragment& f);  // steps b and c
+  void insertNew(size_t pixel, float depth, float zThreshold, float weight, const float* attr);  // steps b and c
   PixelRect rect_;
   int layers_;
-  bool keepNormals_ = true;
-  size_t stride_;  ///< kFields * layers_
+  size_t stride_;  ///< kStride * layers_
   std::vector<uint8_t> count_;
   std::vector<float> data_;
   Z3Counters counters_;

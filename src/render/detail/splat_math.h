@@ -8,6 +8,33 @@
 
 namespace linesurf::detail {
 
+/// pi, for every splat kind.
+inline constexpr double kPi = 3.14159265358979323846;
+
+/// Limits that point and segment splats share, so that the primitives of one model are cut and
+/// culled alike. Largest stretch of the resampling filter relative to the reconstruction sigma:
+/// near edge-on the warped prefilter J^-1 V_h J^-T grows without bound (the plane projects to a
+/// line); past this stretch the splat is cut, which costs nothing visible (its screen width
+/// stays below a pixel) and keeps the footprint finite.
+inline constexpr float kMaxStretch = 24.0f;
+/// Primitives seen closer to edge-on than this |cos| (everywhere) are culled: they project to a line.
+inline constexpr float kMinFacing = 2e-3f;
+
+/// An affine function of the pixel position, f(px, py) = dx px + dy py + c.
+struct Affine2 {
+  float dx = 0, dy = 0, c = 0;
+  float at(float px, float py) const { return dx * px + dy * py + c; }
+};
+
+/// k . r(px, py) as an affine function of the pixel, where r(px, py) = ((px - cx)/f, -(py - cy)/f, -1)
+/// is the camera-space ray through the pixel at depth 1 (Camera::rayThrough). Every rasteriser
+/// intersects its primitive's plane with these rays.
+inline Affine2 rayDot(const Camera& cam, const Vec3f& k) {
+  const float f = cam.focalPixels();
+  const Vec2f pp = cam.principalPoint();
+  return {k.x() / f, -k.y() / f, -k.x() * pp.x() / f + k.y() * pp.y() / f - k.z()};
+}
+
 /// exp(-q/2) for q in [0, 25] (cutoff radius up to 5 sigma), linearly interpolated: the thesis's
 /// Gaussian weight texture in one dimension. Relative error below 1e-5.
 struct GaussTable {

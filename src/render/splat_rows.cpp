@@ -1,0 +1,148 @@
+// SIMD splat weights over pixel blocks with Google Highway's runtime dispatch (see
+// detail/splat_rows.h). Compiled once per x86 target; hwy picks the best the CPU runs.
+#include "detail/splat_rows.h"
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "render/splat_rows.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+#include <hwy/contrib/math/math-inl.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace linesurf::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+using DF = hn::ScalableTag<float>;
+using VF = hn::Vec<DF>;
+
+// Pixel centres of lanes k .. k + lanes - 1 of a row-major rectangle of `width` pixels.
+struct BlockWalker {
+  DF d;
+  VF iota = hn::Iota(d, 0.0f), half = hn::Set(d, 0.5f), w, x0, y0;
+  BlockWalker(int width, int px0, int py0)
+      : w(hn::Set(d, float(width))), x0(hn::Set(d, float(px0) + 0.5f)), y0(hn::Set(d, float(py0) + 0.5f)) {}
+  void at(int k, VF& px, VF& py) const {
+    const VF kk = hn::Add(iota, hn::Set(d, float(k)));
+    const VF row = hn::Floor(hn::Div(hn::Add(kk, half), w));
+    px = hn::Add(hn::NegMulAdd(row, w, kk), x0);
+    py = hn::Add(row, y0);
+  }
+};
+
+HWY_INLINE VF affine(DF d, const Affine2& f, VF px, VF py) {
+  return hn::MulAdd(hn::Set(d, f.dx), px, hn::MulAdd(hn::Set(d, f.dy), py, hn::Set(d, f.c)));
+}
+
+// The rays through lanes k.. meet a primitive's plane: pixel centres, 1 / N, depth, and the mask
+// of the lanes where the plane is hit in front of the eye (and within [near, far] when clipDepth).
+struct PlaneHit {
+  VF px, py, iN, z;
+  hn::Mask<DF> front;
+  PlaneHit(const BlockWalker& walk, int k, const Affine2& N, float depthNum, bool clipDepth, float nearD, float farD) {
+    const DF d;
+    walk.at(k, px, py);
+    const VF n = affine(d, N, px, py);
+    iN = hn::Div(hn::Set(d, 1.0f), n);
+    z = hn::Mul(hn::Set(d, depthNum), iN);
+    front = hn::Lt(n, hn::Zero(d));
+    if (clipDepth) front = hn::And(front, hn::And(hn::Ge(z, hn::Set(d, nearD)), hn::Le(z, hn::Set(d, farD))));
+  }
+};
+
+void PointWeights(const PointRaster& P, int x0, int y0, int width, int k0, int n, float* HWY_RESTRICT weight,
+                  float* HWY_RESTRICT depth, float* HWY_RESTRICT sOut, float* HWY_RESTRICT tOut) {
+  const BlockWalker walk(width, x0, y0);
+  const DF d;
+  const VF cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
+  for (int i = 0; i < n; i += int(hn::Lanes(d))) {
+    const PlaneHit h(walk, k0 + i, P.N, P.depthNum, P.clipDepth, P.nearD, P.farD);
+    const VF s = hn::Mul(affine(d, P.S, h.px, h.py), h.iN), t = hn::Mul(affine(d, P.T, h.px, h.py), h.iN);
+    const VF q = hn::MulAdd(s, s, hn::Mul(t, t));
+    const VF z = h.z;
+    const auto inside = hn::And(h.front, hn::Le(q, cutoff));
+    const VF w = hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale);
+    hn::StoreU(hn::IfThenElseZero(inside, w), d, weight + i);
+    hn::StoreU(z, d, depth + i);
+    if (sOut) {
+      hn::StoreU(s, d, sOut + i);
+      hn::StoreU(t, d, tOut + i);
+    }
+  }
+}
+
+// erf(x) from exp(-x^2) (Abramowitz & Stegun 7.1.26, absolute error < 1.5e-7).
+HWY_INLINE VF erfFromExp(DF d, VF x, VF expMinusX2) {
+  const VF ax = hn::Abs(x);
+  const VF t = hn::Div(hn::Set(d, 1.0f), hn::MulAdd(hn::Set(d, 0.3275911f), ax, hn::Set(d, 1.0f)));
+  VF p = hn::Set(d, 1.061405429f);
+  p = hn::MulAdd(p, t, hn::Set(d, -1.453152027f));
+  p = hn::MulAdd(p, t, hn::Set(d, 1.421413741f));
+  p = hn::MulAdd(p, t, hn::Set(d, -0.284496736f));
+  p = hn::MulAdd(p, t, hn::Set(d, 0.254829592f));
+  p = hn::Mul(p, t);
+  const VF r = hn::NegMulAdd(p, expMinusX2, hn::Set(d, 1.0f));
+  return hn::CopySign(r, x);
+}
+
+void SegmentWeights(const SegmentRaster& S, int x0, int y0, int width, int k0, int n, float* HWY_RESTRICT weight,
+                    float* HWY_RESTRICT depth, float* HWY_RESTRICT uOut, float* HWY_RESTRICT thrOut) {
+  const BlockWalker walk(width, x0, y0);
+  const DF d;
+  const VF one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
+  const VF a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0);
+  const VF len = hn::Set(d, S.length), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f), R2 = hn::Set(d, S.R2);
+  const VF aMin = hn::Set(d, S.aMin), aMax = hn::Set(d, S.aMax), bMax = hn::Set(d, S.bMax);
+  const VF skew = hn::Set(d, S.skew), across = hn::Set(d, S.across), invM00 = hn::Set(d, S.invM00);
+  const VF kk = hn::Set(d, S.k), erfScale = hn::Set(d, S.erfScale), scale0 = hn::Set(d, S.scale0),
+           slope = hn::Set(d, S.slope);
+  const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
+  for (int i = 0; i < n; i += int(hn::Lanes(d))) {
+    const PlaneHit h(walk, k0 + i, S.N, S.depthNum, S.clipDepth, S.nearD, S.farD);
+    const VF z = h.z;
+    const VF a = hn::MulSub(affine(d, S.A, h.px, h.py), h.iN, a0), b = hn::MulSub(affine(d, S.B, h.px, h.py), h.iN, b0);
+    auto inside = hn::And(h.front, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
+    // the integral along the sub-segment in closed form (segment_splat.cpp, screenSpaceWeight)
+    const VF tauStar = hn::MulAdd(skew, b, a);
+    const VF qmin = hn::Mul(hn::Mul(b, b), across);
+    inside = hn::And(inside, hn::Lt(qmin, R2));
+    const VF delta = hn::Sqrt(hn::Mul(hn::Max(hn::Sub(R2, qmin), zero), invM00));
+    const VF t0 = hn::Max(zero, hn::Sub(tauStar, delta)), t1 = hn::Min(len, hn::Add(tauStar, delta));
+    inside = hn::And(inside, hn::Gt(t1, t0));
+    const VF u0 = hn::Mul(kk, hn::Sub(t0, tauStar)), u1 = hn::Mul(kk, hn::Sub(t1, tauStar));
+    const VF g = hn::Exp(d, hn::Mul(hn::Min(qmin, R2), mhalf));
+    const VF e0 = hn::Exp(d, hn::Neg(hn::Min(hn::Mul(u0, u0), R2))),
+             e1 = hn::Exp(d, hn::Neg(hn::Min(hn::Mul(u1, u1), R2)));
+    const VF i0 = hn::Mul(erfScale, hn::Sub(erfFromExp(d, u1, e1), erfFromExp(d, u0, e0)));
+    VF w = hn::Mul(hn::Mul(hn::MulAdd(slope, tauStar, scale0), i0), g);
+    w = hn::MulAdd(hn::Mul(hn::Mul(slope, invM00), g), hn::Sub(e0, e1), w);
+    const VF u = hn::Min(one, hn::Max(zero, hn::Mul(a, invLen)));
+    hn::StoreU(hn::IfThenElseZero(inside, w), d, weight + i);
+    hn::StoreU(z, d, depth + i);
+    hn::StoreU(u, d, uOut + i);
+    hn::StoreU(hn::MulAdd(u, thrD, thr0), d, thrOut + i);
+  }
+}
+
+int64_t Target() { return HWY_TARGET; }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace linesurf::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace linesurf::detail {
+HWY_EXPORT(PointWeights);
+HWY_EXPORT(SegmentWeights);
+HWY_EXPORT(Target);
+
+void pointWeights(const PointRaster& p, int x0, int y0, int width, int k0, int n, float* weight, float* depth,
+                  float* s, float* t) {
+  HWY_DYNAMIC_DISPATCH(PointWeights)(p, x0, y0, width, k0, n, weight, depth, s, t);
+}
+void segmentWeights(const SegmentRaster& s, int x0, int y0, int width, int k0, int n, float* weight, float* depth,
+                    float* u, float* zThreshold) {
+  HWY_DYNAMIC_DISPATCH(SegmentWeights)(s, x0, y0, width, k0, n, weight, depth, u, zThreshold);
+}
+const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
+}  // namespace linesurf::detail
+#endif
