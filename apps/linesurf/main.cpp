@@ -50,6 +50,10 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
+    if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
+      printError(std::string("linesurf: unknown command '") + argv[1] + "' (see --help)");
+      return 1;
+    }
     printError(std::string("linesurf: ") + e.what() + " (see --help)");
     return 1;
   } catch (const Error& e) {

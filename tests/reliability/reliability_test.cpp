@@ -1,0 +1,359 @@
+// Reliability suite (issue 17): malformed and hostile files, absurd parameters and outputs that
+// cannot be written, across every command. Each case runs the CLI in a fresh folder holding good
+// fixtures, hostile files and sentinel files at every output path, and asserts
+//   - the exit code (1 usage/bad parameter, 2 bad input file, 3 failure to write / other),
+//   - exactly one line of output (-q), naming the file or option at fault,
+//   - every file that existed before is unchanged byte for byte, and no file was added (no
+//     half-written output, no temporary left behind).
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "linesurf/io/image_io.h"
+#include "linesurf/io/model_io.h"
+#include "sphere_fixture.h"
+#include "test_util.h"
+
+using namespace linesurf;
+namespace fs = std::filesystem;
+
+namespace {
+
+void put(const fs::path& p, const std::string& bytes) {
+  std::ofstream f(p, std::ios::binary);
+  f << bytes;
+}
+
+std::string plyHead(const std::string& format, int vertices, const std::string& vertexProps, int faces = -1,
+                    const std::string& faceProps = "property list uchar int vertex_indices\n") {
+  std::string h = "ply\nformat " + format + " 1.0\nelement vertex " + std::to_string(vertices) + "\n" + vertexProps;
+  if (faces >= 0) h += "element face " + std::to_string(faces) + "\n" + faceProps;
+  return h + "end_header\n";
+}
+const std::string kXYZ = "property float x\nproperty float y\nproperty float z\n";
+
+uint32_t crc32(const std::string& s) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (unsigned char b : s) {
+    c ^= b;
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return ~c;
+}
+std::string be32(uint32_t v) {
+  return {char(v >> 24), char((v >> 16) & 0xFF), char((v >> 8) & 0xFF), char(v & 0xFF)};
+}
+/// A tiny PNG file whose header declares w x h pixels (its data is far too short).
+std::string pngDeclaring(uint32_t w, uint32_t h) {
+  std::string ihdr = "IHDR" + be32(w) + be32(h) + std::string("\x08\x06\x00\x00\x00", 5);
+  std::string idat = "IDAT" + std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + ihdr + be32(crc32(ihdr)) + be32(8) + idat + be32(crc32(idat)) +
+         be32(0) + "IEND" + be32(crc32("IEND"));
+}
+
+/// Good fixtures, hostile files and sentinels, written once; every case gets a copy.
+const fs::path& templateDir() {
+  static const fs::path dir = [] {
+    // One template per process (ctest runs the cases in parallel processes); removed at exit.
+    fs::path d = test::scratchDir("reliability_template_" + std::to_string(::getpid()));
+    static struct Cleanup {
+      fs::path p;
+      ~Cleanup() {
+        std::error_code ec;
+        fs::remove_all(p, ec);
+      }
+    } cleanup{d};
+    // A sphere of 300 points: with normals and radii, and raw.
+    HybridModel pts = test::randomSphere(300, 1.0f, true, 7);
+    for (Point& p : pts.points) p.radius = 0.15f;
+    writeModel(d / "pts.ply", pts, WriteOptions{PlyEncoding::Ascii});
+    writeModel(d / "pts.xyz", pts);
+    HybridModel raw = pts;
+    raw.attributes = {};
+    writeModel(d / "raw.ply", raw);
+    // A 6 x 6 grid mesh.
+    TriangleMesh mesh;
+    for (int j = 0; j < 6; ++j)
+      for (int i = 0; i < 6; ++i) mesh.positions.emplace_back(float(i), float(j), 0.0f);
+    for (int j = 0; j < 5; ++j)
+      for (int i = 0; i < 5; ++i) {
+        uint32_t a = uint32_t(j * 6 + i);
+        mesh.faces.push_back({a, a + 1, a + 6});
+        mesh.faces.push_back({a + 1, a + 7, a + 6});
+      }
+    writeMesh(d / "mesh.ply", mesh);
+    for (const char* f : {"quad.obj", "quad.mtl", "texture.png"}) fs::copy_file(test::testData() / "ok" / f, d / f);
+    Image a(16, 16), c(8, 8);
+    for (auto& px : a.pixels) px = Color(0.5f, 0.25f, 1.0f, 1.0f);
+    writePng(d / "a.png", a);
+    writePng(d / "b.png", a);
+    writePng(d / "c.png", c);
+    put(d / "huge.png", pngDeclaring(16384, 16384));
+    put(d / "huge2.png", pngDeclaring(16384, 16384));
+    put(d / "notpng.png", "this is not an image\n");
+    fs::create_directories(d / "expdata");
+    fs::copy_file(d / "pts.ply", d / "expdata" / "pts.ply");
+
+    // Hostile model files.
+    const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
+    put(d / "face_oob.ply", plyHead("ascii", 3, kXYZ, 1) + tri + "3 0 1 7\n");
+    put(d / "face_neg.ply", plyHead("ascii", 3, kXYZ, 1) + tri + "3 0 -1 2\n");
+    put(d / "face_two.ply", plyHead("ascii", 3, kXYZ, 1) + tri + "2 0 1\n");
+    put(d / "face_scalar.ply", plyHead("ascii", 3, kXYZ, 1, "property int vertex_indices\n") + tri + "1\n");
+    put(d / "big_double.ply", plyHead("ascii", 1, "property double x\nproperty double y\nproperty double z\n") + "1e300 0 0\n");
+    put(d / "neg_radius.ply", plyHead("ascii", 3, kXYZ + "property float radius\n") + "0 0 0 0.1\n1 0 0 -0.1\n0 1 0 0.1\n");
+    put(d / "huge_radius.ply", plyHead("ascii", 3, kXYZ + "property float radius\n") + "0 0 0 0.1\n1 0 0 1e30\n0 1 0 0.1\n");
+    put(d / "neg_alpha.ply", plyHead("ascii", 2, kXYZ + "property float red\nproperty float green\nproperty float blue\nproperty float alpha\n") +
+                                 "0 0 0 1 1 1 1\n1 0 0 1 1 1 -0.5\n");
+    put(d / "red2.ply", plyHead("ascii", 2, kXYZ + "property float red\nproperty float green\nproperty float blue\n") +
+                            "0 0 0 2 1 1\n1 0 0 1 1 1\n");
+    put(d / "seg_inf.ply", "ply\nformat ascii 1.0\nelement segment 1\nproperty float x0\nproperty float y0\nproperty float z0\n"
+                           "property float x1\nproperty float y1\nproperty float z1\nend_header\n0 0 0 inf 0 0\n");
+    {
+      std::string u16 = "\xFF\xFE";  // UTF-16LE with BOM: "ply\n..." with NUL after every byte
+      for (char ch : std::string("ply\nformat ascii 1.0\nelement vertex 1\n")) u16 += std::string(1, ch) + '\0';
+      put(d / "utf16.ply", u16);
+    }
+    put(d / "junk_header.ply", std::string("ply\nformat ascii 1.0\nel\xE9ment\x01\x02 vertex 1\n") + kXYZ + "end_header\n0 0 0\n");
+    put(d / "truncated.ply", plyHead("binary_little_endian", 5, kXYZ) + std::string(20, '\0'));
+    put(d / "obj_abc.obj", "v 5 abc 7\nv 0 1 0\nv 1 0 0\nf 1 2 3\n");
+    put(d / "obj_short.obj", "v 0.5\n");
+    put(d / "obj_vnnan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn nan 0 1\nf 1//1 2//1 3//1\n");
+    put(d / "obj_f2.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n");
+    put(d / "obj_five.obj", "v 0 0 0 1 2\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    put(d / "obj_inf.obj", "v 1e39 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    put(d / "obj_oob.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    put(d / "obj_corner.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n");
+    put(d / "bad_inf.xyz", "0 0 0\n1e39 0 0\n");
+    put(d / "bad_text.xyz", "0 0 0\n1 2 three\n");
+    put(d / "bad_cols.xyz", "0 0 0\n1 2 3 4\n");
+    put(d / "empty.xyz", "");
+    put(d / "empty_cloud.ply", plyHead("ascii", 0, kXYZ));
+    put(d / "model.stl", "solid x\nendsolid x\n");
+    fs::create_directories(d / "folder.ply");
+    ::mkfifo((d / "fifo.ply").c_str(), 0644);
+    fs::create_symlink("/dev/zero", d / "zero.ply");
+    fs::create_symlink("pts.ply", d / "link.png");  // an output name that is the input
+
+    // Sentinels at every output path the cases name.
+    for (const char* s : {"out.png", "d.png", "n.png", "al.png", "diff.png", "out.ply", "c.ply", "out.xyz", "out.obj",
+                          "out_000.png", "conv_texture.png", "conv2.mtl", "exp/results.json"}) {
+      fs::create_directories((d / s).parent_path());
+      put(d / s, std::string("sentinel ") + s + "\n");
+    }
+    // Outputs that can be staged but not written: they fail after other outputs were written.
+    fs::create_directories(d / "out_001.png");
+    fs::create_directories(d / "conv.mtl");
+    fs::create_directories(d / "conv2_texture.png");
+    fs::create_directories(d / "outdir.png");
+    return d;
+  }();
+  return dir;
+}
+
+struct Entry {
+  std::string type;  ///< "file", "dir", "link", "other"
+  std::string bytes;
+};
+std::map<std::string, Entry> snapshot(const fs::path& root) {
+  std::map<std::string, Entry> s;
+  for (auto it = fs::recursive_directory_iterator(root); it != fs::recursive_directory_iterator(); ++it) {
+    const fs::path rel = it->path().lexically_relative(root);
+    const auto st = fs::symlink_status(it->path());
+    Entry e;
+    if (fs::is_symlink(st)) {
+      e = {"link", fs::read_symlink(it->path()).string()};
+    } else if (fs::is_regular_file(st)) {
+      std::ifstream f(it->path(), std::ios::binary);
+      std::stringstream ss;
+      ss << f.rdbuf();
+      e = {"file", ss.str()};
+    } else if (fs::is_directory(st)) {
+      e = {"dir", ""};
+    } else {
+      e = {"other", ""};
+    }
+    s[rel.string()] = e;
+  }
+  return s;
+}
+
+void copyTree(const fs::path& from, const fs::path& to) {
+  fs::create_directories(to);
+  for (auto it = fs::recursive_directory_iterator(from); it != fs::recursive_directory_iterator(); ++it) {
+    const fs::path rel = it->path().lexically_relative(from), dst = to / rel;
+    const auto st = fs::symlink_status(it->path());
+    if (fs::is_symlink(st)) fs::copy_symlink(it->path(), dst);
+    else if (fs::is_directory(st)) fs::create_directories(dst);
+    else if (fs::is_regular_file(st)) fs::copy_file(it->path(), dst);
+    else ::mkfifo(dst.c_str(), 0644);
+  }
+}
+
+test::CliResult runIn(const fs::path& dir, const std::string& args) {
+  test::CliResult r;
+  const std::string cmd = "cd '" + dir.string() + "' && timeout 60 " + std::string(LINESURF_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+struct Case {
+  std::string name, args;
+  int code;
+  std::vector<std::string> needles;  ///< each appears in the one-line message
+};
+
+std::ostream& operator<<(std::ostream& os, const Case& c) { return os << c.name; }
+
+// clang-format off
+const std::vector<Case> kCases = {
+  // --- Outputs: the transaction, refused paths, unwritable outputs ---------------------------
+  {"RenderDepthOutMissingFolder", "render pts.ply -o out.png --depth-out nodir/d.png", 3, {"nodir/d.png", "output folder does not exist"}},
+  {"RenderNormalOutMissingFolder", "render pts.ply -o out.png --normal-out nodir/n.png", 3, {"nodir/n.png"}},
+  {"RenderAlphaOutIsFolder", "render pts.ply -o out.png --alpha-out outdir.png", 3, {"outdir.png", "is a directory"}},
+  {"RenderOutputIsFolder", "render pts.ply -o outdir.png", 3, {"outdir.png", "is a directory"}},
+  {"RenderOutputOntoInput", "render pts.ply -o pts.ply", 1, {"--output", "pts.ply", "also the input"}},
+  {"RenderOutputLinkToInput", "render pts.ply -o link.png", 1, {"--output", "link.png", "also the input"}},
+  {"RenderDepthOntoInput", "render pts.ply -o out.png --depth-out ./pts.ply", 1, {"--depth-out", "also the input"}},
+  {"RenderJpegName", "render pts.ply -o r.jpg", 1, {"--output", "r.jpg", ".png"}},
+  {"RenderTwoOutputsOnePath", "render pts.ply -o out.png --depth-out out.png", 1, {"--depth-out", "--output"}},
+  {"RenderTwoOutputsOnePathSpelledApart", "render pts.ply -o out.png --normal-out ./sub/../out.png", 1, {"--normal-out"}},
+  {"RenderViewFailsAfterFirstView", "render pts.ply -o out.png --views 2 --size 32x32", 3, {"out_001.png", "is a directory"}},
+  {"RenderViewsDepthMissingFolder", "render pts.ply -o out.png --views 2 --size 32x32 --depth-out nodir/d.png", 3, {"nodir/d.png"}},
+  {"ConvertObjMtlIsFolder", "convert quad.obj conv.obj", 3, {"conv.mtl", "is a directory"}},
+  {"ConvertObjTextureIsFolder", "convert quad.obj conv2.obj", 3, {"conv2_texture.png", "is a directory"}},
+  {"ConvertOntoInput", "convert quad.obj quad.obj", 1, {"quad.obj", "also the input"}},
+  {"ConvertUnknownOutputFormat", "convert pts.ply out.stl", 1, {"out.stl", ".ply"}},
+  {"ConvertPointsToObj", "convert pts.ply out.obj", 1, {"out.obj"}},
+  {"ConvertEmptyCloudToXyzRefused", "convert empty_cloud.ply out.xyz", 3, {"out.xyz", "at least one point"}},
+  {"NormalsOntoInput", "normals raw.ply -o raw.ply", 1, {"--output", "raw.ply"}},
+  {"NormalsMissingFolder", "normals raw.ply -o nodir/x.ply", 3, {"nodir/x.ply"}},
+  {"EpsDeltaOntoInput", "extract eps-delta pts.ply -o pts.ply", 1, {"--output", "pts.ply"}},
+  {"EpsDeltaXyzOutput", "extract eps-delta pts.ply -o out.xyz", 1, {"--output", "out.xyz", ".ply"}},
+  {"ShapeApproxClustersMissingFolder", "extract shape-approx pts.ply -o out.ply --clusters-out nodir/c.ply", 3, {"nodir/c.ply"}},
+  {"ShapeApproxClustersOntoOutput", "extract shape-approx pts.ply -o out.ply --clusters-out out.ply", 1, {"--clusters-out", "--output"}},
+  {"ContourOntoInput", "extract contour mesh.ply -o mesh.ply", 1, {"--output", "mesh.ply"}},
+  {"CompareDiffOntoInput", "compare a.png b.png --diff a.png", 1, {"--diff", "a.png"}},
+  {"CompareDiffJpeg", "compare a.png b.png --diff out.jpg", 1, {"--diff", "out.jpg"}},
+  {"CompareDiffMissingFolder", "compare a.png b.png --diff nodir/diff.png", 3, {"nodir/diff.png"}},
+  // --- Resources ---------------------------------------------------------------------------
+  {"RenderHugeSize", "render pts.ply -o out.png --size 16384x16384", 1, {"--size", "--max-mb"}},
+  {"RenderSizeOverLoweredLimit", "render pts.ply -o out.png --size 512x512 --max-mb 1", 1, {"--size", "--max-mb"}},
+  {"ContourTinySpacing", "extract contour mesh.ply -o out.ply --spacing 1e-6", 1, {"--spacing", "--max-mb"}},
+  {"ContourTinySpacingAllPoints", "extract contour mesh.ply -o out.ply --spacing 1e-4 --all-points", 1, {"--spacing", "--max-mb"}},
+  {"ContourTinySpacingScale", "extract contour mesh.ply -o out.ply --spacing-scale 1e-6", 1, {"--spacing-scale"}},
+  {"CompareHugeHeaderSizeMismatch", "compare a.png huge.png", 2, {"huge.png", "16384x16384"}},
+  {"CompareHugeHeaders", "compare huge.png huge2.png --diff diff.png", 1, {"huge.png", "--max-mb"}},
+  {"InfoFifo", "info fifo.ply", 2, {"fifo.ply", "not a regular file"}},
+  {"RenderFifo", "render fifo.ply -o out.png", 2, {"fifo.ply", "not a regular file"}},
+  {"InfoDevZero", "info zero.ply", 2, {"zero.ply", "not a regular file"}},
+  {"ConvertDevZero", "convert zero.ply out.ply", 2, {"zero.ply"}},
+  {"InfoFolder", "info folder.ply", 2, {"folder.ply", "directory"}},
+  // --- Bad input files: every command applies the same checks --------------------------------
+  {"RenderMissingFile", "render missing.ply -o out.png", 2, {"missing.ply", "no such file"}},
+  {"NormalsMissingFile", "normals missing.xyz -o out.ply", 2, {"missing.xyz", "no such file"}},
+  {"InfoFaceOutOfRange", "info face_oob.ply", 2, {"face_oob.ply", "out of range"}},
+  {"NormalsFaceOutOfRange", "normals face_oob.ply -o out.ply", 2, {"face_oob.ply", "out of range"}},
+  {"EpsDeltaFaceNegative", "extract eps-delta face_neg.ply -o out.ply", 2, {"face_neg.ply", "out of range"}},
+  {"ShapeApproxFaceTwoCorners", "extract shape-approx face_two.ply -o out.ply", 2, {"face_two.ply", "at least 3"}},
+  {"ConvertFaceOutOfRange", "convert face_oob.ply out.ply", 2, {"face_oob.ply", "out of range"}},
+  {"ConvertFaceNotAList", "convert face_scalar.ply out.ply", 2, {"face_scalar.ply", "list"}},
+  {"RenderFaceNotAList", "render face_scalar.ply -o out.png", 2, {"face_scalar.ply", "list"}},
+  {"ConvertDoubleOverflowsFloat", "convert big_double.ply out.ply", 2, {"big_double.ply", "too large"}},
+  {"RenderNegativeRadius", "render neg_radius.ply -o out.png", 2, {"neg_radius.ply", "negative"}},
+  {"RenderHugeRadius", "render huge_radius.ply -o out.png", 2, {"huge_radius.ply", "radius"}},
+  {"RenderNegativeAlpha", "render neg_alpha.ply -o out.png", 2, {"neg_alpha.ply", "alpha"}},
+  {"ConvertColourAboveOne", "convert red2.ply out.ply", 2, {"red2.ply", "red"}},
+  {"RenderInfiniteSegment", "render seg_inf.ply -o out.png", 2, {"seg_inf.ply", "line 11", "x1"}},
+  {"InfoUtf16", "info utf16.ply", 2, {"utf16.ply"}},
+  {"InfoNonUtf8Header", "info junk_header.ply", 2, {"junk_header.ply", "line 3", "unknown header keyword"}},
+  {"RenderTruncatedBinary", "render truncated.ply -o out.png", 2, {"truncated.ply", "truncated"}},
+  {"InfoObjNotANumber", "info obj_abc.obj", 2, {"obj_abc.obj", "line 1", "abc"}},
+  {"ConvertObjTooFewCoordinates", "convert obj_short.obj out.ply", 2, {"obj_short.obj", "line 1"}},
+  {"RenderObjNanNormal", "render obj_vnnan.obj -o out.png", 2, {"obj_vnnan.obj", "line 4"}},
+  {"ContourObjTwoCornerFace", "extract contour obj_f2.obj -o out.ply", 2, {"obj_f2.obj", "line 4", "3 corners"}},
+  {"NormalsObjFiveCoordinates", "normals obj_five.obj -o out.ply", 2, {"obj_five.obj", "line 1"}},
+  {"ConvertObjOverflow", "convert obj_inf.obj out.ply", 2, {"obj_inf.obj", "line 1"}},
+  {"ConvertObjFaceOutOfRange", "convert obj_oob.obj out.obj", 2, {"obj_oob.obj", "out of range"}},
+  {"InfoObjBadCorner", "info obj_corner.obj", 2, {"obj_corner.obj", "line 4"}},
+  {"NormalsXyzOverflow", "normals bad_inf.xyz -o out.ply", 2, {"bad_inf.xyz", "line 2"}},
+  {"EpsDeltaXyzText", "extract eps-delta bad_text.xyz -o out.ply", 2, {"bad_text.xyz", "line 2"}},
+  {"ConvertXyzColumns", "convert bad_cols.xyz out.ply", 2, {"bad_cols.xyz", "line 2"}},
+  {"RenderEmptyXyz", "render empty.xyz -o out.png", 2, {"empty.xyz"}},
+  {"RenderUnknownExtension", "render model.stl -o out.png", 2, {"model.stl", "extension"}},
+  {"ContourOnPointCloud", "extract contour pts.ply -o out.ply", 2, {"pts.ply"}},
+  {"CompareNotAnImage", "compare notpng.png a.png", 2, {"notpng.png"}},
+  {"CompareMissingImage", "compare missing.png a.png", 2, {"missing.png"}},
+  {"CompareSizeMismatch", "compare a.png c.png --diff diff.png", 2, {"c.png", "differs"}},
+  {"VerifyMissingInput", "verify-extraction missing.ply pts.ply", 2, {"missing.ply"}},
+  // --- Parameters: refused at once with 1, naming the option -----------------------------------
+  {"RenderBadSize", "render pts.ply -o out.png --size 0x5", 1, {"--size"}},
+  {"RenderSizeJunk", "render pts.ply -o out.png --size 64x64x", 1, {"--size"}},
+  {"RenderZeroViews", "render pts.ply -o out.png --views 0", 1, {"--views"}},
+  {"RenderFov", "render pts.ply -o out.png --fov 500", 1, {"--fov"}},
+  {"RenderUpAxis", "render pts.ply -o out.png --up-axis w", 1, {"--up-axis"}},
+  {"RenderSegmentMethod", "render pts.ply -o out.png --segment-method foo", 1, {"--segment-method"}},
+  {"RenderBackground", "render pts.ply -o out.png --background purple", 1, {"--background"}},
+  {"RenderNegativeThreads", "render pts.ply -o out.png -j -1", 1, {"--threads"}},
+  {"RenderNoModel", "render -o out.png", 1, {"MODEL"}},
+  {"ShapeApproxDeltaN", "extract shape-approx pts.ply -o out.ply --delta-n 5", 1, {"delta-n"}},
+  {"NormalsTinyK", "normals raw.ply -o out.ply --k 1", 1, {"--k"}},
+  {"CompareSaturateZero", "compare a.png b.png --diff diff.png --saturate 0", 1, {"--saturate"}},
+  {"UnknownCommand", "frobnicate pts.ply", 1, {"frobnicate", "unknown command"}},
+  {"MaxMbZero", "info pts.ply --max-mb 0", 1, {"--max-mb"}},
+  {"ExperimentZeroViews", "experiment expdata -o exp --views 0", 1, {"--views"}},
+  {"ExperimentUnknownMethod", "experiment expdata -o exp --methods foo", 1, {"foo"}},
+  {"VerifyWithoutTolerances", "verify-extraction pts.ply raw.ply", 1, {"epsilon"}},
+};
+// clang-format on
+
+class Reliability : public ::testing::TestWithParam<Case> {};
+
+TEST_P(Reliability, RefusedInOneLineLeavingEveryFileAsItWas) {
+  const Case& c = GetParam();
+  const fs::path dir = fs::temp_directory_path() / ("linesurf_reliability_" + c.name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  copyTree(templateDir(), dir);
+  const auto before = snapshot(dir);
+  const test::CliResult r = runIn(dir, c.args + " -q");
+  EXPECT_EQ(r.exitCode, c.code) << c.args << "\n" << r.out;
+  ASSERT_FALSE(r.out.empty()) << c.args;
+  EXPECT_EQ(r.out.back(), '\n') << r.out;
+  EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << "not one line: " << r.out;
+  EXPECT_EQ(r.out.find('\0'), std::string::npos) << r.out;
+  for (const std::string& n : c.needles) EXPECT_NE(r.out.find(n), std::string::npos) << "'" << n << "' not in: " << r.out;
+  const auto after = snapshot(dir);
+  for (const auto& [path, e] : before) {
+    auto it = after.find(path);
+    ASSERT_NE(it, after.end()) << path << " was removed";
+    EXPECT_EQ(it->second.type, e.type) << path;
+    EXPECT_TRUE(it->second.bytes == e.bytes) << path << " changed";
+  }
+  for (const auto& [path, e] : after) EXPECT_TRUE(before.count(path)) << path << " was added (" << e.type << ")";
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, Reliability, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<Case>& i) { return i.param.name; });
+
+TEST(Reliability, AtLeastSixtyCases) { EXPECT_GE(kCases.size(), 60u); }
+
+}  // namespace
