@@ -207,6 +207,13 @@ void run(const RenderArgs& a) {
     Vec3f target = a.target.empty() ? sphere.center : frame.toNormalized(vec3(a.target, "--target"));
     Vec3f up = a.up.empty() ? Vec3f(0, 1, 0) : vec3(a.up, "--up");
     float dist = (eye - target).norm();
+    // Name the options (the camera's own message would say "near/far").
+    const char* which = !a.eye.empty() ? "--eye" : "--target";
+    if (!eye.allFinite() || !target.allFinite() || !std::isfinite(dist))
+      throwBadParameter(which, "--eye and --target must be finite points at a finite distance from each other");
+    if (!(dist > 0)) throwBadParameter(which, "--eye must differ from --target");
+    if (!up.allFinite() || !(up.cross(eye - target).norm() > 1e-6f * up.norm() * dist))
+      throwBadParameter("--up", "must be a finite vector not parallel to the view direction");
     float nearD = std::max(1e-4f * dist, dist - 1.5f * sphere.radius);
     float farD = std::max(dist + 1.5f * sphere.radius, 2 * nearD);
     cams.push_back(Camera::lookAt(eye, target, up, a.fov, w, h, nearD, farD));
