@@ -523,6 +523,13 @@ void main() {
     if (!gl.getExtension('EXT_color_buffer_float'))
       throw new Error('WebGL2 is there but without EXT_color_buffer_float (float render targets)');
     const floatBlend = !!gl.getExtension('EXT_float_blend');
+    const debugInfo = gl.getExtension('WEBGL_debug_renderer_info');
+    const gpuName = (() => {
+      const raw = debugInfo ? String(gl.getParameter(debugInfo.UNMASKED_RENDERER_WEBGL)) : '';
+      if (/swiftshader/i.test(raw)) return 'software GL (SwiftShader)';
+      if (/llvmpipe|softpipe|software/i.test(raw)) return 'software GL';
+      return raw.length > 48 ? raw.slice(0, 47) + '\u2026' : raw;
+    })();
     canvas.addEventListener('webglcontextlost', (e) => { e.preventDefault(); fail('the WebGL context was lost'); });
 
     const pointProg = model.np ? compile(gl, POINT_VS, POINT_FS, 'point splat') : null;
@@ -791,7 +798,9 @@ void main() {
       if (model.np) parts.push(state.showPoints ? `${counts.points.toLocaleString('en')} of ${model.np.toLocaleString('en')} points${pct(counts.points, model.np)}` : 'points hidden');
       if (model.ns) parts.push(state.showSegments ? `${counts.segments.toLocaleString('en')} of ${model.ns.toLocaleString('en')} segments${pct(counts.segments, model.ns)}` : 'segments hidden');
       $('counts').textContent = 'front-facing: ' + parts.join(', ');
-      $('frameTime').textContent = `frame ${lastFrameMs.toFixed(1)} ms at ${canvas.width}x${canvas.height}` +
+      // (under a headless browser's virtual time the clock stands still: no figure then)
+      $('frameTime').textContent = (lastFrameMs > 0 ? `frame ${lastFrameMs.toFixed(1)} ms` : 'frame') +
+        ` at ${canvas.width}x${canvas.height}` + (gpuName ? ' on ' + gpuName : '') +
         (floatBlend ? '' : ' (half-float accumulation)');
       describeCamera();
       document.body.setAttribute('data-state', 'drawn');
@@ -799,6 +808,7 @@ void main() {
 
     let pending = false;
     function requestDraw() {
+      describeCamera();  // at once: the arguments follow the mouse even before the frame is drawn
       if (pending) return;
       pending = true;
       requestAnimationFrame(() => { pending = false; try { draw(); } catch (e) { fail(e.message); } });
@@ -853,7 +863,7 @@ void main() {
     let gesture = null;
     canvas.addEventListener('contextmenu', (e) => e.preventDefault());
     canvas.addEventListener('pointerdown', (e) => {
-      canvas.setPointerCapture(e.pointerId);
+      try { canvas.setPointerCapture(e.pointerId); } catch (err) { /* synthetic or vanished pointer */ }
       pointers.set(e.pointerId, { x: e.clientX, y: e.clientY, button: e.button, shift: e.shiftKey });
       gesture = null;
     });
@@ -934,7 +944,7 @@ void main() {
       out.id = 'bench';
       out.textContent = `bench frames=${n} size=${canvas.width}x${canvas.height} median_ms=${med.toFixed(2)} ` +
         `min_ms=${times[0].toFixed(2)} max_ms=${times[times.length - 1].toFixed(2)} points=${model.np} segments=${model.ns} ` +
-        `renderer=${gl.getParameter(gl.RENDERER)}`;
+        `renderer=${(gpuName || gl.getParameter(gl.RENDERER)).replace(/\s+/g, '_')}`;
       document.body.appendChild(out);
       return;
     }

@@ -62,6 +62,36 @@ check igea_points "$SRC/data/igea_points.ply" 0.15,0.1,0.3 0,0,0 0,1,0 30
 check igea_greedy igea_greedy.ply -0.2,0.05,0.25 0,0,0 0,1,0 30
 check al_contour al_contour.ply 2.5,1.5,3 0,0.68,0 0,1,0 30
 
+# Controls: a mouse drag orbits (the camera shown as render arguments changes), the wheel zooms,
+# a right-drag pans, and "reset view" brings back the default view. Synthetic pointer events.
+cat >probe.js <<'JS'
+<script>
+setTimeout(() => {
+  const c = document.getElementById('gl'), cam = () => document.getElementById('camera').textContent;
+  const ev = (type, x, y, button) => c.dispatchEvent(new PointerEvent(type, { pointerId: 7, clientX: x, clientY: y,
+    button: button, buttons: 1, bubbles: true }));
+  const out = [cam()];
+  const step = (f) => new Promise((r) => { f(); setTimeout(r, 100); });
+  step(() => { ev('pointerdown', 200, 200, 0); ev('pointermove', 260, 230, 0); ev('pointerup', 260, 230, 0); })
+    .then(() => { out.push(cam()); return step(() => c.dispatchEvent(new WheelEvent('wheel', { deltaY: 300, bubbles: true, cancelable: true }))); })
+    .then(() => { out.push(cam()); return step(() => { ev('pointerdown', 200, 200, 2); ev('pointermove', 230, 200, 2); ev('pointerup', 230, 200, 2); }); })
+    .then(() => { out.push(cam()); return step(() => document.getElementById('reset').click()); })
+    .then(() => { out.push(cam()); const p = document.createElement('pre'); p.id = 'probe'; p.textContent = out.join('\n'); document.body.appendChild(p); });
+}, 200);
+</script>
+JS
+sed '/<\/body>/e cat probe.js' al_contour.html >probe.html
+dom=$(chrome probe.html "" --window-size=512,512 --virtual-time-budget=10000 --dump-dom)
+mapfile -t cams < <(sed -n '/<pre id="probe">/,/<\/pre>/p' <<<"$dom" | sed 's/<[^>]*>//g' | grep 'linesurf render')
+if [ ${#cams[@]} -eq 5 ] && [ "${cams[1]}" != "${cams[0]}" ] && [ "${cams[2]}" != "${cams[1]}" ] &&
+   [ "${cams[3]}" != "${cams[2]}" ] && [ "${cams[4]}" = "${cams[0]}" ]; then
+  echo "ok   controls: orbit, zoom and pan move the camera, reset restores '${cams[0]#*al_contour.ply }'"
+else
+  echo "FAIL controls: cameras seen:"
+  printf '  %s\n' "${cams[@]}"
+  fail=1
+fi
+
 # A damaged page shows its message instead of a blank canvas.
 # (the first 8 base64 characters of the model data cut: 6 bytes missing)
 sed -E 's|(<script id="linesurf-data" type="application/octet-stream">)[A-Za-z0-9+/]{8}|\1|' al_contour.html >damaged.html
