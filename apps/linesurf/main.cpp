@@ -3,6 +3,7 @@
 // Every error is one line on stderr ("PATH: WHERE: WHAT"). Every command runs inside one
 // OutputTransaction: its outputs are renamed into place only when the whole command succeeded.
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <new>
@@ -50,6 +51,13 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
+    // CLI11's ExistingFile / ExistingDirectory checks: a missing input is a bad input (2).
+    const std::string what = e.what();
+    for (const char* key : {"File does not exist: ", "Directory does not exist: ", "Path does not exist: "})
+      if (size_t at = what.find(key); at != std::string::npos) {
+        printError(what.substr(at + std::strlen(key)) + ": no such " + (key[0] == 'D' ? "folder" : "file"));
+        return 2;
+      }
     if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
       printError(std::string("linesurf: unknown command '") + argv[1] + "' (see --help)");
       return 1;

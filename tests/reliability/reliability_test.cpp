@@ -142,6 +142,7 @@ const fs::path& templateDir() {
     put(d / "empty.xyz", "");
     put(d / "empty_cloud.ply", plyHead("ascii", 0, kXYZ));
     put(d / "model.stl", "solid x\nendsolid x\n");
+    put(d / "new\nline\x01.xyz", "0 0 0\nnot a point\n");  // a name to print on one line
     fs::create_directories(d / "folder.ply");
     ::mkfifo((d / "fifo.ply").c_str(), 0644);
     fs::create_symlink("/dev/zero", d / "zero.ply");
@@ -321,6 +322,14 @@ const std::vector<Case> kCases = {
   {"MaxMbZero", "info pts.ply --max-mb 0", 1, {"--max-mb"}},
   {"ExperimentZeroViews", "experiment expdata -o exp --views 0", 1, {"--views"}},
   {"ExperimentUnknownMethod", "experiment expdata -o exp --methods foo", 1, {"foo"}},
+  {"RenderEyeIsTarget", "render pts.ply -o out.png --eye 0 0 0 --target 0 0 0", 1, {"--eye", "--target"}},
+  {"RenderUpAlongView", "render pts.ply -o out.png --eye 0 0 5 --target 0 0 0 --up 0 0 0", 1, {"--up"}},
+  {"ExperimentHugeBoundPrintedBriefly", "experiment expdata -o exp --contour-spacing -1", 1, {"--contour-spacing", "1e+30"}},
+  {"ViewOntoInput", "view pts.ply -o pts.ply", 1, {"--output", "pts.ply"}},
+  {"ViewMissingFolder", "view pts.ply -o nodir/v.html", 3, {"nodir/v.html"}},
+  {"ViewMissingModel", "view missing.ply -o out.html", 2, {"missing.ply: no such file"}},
+  {"ExperimentMissingFolder", "experiment nodata -o exp", 2, {"nodata: no such folder"}},
+  {"InfoControlBytesInName", "info new*line*.xyz", 2, {"new\\nline\\x01.xyz: line 2"}},
   {"VerifyWithoutTolerances", "verify-extraction pts.ply raw.ply", 1, {"epsilon"}},
 };
 // clang-format on
