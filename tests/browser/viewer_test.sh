@@ -96,13 +96,21 @@ fi
 # (the first 8 base64 characters of the model data cut: 6 bytes missing)
 sed -E 's|(<script id="linesurf-data" type="application/octet-stream">)[A-Za-z0-9+/]{8}|\1|' al_contour.html >damaged.html
 if cmp -s al_contour.html damaged.html; then echo "FAIL damaged: could not damage the page"; fail=1; fi
-dom=$(chrome damaged.html "" --window-size=512,512 --virtual-time-budget=5000 --dump-dom)
-if grep -q 'data-state="error"' <<<"$dom" && grep -q 'cannot draw this model' <<<"$dom"; then
-  echo "ok   damaged page: shows '$(tr '\n' ' ' <<<"$dom" | grep -o 'cannot draw this model[^<]*' | head -1)'"
-else
-  echo "FAIL damaged page: no visible error message"
-  fail=1
-fi
+# expect_message NAME PAGE CHROMIUM-FLAGS...: the page shows its error message, not a blank canvas.
+expect_message() {
+  local name=$1 page=$2
+  shift 2
+  local dom
+  dom=$(chrome "$page" "" --window-size=512,512 --virtual-time-budget=5000 --dump-dom "$@" | tr '\n' ' ')
+  if grep -q '<body data-state="error">' <<<"$dom" && grep -q '<div id="error">linesurf view cannot draw' <<<"$dom"; then
+    echo "ok   $name: shows '$(grep -o '<div id="error">[^<]*' <<<"$dom" | sed 's/<div id="error">//')'"
+  else
+    echo "FAIL $name: no visible error message"
+    fail=1
+  fi
+}
+expect_message "damaged page" damaged.html
+expect_message "no WebGL2" al_contour.html --disable-webgl2
 
 # Over the page's budget: refused with a one-line error and exit code 2, no page written.
 set +e
