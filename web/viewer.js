@@ -776,7 +776,8 @@ void main() {
       const v3 = (a) => a.map(fmt).join(' ');
       const args = `--size ${canvas.width}x${canvas.height} --eye ${v3(c.eye)} --target ${v3(c.target)} --up ${v3(c.up)} --fov ${fmt(c.fov)}`;
       const file = /^[\w.+-]+$/.test(meta.name || '') ? meta.name : 'MODEL';
-      $('camera').textContent = 'linesurf render ' + file + ' ' + args;
+      const extra = typeof meta.renderArguments === 'string' && meta.renderArguments ? ' ' + meta.renderArguments : '';
+      $('camera').textContent = 'linesurf render ' + file + ' ' + args + extra;
       const frag = `eye=${c.eye.map(fmt).join(',')}&target=${c.target.map(fmt).join(',')}&up=${c.up.map(fmt).join(',')}&fov=${fmt(c.fov)}`;
       const keep = Object.keys(params).filter((k) => !['eye', 'target', 'up', 'fov'].includes(k))
         .map((k) => encodeURIComponent(k) + '=' + encodeURIComponent(params[k]));

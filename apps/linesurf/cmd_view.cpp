@@ -9,6 +9,7 @@
 #include "drawable_model.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
+#include "linesurf/io/model_io.h"
 #include "linesurf/view/viewer_page.h"
 
 namespace linesurf::cli {
@@ -44,6 +45,7 @@ void run(const ViewArgs& a) {
   checkFiles({a.model}, {{"--output", out, {".html", ".htm"}}});
 
   HybridModel model = readDrawableModel(a.model);
+  if (fileHoldsMesh(a.model)) o.renderArguments = "--primitive points";  // render draws a mesh's faces
   // Refuse before the geometry stage: a model over the budget costs nothing more.
   const size_t primitives = model.points.size() + model.segments.size();
   if (primitives > a.maxPrimitives)

@@ -187,6 +187,7 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
   meta["bytes"] = blob.bytes().size();
   meta["sphere"] = {{"center", vec(centre)}, {"radius", sphere.radius}};
   meta["upAxis"] = vec(o.upAxis.normalized());
+  meta["renderArguments"] = o.renderArguments;
   meta["skipped"] = {{"points", st.skippedPoints}, {"segments", st.skippedSegments}};
   meta["defaults"] = {{"azimuth", o.azimuth},
                       {"elevation", o.elevation},

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <iterator>
 
 #include "linesurf/core/error.h"
 #include "linesurf/render/camera.h"
@@ -156,6 +157,12 @@ TEST(ViewCli, WritesAPageAndRefusesBadInput) {
                          (dir / "r.html").string() + " --up-axis z");
   EXPECT_EQ(ok.exitCode, 0) << ok.out;
   EXPECT_TRUE(std::filesystem::exists(dir / "r.html"));
+  // a mesh is drawn as its vertices: the page's render line says --primitive points
+  auto mesh = test::runCli("view " + (test::bundledData() / "al_mesh.ply").string() + " -o " + (dir / "m.html").string());
+  EXPECT_EQ(mesh.exitCode, 0) << mesh.out;
+  std::ifstream in(dir / "m.html");
+  const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(page.find("\"renderArguments\":\"--primitive points\""), std::string::npos);
   auto missing = test::runCli("view " + (dir / "missing.ply").string());
   EXPECT_NE(missing.exitCode, 0);
   std::ofstream(dir / "bad.ply") << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1\n";

@@ -26,6 +26,9 @@ struct ViewerPageOptions {
   size_t maxPrimitives = 5'000'000;
   /// World up axis of the default orbit view and of the turntable (as `render --up-axis`).
   Vec3f upAxis = Vec3f(0, 1, 0);
+  /// Appended to the `linesurf render` arguments the page shows (e.g. "--primitive points" for a
+  /// mesh drawn as its vertices).
+  std::string renderArguments;
   /// Default orbit view (as `linesurf render`'s defaults): degrees.
   float azimuth = 30, elevation = 20, fovY = 30;
   /// Filtering, z threshold (PerPrimitive mode), material, light (headlight), default colour and
