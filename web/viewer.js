@@ -826,9 +826,9 @@ void main() {
       if (!state.camera || state.autoFramed) { state.camera = defaultCamera(w, h); state.autoFramed = true; }
     }
 
-    state.camera = cameraFromFragment();
-    state.autoFramed = !state.camera;
-    resize();
+    resize();  // canvas size first: a fragment without an eye takes the framed default for it
+    const fromFragment = cameraFromFragment();
+    if (fromFragment) { state.camera = fromFragment; state.autoFramed = false; }
 
     // ---- controls ----------------------------------------------------------------------------
     function orbit(dx, dy) {
