@@ -100,7 +100,11 @@ std::string lower(std::string s) {
 void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs) {
   std::vector<std::pair<std::filesystem::path, const OutputSpec*>> seen;
   for (const OutputSpec& o : outputs) {
-    if (o.path.empty()) continue;
+    if (o.path.empty()) {
+      // An optional output not asked for; the main output typed as '' is refused.
+      if (o.option == "--output" || o.option == "output") throwBadParameter(o.option, "empty path");
+      continue;
+    }
     const std::string where = o.option + " " + o.path;
     const FileId id = fileId(o.path);
     const std::filesystem::path c = canonicalOrSelf(o.path);

@@ -42,7 +42,8 @@ void endProgress();
 ///   with one path, an output whose extension is not one of `extensions` (e.g. {".png"});
 /// - Io (exit 3): an output whose folder does not exist, or an output that is a folder.
 /// `outputs` pairs an option name (as typed, for messages) with its value; empty values are
-/// skipped. An input path that does not exist is left to the reader.
+/// skipped (except for the main output, "--output"/"output"). An input path that does not exist
+/// is left to the reader.
 struct OutputSpec {
   std::string option, path;
   std::vector<std::string> extensions;  ///< lower case with the dot; empty = any

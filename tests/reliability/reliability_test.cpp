@@ -234,6 +234,8 @@ const std::vector<Case> kCases = {
   {"RenderOutputOntoInput", "render pts.ply -o pts.ply", 1, {"--output", "pts.ply", "also the input"}},
   {"RenderOutputLinkToInput", "render pts.ply -o link.png", 1, {"--output", "link.png", "also the input"}},
   {"RenderDepthOntoInput", "render pts.ply -o out.png --depth-out ./pts.ply", 1, {"--depth-out", "also the input"}},
+  {"RenderEmptyOutput", "render pts.ply -o ''", 1, {"--output", "empty path"}},
+  {"ConvertEmptyOutput", "convert pts.ply ''", 1, {"output", "empty path"}},
   {"RenderJpegName", "render pts.ply -o r.jpg", 1, {"--output", "r.jpg", ".png"}},
   {"RenderTwoOutputsOnePath", "render pts.ply -o out.png --depth-out out.png", 1, {"--depth-out", "--output"}},
   {"RenderTwoOutputsOnePathSpelledApart", "render pts.ply -o out.png --normal-out ./sub/../out.png", 1, {"--normal-out"}},
