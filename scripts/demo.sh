@@ -30,5 +30,9 @@ run extract contour "$DATA/al_mesh.ply" -o "$OUT/al_points.ply" --seed 1 --all-p
 run render "$OUT/al_segments.ply" -o "$OUT/al_segments.png" --size 512x512 --azimuth 20 --elevation 10
 run render "$OUT/al_points.ply" -o "$OUT/al_points.png" --size 512x512 --azimuth 20 --elevation 10
 run compare "$OUT/al_points.png" "$OUT/al_segments.png" --diff "$OUT/al_diff.png"
+
+# Interactive pages (WebGL2, open offline in a browser): the hybrid and the line model.
+run view "$OUT/igea_eps_delta.ply" -o "$OUT/igea_eps_delta.html"
+run view "$OUT/al_segments.ply" -o "$OUT/al_segments.html"
 echo
-echo "demo: pictures (*.png) and models (*.ply) in $OUT"
+echo "demo: pictures (*.png), models (*.ply) and viewer pages (*.html) in $OUT"

@@ -67,8 +67,7 @@ void run(const ViewArgs& a) {
                     st.skippedSegments));
   say(fmt::format("page: {} points + {} segments, {:.1f} MB, in {:.2f} s", st.points, st.segments,
                   double(st.bytes) / 1e6, total.seconds()));
-  say("wrote " + out + " (open it in a browser with WebGL2; the URL fragment #eye=X,Y,Z&target=X,Y,Z&up=X,Y,Z&fov=DEG "
-      "sets the camera)");
+  say("wrote " + out + " (a WebGL2 page; camera in the URL: #eye=X,Y,Z&target=X,Y,Z&up=X,Y,Z&fov=DEG)");
 }
 
 RegisterCommand reg(45, [](CLI::App& app) {
