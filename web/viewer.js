@@ -281,12 +281,12 @@ void main() {
   vAB = corner;
   vP = P;
   vN = n;
-  if (uEndpointNormals) {
-    vec3 a0 = uRot * aN0, a1 = uRot * aN1;
-    vN0 = length(a0) > 0.0 ? normalize(a0) : n;
-    vN1 = length(a1) > 0.0 ? normalize(a1) : n;
-  } else {
-    vN0 = vN1 = n;
+  vN0 = vN1 = n;
+  if (uEndpointNormals && length(aN0) > 0.0 && length(aN1) > 0.0) {
+    // smooth line model: shading normals at the ends, on the side of the plane normal (as the CPU)
+    vec3 m0 = normalize(uRot * aN0), m1 = normalize(uRot * aN1);
+    if (dot(n, m0 + m1) < 0.0) { m0 = -m0; m1 = -m1; }
+    vN0 = m0; vN1 = m1;
   }
   float k = sqrt(0.5 * Mi.x);
   vK = vec4(Mi.y / Mi.x, Mi.z - Mi.y * Mi.y / Mi.x, 1.0 / Mi.x, k);

@@ -150,7 +150,11 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
         ++st.skippedSegments;
         continue;
       }
-      const Vec3f a = local(s.p0), b = local(s.p1), n = unit(s.normal);
+      const Vec3f a = local(s.p0), b = local(s.p1);
+      // a smooth segment without a plane normal lies in the plane of its mean endpoint normal (as
+      // prepareSegment)
+      const bool smooth = ends && unit(s.normal0).squaredNorm() > 0 && unit(s.normal1).squaredNorm() > 0;
+      const Vec3f n = unit(smooth && !(s.normal.squaredNorm() > 0) ? Vec3f(s.normal0 + s.normal1) : s.normal);
       p0.insert(p0.end(), {a.x(), a.y(), a.z()});
       p1.insert(p1.end(), {b.x(), b.y(), b.z()});
       nrm.insert(nrm.end(), {snorm16(n.x()), snorm16(n.y()), snorm16(n.z())});
