@@ -21,29 +21,6 @@ ModelFrame normalizingFrame(const Bounds3f& b) {
   return f;
 }
 
-ModelFrame scalingFrame(const Bounds3f& b) {
-  if (b.empty()) return {};
-  const double extent = std::max(b.min.cast<double>().cwiseAbs().maxCoeff(), b.max.cast<double>().cwiseAbs().maxCoeff());
-  ModelFrame f;
-  if (!(extent > 0) || !std::isfinite(extent) || (extent >= std::ldexp(1.0, -10) && extent <= std::ldexp(1.0, 20))) return f;
-  f.scale = std::ldexp(1.0, std::ilogb(extent));
-  return f;
-}
-
-void fromFrame(HybridModel& m, const ModelFrame& f) {
-  if (f.identity()) return;
-  const float s = float(f.scale);
-  for (Point& p : m.points) {
-    p.position = f.toObject(p.position);
-    p.radius *= s;
-  }
-  for (Segment& seg : m.segments) {
-    seg.p0 = f.toObject(seg.p0);
-    seg.p1 = f.toObject(seg.p1);
-    seg.radius *= s;
-  }
-}
-
 void toFrame(HybridModel& m, const ModelFrame& f) {
   if (f.identity()) return;
   const float inv = float(1.0 / f.scale);

@@ -21,14 +21,8 @@ struct ModelFrame {
 /// The frame that normalises bounds `b` (identity when normalising is not needed).
 ModelFrame normalizingFrame(const Bounds3f& b);
 
-/// The same with scale only (centre at the origin): toFrame and fromFrame are then exact
-/// inverses, so points an extraction keeps come back bit-identical.
-ModelFrame scalingFrame(const Bounds3f& b);
-
 /// Moves positions and radii (points, segment ends, mesh vertices) into `frame`.
 void toFrame(HybridModel& model, const ModelFrame& frame);
 void toFrame(TriangleMesh& mesh, const ModelFrame& frame);
-/// The inverse of toFrame: positions and radii back to object units.
-void fromFrame(HybridModel& model, const ModelFrame& frame);
 
 }  // namespace linesurf
