@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "command.h"
+#include "options_bind.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/contour.h"
@@ -15,20 +16,21 @@ namespace {
 
 struct ContourArgs {
   std::string mesh, output;
-  float spacing = 0, spacingScale = 1.0f, radiusScale = 0.75f, pointsBelow = 0, familySwitchSine = 1.0f;
-  uint64_t seed = 1;
-  bool allPoints = false, vertexNormals = false, ascii = false, flat = false;
+  ContourOptions extract;
+  bool ascii = false, flat = false;
 };
 
-void run(const ContourArgs& a) {
+void run(ContourArgs& a) {
   Timer total, t;
-  checkFiles({a.mesh}, {{"--output", a.output, a.allPoints ? std::vector<std::string>{".ply", ".xyz"} : std::vector<std::string>{".ply"}}});
+  ContourOptions& o = a.extract;
+  o.endpointNormals = !a.flat;
+  validate(o);  // before reading the mesh
+  checkFiles({a.mesh}, {{"--output", a.output, o.allPoints ? std::vector<std::string>{".ply", ".xyz"} : std::vector<std::string>{".ply"}}});
   const TriangleMesh mesh = readMesh(a.mesh);
   const double readSeconds = t.seconds();
   say(fmt::format("{}: {} vertices, {} faces{}{} ({:.2f} s)", a.mesh, mesh.positions.size(), mesh.faces.size(),
                   mesh.cornerUVs.empty() ? "" : ", per-corner uvs", mesh.texture ? ", texture" : "", readSeconds));
   if (mesh.faces.empty()) throwBadInput(a.mesh, "", "the file holds no faces: contour extraction needs a triangle mesh");
-
   // Size guard before any cutting: a face of longest edge L meets about L/d + 1 planes; with
   // --all-points a segment of length l gives l/d + 1 points (about area/d^2 over the mesh).
   {
@@ -43,32 +45,21 @@ void run(const ContourArgs& a) {
       longest += std::max({l[0], l[1], l[2]});
       area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
     }
-    const double d = a.spacing > 0 ? double(a.spacing) : double(a.spacingScale) * edgeSum / double(std::max<size_t>(edges, 1));
+    const double d = o.spacing > 0 ? double(o.spacing) : double(o.spacingScale) * edgeSum / double(std::max<size_t>(edges, 1));
     if (d > 0) {
       const double segments = longest / d + double(mesh.faces.size());
-      const double points = a.allPoints || a.pointsBelow > 0 ? area / (d * d) + segments : 0;
-      checkSize(a.spacing > 0 ? "--spacing" : "--spacing-scale", 120.0 * segments + 60.0 * points,
+      const double points = o.allPoints || o.pointsBelow > 0 ? area / (d * d) + segments : 0;
+      checkSize(o.spacing > 0 ? "--spacing" : "--spacing-scale", 120.0 * segments + 60.0 * points,
                 fmt::format("contour output at d = {:.3g} (about {:.3g} segments{})", d, segments,
                             points > 0 ? fmt::format(", {:.3g} points", points) : std::string()));
     }
   }
-
-  ContourOptions o;
-  o.spacing = a.spacing;
-  o.spacingScale = a.spacingScale;
-  o.seed = a.seed;
-  o.radiusScale = a.radiusScale;
-  o.pointsBelow = a.pointsBelow;
-  o.allPoints = a.allPoints;
-  o.vertexNormals = a.vertexNormals;
-  o.endpointNormals = !a.flat;
-  o.familySwitchSine = a.familySwitchSine;
   o.progress = progressBar();
   ContourStats s;
   HybridModel model = extractContour(mesh, o, &s);
   endProgress();
-  if (a.radiusScale <= 0.5f)
-    say(fmt::format("warning: --radius-scale {} <= 0.5: d >= 2R, the model may render with holes (§3.3)", a.radiusScale));
+  if (o.radiusScale <= 0.5f)
+    say(fmt::format("warning: --radius-scale {} <= 0.5: d >= 2R, the model may render with holes (§3.3)", o.radiusScale));
 
   t.reset();
   WriteOptions w;
@@ -77,8 +68,8 @@ void run(const ContourArgs& a) {
   const double writeSeconds = t.seconds();
 
   say(fmt::format("contour planes (§3.3): d = {:.6g}{}, radius {:.6g}, seed {}", s.spacing,
-                  a.spacing > 0 ? "" : fmt::format(" ({} x mean edge {:.6g})", a.spacingScale, s.meanEdgeLength),
-                  s.radius, a.seed));
+                  o.spacing > 0 ? "" : fmt::format(" ({} x mean edge {:.6g})", o.spacingScale, s.meanEdgeLength),
+                  s.radius, o.seed));
   say(fmt::format("faces: {} cut by P=, {} by P|| ({} at d/2 or finer), {} between planes, {} degenerate skipped",
                   s.cutByFamily[0], s.cutByFamily[1], s.halvedSpacing, s.uncutTriangles, s.degenerateTriangles));
   say(fmt::format("output: {} segments, {} points{}", s.segments, s.points,
@@ -91,32 +82,25 @@ void run(const ContourArgs& a) {
 RegisterCommand reg(33, [](CLI::App& app) {
   CLI::App* extract = extractCommand(app);
   auto a = std::make_shared<ContourArgs>();
+  ContourOptions& o = a->extract;
   CLI::App* sub = extract->add_subcommand(
       "contour", "Cut a triangle mesh with two perpendicular families of contour planes (thesis §3.3)");
   sub->add_option("MESH", a->mesh, "Triangle mesh (.ply, or .obj with .mtl and texture image)")->required();
   sub->add_option("-o,--output", a->output, "Output model (.ply)")->required();
-  sub->add_option("--spacing", a->spacing,
-                  "Largest distance d between neighbouring segments, object units (default: --spacing-scale x mean edge length)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--spacing-scale", a->spacingScale, "d as a multiple of the mesh's mean edge length, when --spacing is not given")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_option("--seed", a->seed, "Seed of the random plane orientation and offsets")->capture_default_str();
-  auto below = sub->add_option("--points-below", a->pointsBelow,
-                               "Turn segments shorter than LEN (object units) into points: hybrid model")
-                   ->check(CLI::PositiveNumber);
-  sub->add_flag("--all-points", a->allPoints, "Turn every segment into ceil(l/d)+1 points: pure point model (Table 5)")
+  bind(sub, "spacing", o.spacing,
+       "Largest distance d between neighbouring segments, object units (0: --spacing-scale x mean edge length)");
+  bind(sub, "spacingScale", o.spacingScale, "d as a multiple of the mesh's mean edge length, when --spacing is 0; > 0");
+  bind(sub, "seed", o.seed, "Seed of the random plane orientation and offsets");
+  auto below = bind(sub, "pointsBelow", o.pointsBelow,
+                    "Turn segments shorter than LEN (object units) into points: hybrid model (0 = none)");
+  sub->add_flag(flagName("allPoints"), o.allPoints, "Turn every segment into ceil(l/d)+1 points: pure point model (Table 5)")
       ->excludes(below);
-  sub->add_option("--radius-scale", a->radiusScale, "Segment/point radius as a multiple of d (> 0.5 for a hole-free model)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_flag("--vertex-normals", a->vertexNormals, "Interpolate the mesh's vertex normals instead of the face normal");
+  bind(sub, "radiusScale", o.radiusScale, "Segment/point radius as a multiple of d (> 0.5 for a hole-free model)");
+  sub->add_flag(flagName("vertexNormals"), o.vertexNormals, "Interpolate the mesh's vertex normals instead of the face normal");
+  bind(sub, "familySwitchSine", o.familySwitchSine,
+       "Use P= unless its sin(theta) is below this and P|| cuts steeper, [0, 1] (1: steeper family always; 0: P= only)");
   sub->add_flag("--flat", a->flat,
                 "One normal per segment (the thesis) instead of interpolated vertex normals at both endpoints");
-  sub->add_option("--family-switch-sine", a->familySwitchSine,
-                  "Use P= unless its sin(theta) is below this and P|| cuts steeper (1: steeper family always; 0: P= only)")
-      ->check(CLI::Range(0.0f, 1.0f))
-      ->capture_default_str();
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY instead of binary");
   sub->callback([a] { run(*a); });
 });

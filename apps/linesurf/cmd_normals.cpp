@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "command.h"
+#include "options_bind.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
@@ -14,9 +15,8 @@ namespace {
 
 struct NormalsArgs {
   std::string in, out;
-  int k = 12;
-  bool recompute = false, curvature = false, noOrient = false;
-  std::string fit = "taubin";
+  GeometryOptions geometry{.delaunayNeighbours = false, .curvature = false};  // --curvature turns both on
+  bool noOrient = false;
 };
 
 void run(const NormalsArgs& args) {
@@ -25,37 +25,33 @@ void run(const NormalsArgs& args) {
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();
   if (model.points.empty()) throw Error(Error::Kind::BadInput, args.in, "", "holds no points");
-  GeometryOptions o;
-  o.k = args.k;
-  o.recomputeNormals = args.recompute;
+  GeometryOptions o = args.geometry;
   o.orientNormals = !args.noOrient;
-  o.delaunayNeighbours = args.curvature;
-  o.curvature = args.curvature;
-  o.curvatureFit = args.fit == "quadric" ? CurvatureFit::Quadric : CurvatureFit::Taubin;
+  o.delaunayNeighbours = o.curvature;
   o.progress = progressBar();
   const bool hadNormals = model.attributes.normals;
   PointGeometry g = computePointGeometry(model, o);
   endProgress();
   applyGeometry(model, g);
-  if (args.curvature) addCurvatureProperties(model, g);
+  if (o.curvature) addCurvatureProperties(model, g);
   Timer writeTimer;
   writeModel(args.out, model);
   const double writeTime = writeTimer.seconds();
 
   const size_t n = g.size();
   say(fmt::format("{}: {} points, k = {}, {} threads", args.in, n, g.k, currentThreadCount()));
-  say(fmt::format("normals        {}", hadNormals && !args.recompute ? "kept from the file" : "estimated by PCA"));
+  say(fmt::format("normals        {}", hadNormals && !o.recomputeNormals ? "kept from the file" : "estimated by PCA"));
   if (g.orientationComponents > 0)
     say(fmt::format("orientation    {} component(s), {} normals flipped", g.orientationComponents, g.orientationFlips));
   say(fmt::format("average spacing {:.6g}", g.averageSpacing));
   say(fmt::format("degenerate     {} duplicate, {} with < 3 distinct neighbours, {} collinear/flat, {} isolated{}",
                   g.countFlag(kPointDuplicate), g.countFlag(kPointFewNeighbours),
                   g.countFlag(kPointFlatNeighbourhood), g.countFlag(kPointIsolated),
-                  args.curvature ? fmt::format(", {} without a Delaunay star", g.countFlag(kPointNoStar)) : ""));
+                  o.curvature ? fmt::format(", {} without a Delaunay star", g.countFlag(kPointNoStar)) : ""));
   const auto& t = g.times;
   say(fmt::format("time (s)       read {:.3f}  neighbours {:.3f}  normals {:.3f}  orientation {:.3f}{}  spacing {:.3f}  write {:.3f}  total {:.3f}",
                   readTime, t.neighbours, t.normals, t.orientation,
-                  args.curvature ? fmt::format("  delaunay {:.3f}  curvature {:.3f}", t.delaunay, t.curvature) : "",
+                  o.curvature ? fmt::format("  delaunay {:.3f}  curvature {:.3f}", t.delaunay, t.curvature) : "",
                   t.spacing, writeTime, total.seconds()));
   say("wrote " + args.out);
 }
@@ -65,12 +61,15 @@ RegisterCommand reg(20, [](CLI::App& app) {
   CLI::App* sub = app.add_subcommand("normals", "Estimate oriented normals (and curvature) of a point cloud (thesis §6.1)");
   sub->add_option("IN", args->in, "Input point cloud (.ply, .xyz)")->required();
   sub->add_option("-o,--output", args->out, "Output .ply with normals (and curvature properties)")->required();
-  sub->add_option("--k", args->k, "Nearest neighbours per point")->check(CLI::Range(3, 256))->capture_default_str();
-  sub->add_flag("--recompute", args->recompute, "Recompute normals even when the file has them");
-  sub->add_flag("--curvature", args->curvature,
+  GeometryOptions& o = args->geometry;
+  bind(sub, "k", o.k, "Nearest neighbours per point, [3, 256]");
+  sub->add_flag(flags("recomputeNormals", "--recompute"), o.recomputeNormals, "Recompute normals even when the file has them");
+  bind(sub, "orientationPenalty", o.orientationPenalty,
+       "MST orientation: penalty on edges along the normals (0 = Hoppe's weight), >= 0");
+  sub->add_flag("--curvature", o.curvature,
                 "Also write curvature as vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z");
-  sub->add_option("--curvature-fit", args->fit, "taubin (thesis §6.1.2) or quadric (height-function fit)")
-      ->check(CLI::IsMember({"taubin", "quadric"}))->capture_default_str();
+  bindEnum(sub, "curvatureFit", o.curvatureFit, {{"taubin", CurvatureFit::Taubin}, {"quadric", CurvatureFit::Quadric}},
+           "taubin (thesis §6.1.2) or quadric (height-function fit)");
   sub->add_flag("--no-orient", args->noOrient, "Skip the MST orientation of estimated normals");
   sub->callback([args] { run(*args); });
 });

@@ -1,86 +1,37 @@
 // linesurf render MODEL -o out.png: software EWA splatting of point / hybrid models (thesis §4,
-// §5, §6.2). Raw scans get normals and radii from the geometry stage (§6.1) first.
+// §5, §6.2). Raw scans get normals and radii from the geometry stage (§6.1) first. Options bind
+// straight to RenderOptions, ViewOptions, PrepareOptions and MeshRenderOptions (their defaults are
+// the only ones). A mesh file is drawn as anti-aliased triangles (the ground truth) or its vertices.
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cmath>
+#include <cstdio>
 #include <filesystem>
-#include <optional>
-#include <sstream>
 
 #include "command.h"
 #include "drawable_model.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
-#include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
-#include "linesurf/io/model_validate.h"
-#include "linesurf/render/camera.h"
+#include "linesurf/pipeline/render_job.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
+#include "options_bind.h"
 
 namespace linesurf::cli {
 namespace {
 
 struct RenderArgs {
   std::string model, output = "render.png";
-  std::string size = "512x512";
-  float azimuth = 30, elevation = 20, distance = 0, fov = 30, zoom = 1;
-  int views = 0;
-  std::vector<float> eye, target, up;
-  float alpha = -1;
-  int layers = 4;
-  float prefilter = 1.0f, cutoff = 2.0f, reconScale = 0.5f, radiusScale = 1.0f;
-  std::string zMode = "primitive";
-  float zThreshold = -1;
-  float ambient = 0.25f, diffuse = 0.75f, specular = 0.2f, shininess = 24;
-  std::vector<float> light, color;
-  bool perPixel = false, noCull = false, worldLight = false;
-  std::string background = "white";
-  std::string upAxis = "y";
-  std::string segmentMethod = "screen";
   std::string depthOut, alphaOut, normalOut;
-  int k = 12;
-  int tileSize = 64;
+  RenderOptions render;
+  ViewOptions view;
+  PrepareOptions prepare;
+  MeshRenderOptions mesh;
   std::string primitive = "auto";
-  int supersampling = 4;
+  bool zThresholdGiven = false, worldLight = false, noCull = false;
 };
-
-Vec3f vec3(const std::vector<float>& v, const char* name) {
-  if (v.size() != 3) throwBadParameter(name, "needs three numbers x y z");
-  return Vec3f(v[0], v[1], v[2]);
-}
-
-std::pair<int, int> parseSize(const std::string& s) {
-  int w = 0, h = 0;
-  char x = 0;
-  std::istringstream in(s);
-  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || w < 1 || h < 1 || w > 16384 || h > 16384 || !in.eof())
-    throwBadParameter("--size", "expected WIDTHxHEIGHT with 1..16384 pixels per side, got '" + s + "'");
-  return {w, h};
-}
-
-Color parseBackground(const std::string& s) {
-  if (s == "white") return Color(1, 1, 1, 1);
-  if (s == "black") return Color(0, 0, 0, 1);
-  if (s == "transparent" || s == "none") return Color(0, 0, 0, 0);
-  std::vector<float> v;
-  std::istringstream in(s);
-  std::string tok;
-  while (std::getline(in, tok, ',')) {
-    try {
-      v.push_back(std::stof(tok));
-    } catch (...) {
-      v.clear();
-      break;
-    }
-  }
-  if (v.size() == 3) v.push_back(1);
-  if (v.size() != 4) throwBadParameter("--background", "expected white, black, transparent or R,G,B[,A] in [0,1]");
-  return Color(v[0], v[1], v[2], v[3]);
-}
 
 std::filesystem::path viewPath(const std::filesystem::path& out, int i) {
   auto p = out;
@@ -92,40 +43,39 @@ std::filesystem::path bufferPath(const std::string& base, int view, int views) {
   return views > 0 ? viewPath(base, view) : std::filesystem::path(base);
 }
 
-// Depth as grey: near = white, far = dark, empty = transparent.
-Image depthImage(const Image& depth) {
-  float lo = INFINITY, hi = -INFINITY;
-  for (const Color& c : depth.pixels)
-    if (c.w() > 0) { lo = std::min(lo, c.x()); hi = std::max(hi, c.x()); }
-  Image out(depth.width, depth.height);
-  for (size_t i = 0; i < depth.pixels.size(); ++i) {
-    const Color& c = depth.pixels[i];
-    if (c.w() <= 0) continue;
-    float g = hi > lo ? 1.0f - 0.8f * (c.x() - lo) / (hi - lo) : 1.0f;
-    out.pixels[i] = Color(g, g, g, 1);
-  }
-  return out;
-}
-
-void run(const RenderArgs& a) {
+void run(RenderArgs& a) {
   Timer total;
-  auto [w, h] = parseSize(a.size);
+  RenderOptions& o = a.render;
+  if (!a.zThresholdGiven) o.zThreshold = defaultZThreshold(o.zThresholdMode);
+  o.light.headlight = !a.worldLight;
+  o.backfaceCulling = !a.noCull;
+  o.depthBuffer = !a.depthOut.empty();
+  o.alphaBuffer = !a.alphaOut.empty();
+  o.normalBuffer = !a.normalOut.empty();
+  o.progress = progressBar();
+  a.prepare.progress = progressBar();
+  // Every parameter is checked before the (long) geometry stage.
+  validate(o);
+  validate(a.view);
+  validate(a.prepare);
+
+  const int w = a.view.width, h = a.view.height;
   checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},
                          {"--alpha-out", a.alphaOut, {".png"}}, {"--normal-out", a.normalOut, {".png"}}});
   // Colour, depth, alpha, normal images (16 bytes a pixel each) and the Z3 fragment layers.
-  checkSize("--size", double(w) * h * (16.0 * 4 + 48.0 * std::max(a.layers, 1)), "a " + a.size + " image");
+  checkSize("--size", double(w) * h * (16.0 * 4 + 48.0 * std::max(o.layers, 1)), fmt::format("a {}x{} image", w, h));
   if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points")
-    throwBadParameter("--primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
+    throwBadOption("primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
   const bool isMesh = fileHoldsMesh(a.model);
   if (a.primitive == "mesh" && !isMesh)
-    throwBadParameter("--primitive", "mesh needs a file with faces; " + a.model + " holds none");
+    throwBadOption("primitive", "mesh needs a file with faces; " + a.model + " holds none");
   std::optional<TriangleMesh> triMesh;
   HybridModel model;
   if (isMesh && a.primitive != "points") {
     triMesh = readMesh(a.model);
     if (triMesh->faces.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the mesh has no faces");
     say(fmt::format("{}: mesh, rasterising its {} triangles ({}x{} samples per pixel)", a.model, triMesh->faces.size(),
-                    a.supersampling, a.supersampling));
+                    a.mesh.supersampling, a.mesh.supersampling));
   } else if (isMesh) {
     model = meshVerticesAsPoints(readMesh(a.model));
     say(fmt::format("{}: mesh, rendering its {} vertices as points", a.model, model.points.size()));
@@ -138,98 +88,24 @@ void run(const RenderArgs& a) {
   const ModelFrame frame = normalizingFrame(triMesh ? triMesh->bounds() : model.bounds());
   toFrame(model, frame);
   if (triMesh) toFrame(*triMesh, frame);
-  const float distance = float(a.distance / frame.scale);
 
-  if (size_t n = estimateSegmentRadii(model))
-    say(fmt::format("{} segments without a radius: estimated from the spacing of their neighbours", n));
-  completePointGeometry(model, a.k);
-  if (a.radiusScale != 1.0f) {
-    for (Point& p : model.points) p.radius *= a.radiusScale;
-    for (Segment& s : model.segments) s.radius *= a.radiusScale;
-  }
-
-  RenderOptions o;
-  o.prefilterVariance = a.prefilter;
-  o.cutoffRadius = a.cutoff;
-  o.reconstructionScale = a.reconScale;
-  if (a.zMode == "fixed") {
-    o.zThresholdMode = ZThresholdMode::Fixed;
-    o.zThreshold = a.zThreshold >= 0 ? a.zThreshold : 0.01f;
-  } else if (a.zMode == "primitive") {
-    o.zThresholdMode = ZThresholdMode::PerPrimitive;
-    o.zThreshold = a.zThreshold >= 0 ? a.zThreshold : 0.5f;
-  } else {
-    throwBadParameter("--z-mode", "expected fixed or primitive");
-  }
-  o.layers = a.layers;
-  o.material = {a.ambient, a.diffuse, a.specular, a.shininess};
-  if (!a.light.empty()) o.light.direction = vec3(a.light, "--light");
-  o.light.headlight = !a.worldLight;
-  if (!a.color.empty()) o.defaultColor = Color(a.color.size() > 0 ? a.color[0] : 0, a.color.size() > 1 ? a.color[1] : 0,
-                                                a.color.size() > 2 ? a.color[2] : 0, 1);
-  if (!a.color.empty() && a.color.size() != 3) throwBadParameter("--color", "needs three numbers R G B in [0,1]");
-  o.perPixelLighting = a.perPixel;
-  o.alphaOverride = a.alpha;
-  if (a.alpha > 1) throwBadParameter("--alpha", "must be in [0, 1]");
-  o.background = parseBackground(a.background);
-  o.backfaceCulling = !a.noCull;
-  if (a.segmentMethod == "approx") o.segmentMethod = SegmentMethod::Approx;
-  else if (a.segmentMethod == "screen") o.segmentMethod = SegmentMethod::ScreenSpace;
-  else if (a.segmentMethod == "reference") o.segmentMethod = SegmentMethod::Reference;
-  else throwBadParameter("--segment-method", "expected approx, screen or reference");
-  o.depthBuffer = !a.depthOut.empty();
-  o.alphaBuffer = !a.alphaOut.empty();
-  o.normalBuffer = !a.normalOut.empty();
-  o.tileSize = a.tileSize;
-  o.progress = progressBar();
-  if (!(a.zoom > 0) || !std::isfinite(a.zoom)) throwBadParameter("--zoom", "must be > 0");
+  const PrepareReport prep = prepareForRendering(model, a.prepare);
+  endProgress();
+  if (prep.segmentRadiiEstimated)
+    say(fmt::format("{} segments without a radius: estimated from the spacing of their neighbours",
+                    prep.segmentRadiiEstimated));
+  if (prep.computedRadii)
+    say(fmt::format("geometry (§6.1): {} for {} points (k = {}) in {:.2f} s",
+                    prep.computedNormals ? "normals + radii" : "radii", model.points.size(), a.prepare.k,
+                    prep.geometrySeconds));
 
   std::optional<Renderer> renderer;
   std::optional<MeshRenderer> meshRenderer;
-  MeshRenderOptions mo;
-  mo.supersampling = a.supersampling;
-  if (triMesh) meshRenderer.emplace(*triMesh, o, mo);
+  if (triMesh) meshRenderer.emplace(*triMesh, o, a.mesh);
   else renderer.emplace(model, o);
   const BoundingSphere& sphere = triMesh ? meshRenderer->sphere() : renderer->sphere();
-  Vec3f upAxis;
-  {
-    std::string u = a.upAxis;
-    float sign = 1;
-    if (!u.empty() && (u[0] == '-' || u[0] == '+')) { sign = u[0] == '-' ? -1.f : 1.f; u = u.substr(1); }
-    if (u == "x") upAxis = Vec3f(sign, 0, 0);
-    else if (u == "y") upAxis = Vec3f(0, sign, 0);
-    else if (u == "z") upAxis = Vec3f(0, 0, sign);
-    else throwBadParameter("--up-axis", "expected x, y, z, -x, -y or -z, got '" + a.upAxis + "'");
-  }
-  std::vector<Camera> cams;
-  if (!a.eye.empty() || !a.target.empty()) {
-    Vec3f eye = a.eye.empty() ? Vec3f(sphere.center + Vec3f(0, 0, 3 * sphere.radius)) : frame.toNormalized(vec3(a.eye, "--eye"));
-    Vec3f target = a.target.empty() ? sphere.center : frame.toNormalized(vec3(a.target, "--target"));
-    Vec3f up = a.up.empty() ? Vec3f(0, 1, 0) : vec3(a.up, "--up");
-    float dist = (eye - target).norm();
-    // Name the options (the camera's own message would say "near/far").
-    const char* which = !a.eye.empty() ? "--eye" : "--target";
-    if (!eye.allFinite() || !target.allFinite() || !std::isfinite(dist))
-      throwBadParameter(which, "--eye and --target must be finite points at a finite distance from each other");
-    if (!(dist > 0)) throwBadParameter(which, "--eye must differ from --target");
-    if (!up.allFinite() || !(up.cross(eye - target).norm() > 1e-6f * up.norm() * dist))
-      throwBadParameter("--up", "must be a finite vector not parallel to the view direction");
-    float nearD = std::max(1e-4f * dist, dist - 1.5f * sphere.radius);
-    float farD = std::max(dist + 1.5f * sphere.radius, 2 * nearD);
-    cams.push_back(Camera::lookAt(eye, target, up, a.fov, w, h, nearD, farD));
-  } else if (a.views > 0) {
-    for (const Vec2f& ang : Camera::spreadViewAngles(a.views)) {
-      Camera c = Camera::orbit(sphere, ang.x(), ang.y(), distance, w, h, a.fov, upAxis);
-      if (a.zoom != 1)
-        c = Camera::orbit(sphere, ang.x(), ang.y(), (c.eye() - c.target()).norm() / a.zoom, w, h, a.fov, upAxis);
-      cams.push_back(c);
-    }
-  } else {
-    Camera c = Camera::orbit(sphere, a.azimuth, a.elevation, distance, w, h, a.fov, upAxis);
-    if (a.zoom != 1)
-      c = Camera::orbit(sphere, a.azimuth, a.elevation, (c.eye() - c.target()).norm() / a.zoom, w, h, a.fov, upAxis);
-    cams.push_back(c);
-  }
+  const std::vector<Camera> cams = viewCameras(sphere, a.view, frame);
+  const int views = a.view.views;
 
   RenderStats sum;
   uint64_t tris[5] = {0, 0, 0, 0, 0};
@@ -252,12 +128,12 @@ void run(const RenderArgs& a) {
     } else {
       r = renderer->render(cams[i]);
     }
-    const int vi = a.views > 0 ? int(i) : -1;
+    const int vi = views > 0 ? int(i) : -1;
     std::filesystem::path out = vi >= 0 ? viewPath(a.output, vi) : std::filesystem::path(a.output);
     writePng(out, r.color, o.background.w() < 1);
-    if (r.depth) writePng(bufferPath(a.depthOut, vi, a.views), depthImage(*r.depth));
-    if (r.alpha) writePng(bufferPath(a.alphaOut, vi, a.views), *r.alpha);
-    if (r.normal) writePng(bufferPath(a.normalOut, vi, a.views), *r.normal);
+    if (r.depth) writePng(bufferPath(a.depthOut, vi, views), depthAsGrey(*r.depth));
+    if (r.alpha) writePng(bufferPath(a.alphaOut, vi, views), *r.alpha);
+    if (r.normal) writePng(bufferPath(a.normalOut, vi, views), *r.normal);
     const RenderStats& s = r.stats;
     if (cams.size() > 1)
       say(fmt::format("{}: {:.1f} ms, {} {} drawn", out.string(), 1000 * s.totalSeconds,
@@ -283,12 +159,12 @@ void run(const RenderArgs& a) {
     say(fmt::format("triangles{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate; "
                     "{} samples covered", per, tris[0], tris[1], tris[2], tris[3], tris[4], sum.fragments));
   else
-  say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
+    say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
   say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); total {:.2f} s",
                   w, h, 1000 * sum.totalSeconds, 1000 * sum.prepareSeconds, 1000 * sum.binSeconds,
                   1000 * sum.rasterSeconds, total.seconds()));
-  if (a.views > 0)
+  if (views > 0)
     say(fmt::format("wrote {} .. {}", viewPath(a.output, 0).string(), viewPath(a.output, int(cams.size()) - 1).string()));
   else
     say("wrote " + a.output);
@@ -296,54 +172,76 @@ void run(const RenderArgs& a) {
 
 RegisterCommand reg(40, [](CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
+  RenderOptions& o = a->render;
+  ViewOptions& v = a->view;
   CLI::App* sub = app.add_subcommand("render", "Render a point or hybrid model by EWA splatting (thesis §4-§6.2) to PNG");
   sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")
       ->required();
   sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->capture_default_str();
-  sub->add_option("--size", a->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  sub->add_option_function<std::string>("--size", [&v](const std::string& s) {
+        int w = 0, h = 0;
+        char x = 0, extra = 0;
+        if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X'))
+          throwBadOption("size", "expected WIDTHxHEIGHT, got '" + s + "'");
+        v.width = w, v.height = h;
+      }, "Image size WIDTHxHEIGHT, 1..16384 pixels per side")->default_str("512x512");
   auto* g = sub->add_option_group("camera", "Orbit view auto-framed on the bounding sphere, N views, or look-at");
-  g->add_option("--azimuth", a->azimuth, "Orbit azimuth about +y, degrees (0 = from +z)")->capture_default_str();
-  g->add_option("--elevation", a->elevation, "Orbit elevation, degrees in [-90, 90]")->capture_default_str();
-  g->add_option("--distance", a->distance, "Orbit distance from the centre (0 = frame the model)")->capture_default_str();
-  g->add_option("--zoom", a->zoom, "Divide the framed distance by this factor")->capture_default_str();
-  g->add_option("--fov", a->fov, "Vertical field of view, degrees")->capture_default_str()->check(CLI::Range(1.0, 170.0));
-  g->add_option("--views", a->views, "Render N views spread over the sphere (deterministic)")->check(CLI::Range(1, 10000));
-  g->add_option("--up-axis", a->upAxis, "World up axis of the orbit: x, y, z, -x, -y, -z (santa, rockerarm: z)")->capture_default_str();
-  g->add_option("--eye", a->eye, "Look-at camera position x y z")->expected(3);
-  g->add_option("--target", a->target, "Look-at target x y z (default: model centre)")->expected(3);
-  g->add_option("--up", a->up, "Look-at up vector (default 0 1 0)")->expected(3);
+  bind(g, "azimuth", v.azimuth, "Orbit azimuth about the up axis, degrees (0 = from +z)");
+  bind(g, "elevation", v.elevation, "Orbit elevation, degrees in [-90, 90]");
+  bind(g, "distance", v.distance, "Orbit distance from the centre (0 = frame the model)");
+  bind(g, "zoom", v.zoom, "Divide the framed distance by this factor (> 0)");
+  bind(g, "fov", v.fov, "Vertical field of view, degrees in [1, 170]");
+  bind(g, "views", v.views, "Render N views spread over the sphere (deterministic), [1, 10000]");
+  g->add_option_function<std::string>(flagName("upAxis"), [&v](const std::string& s) { v.upAxis = parseUpAxis(s); },
+                                      "World up axis of the orbit: x, y, z, -x, -y, -z (santa, rockerarm: z)")
+      ->default_str("y");
+  bindVec3(g, "eye", v.eye, "Look-at camera position x y z");
+  bindVec3(g, "target", v.target, "Look-at target x y z (default: model centre)");
+  bindVec3(g, "up", v.up, "Look-at up vector (default 0 1 0)");
   auto* f = sub->add_option_group("filtering", "EWA resampling filter (§4.2.2)");
-  f->add_option("--prefilter", a->prefilter, "Screen prefilter variance, pixels^2 (0 = none)")->capture_default_str();
-  f->add_option("--cutoff", a->cutoff, "Resampling filter cut-off radius, standard deviations [1, 5]")->capture_default_str();
-  f->add_option("--recon-scale", a->reconScale, "Reconstruction sigma as a fraction of the point radius")->capture_default_str();
-  f->add_option("--radius-scale", a->radiusScale, "Multiply every primitive radius")->capture_default_str()->check(CLI::Range(1e-3, 1e3));
-  auto* v = sub->add_option_group("visibility", "Modified Z^3 buffer (§6.2.3)");
-  v->add_option("--layers", a->layers, "Fragment layers per pixel [1, 8]")->capture_default_str();
-  v->add_option("--z-mode", a->zMode, "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)")->capture_default_str();
-  v->add_option("--z-threshold", a->zThreshold, "primitive: multiple of the depth extent (default 0.5); fixed: fraction of the bounding radius (default 0.01)");
-  v->add_option("--alpha", a->alpha, "Alpha of every primitive in [0, 1] (order-independent transparency)");
-  v->add_flag("--no-cull", a->noCull, "Keep back faces (two-sided lighting)");
+  bind(f, "prefilterVariance", o.prefilterVariance, "Screen prefilter variance, pixels^2 in [0, 100] (0 = none)", "--prefilter");
+  bind(f, "cutoffRadius", o.cutoffRadius, "Resampling filter cut-off radius, standard deviations [1, 5]", "--cutoff");
+  bind(f, "reconstructionScale", o.reconstructionScale, "Reconstruction sigma as a fraction of the point radius, (0, 4]",
+       "--recon-scale");
+  bind(f, "radiusScale", a->prepare.radiusScale, "Multiply every primitive radius, [1e-3, 1e3]");
+  auto* vis = sub->add_option_group("visibility", "Modified Z^3 buffer (§6.2.3)");
+  bind(vis, "layers", o.layers, "Fragment layers per pixel [1, 8]");
+  bindEnum(vis, "zThresholdMode", o.zThresholdMode,
+           {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}},
+           "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)", "--z-mode");
+  vis->add_option_function<float>(flagName("zThreshold"), [a](float z) { a->render.zThreshold = z, a->zThresholdGiven = true; },
+                                  "primitive: multiple of the depth extent (default 0.5); fixed: fraction of the "
+                                  "bounding radius (default 0.01)");
+  vis->add_option(flags("alphaOverride", "--alpha"), o.alphaOverride,
+                  "Alpha of every primitive in [0, 1] (order-independent transparency)");
+  vis->add_flag("--no-cull", a->noCull, "Keep back faces (two-sided lighting)");
   auto* s = sub->add_option_group("shading", "Phong lighting (§6.2.2); defaults suit unit-free scans");
-  s->add_option("--ambient", a->ambient, "Ambient coefficient")->capture_default_str();
-  s->add_option("--diffuse", a->diffuse, "Diffuse coefficient")->capture_default_str();
-  s->add_option("--specular", a->specular, "Specular coefficient")->capture_default_str();
-  s->add_option("--shininess", a->shininess, "Phong exponent")->capture_default_str();
-  s->add_option("--light", a->light, "Direction towards the light x y z (camera space; world with --world-light)")->expected(3);
+  bind(s, "ambient", o.material.ambient, "Ambient coefficient [0, 1]");
+  bind(s, "diffuse", o.material.diffuse, "Diffuse coefficient [0, 1]");
+  bind(s, "specular", o.material.specular, "Specular coefficient [0, 1]");
+  bind(s, "shininess", o.material.shininess, "Phong exponent (0, 10000]");
+  bindVec3(s, "light", o.light.direction, "Direction towards the light x y z (camera space; world with --world-light)");
   s->add_flag("--world-light", a->worldLight, "--light is in world space instead of a headlight");
-  s->add_option("--color", a->color, "Albedo R G B in [0,1] for models without colours")->expected(3);
-  s->add_flag("--per-pixel-lighting", a->perPixel, "Light every fragment instead of Gouraud at the quad vertices");
-  s->add_option("--background", a->background, "white, black, transparent or R,G,B[,A]")->capture_default_str();
-  sub->add_option("--segment-method", a->segmentMethod, "Line-segment filter: approx (§5.2.3 quads), screen (erf), reference")->capture_default_str();
+  s->add_option_function<std::vector<float>>(
+       flags("defaultColor", "--color"), [&o](const std::vector<float>& c) { o.defaultColor = Color(c[0], c[1], c[2], 1); },
+       "Albedo R G B in [0,1] for models without colours")
+      ->expected(3);
+  s->add_flag(flagName("perPixelLighting"), o.perPixelLighting, "Light every fragment instead of Gouraud at the quad vertices");
+  s->add_option_function<std::string>("--background", [&o](const std::string& b) { o.background = parseBackground(b); },
+                                      "white, black, transparent or R,G,B[,A]")
+      ->default_str("white");
+  bindEnum(sub, "segmentMethod", o.segmentMethod,
+           {{"approx", SegmentMethod::Approx}, {"screen", SegmentMethod::ScreenSpace}, {"reference", SegmentMethod::Reference}},
+           "Line-segment filter: approx (§5.2.3 quads), screen (erf), reference");
   sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)");
   sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG");
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB");
-  sub->add_option("--k", a->k, "Neighbours for normals/radii of raw scans (§6.1)")->capture_default_str()->check(CLI::Range(3, 200));
+  bind(sub, "k", a->prepare.k, "Neighbours for normals/radii of raw scans (§6.1), [3, 256]");
   sub->add_option("--primitive", a->primitive,
                   "What a mesh file is drawn as: mesh (anti-aliased triangles, the ground truth), points (its "
                   "vertices as splats) or auto (mesh when the file has faces)")->capture_default_str();
-  sub->add_option("--supersampling", a->supersampling, "Mesh: samples per pixel side (S x S per pixel) [1, 16]")
-      ->capture_default_str();
-  sub->add_option("--tile-size", a->tileSize, "Screen tile side in pixels (does not change the image)")->capture_default_str();
+  bind(sub, "supersampling", a->mesh.supersampling, "Mesh: samples per pixel side (S x S per pixel) [1, 16]");
+  bind(sub, "tileSize", o.tileSize, "Screen tile side in pixels, [8, 1024] (does not change the image)");
   sub->callback([a] { run(*a); });
 });
 

@@ -8,7 +8,7 @@
 #include "command.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
-#include "linesurf/extract/verify.h"
+#include "linesurf/pipeline/verify_job.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 
@@ -17,41 +17,19 @@ namespace {
 
 struct VerifyArgs {
   std::string input, hybrid;
-  double epsilon = -1, delta = -1;
-  int k = 0;
+  RecordedVerifyOptions verify;
 };
 
-void run(const VerifyArgs& a) {
+void run(VerifyArgs& a) {
   Timer t;
   HybridModel input = readModel(a.input);
   HybridModel hybrid = readModel(a.hybrid);
-  // Tolerances and the normals' origin as extract eps-delta recorded them.
-  double epsilon = -1, delta = -1;
-  int k = 12;
-  bool computedNormals = !input.attributes.normals;
-  for (const std::string& c : hybrid.comments) {
-    double e, d;
-    int kk;
-    if (std::sscanf(c.c_str(), "eps-delta: epsilon=%lf delta=%lf k=%d", &e, &d, &kk) == 3) {
-      epsilon = e, delta = d;
-      if (kk >= 3) k = kk;
-    }
-    if (c == "eps-delta: normals=computed") computedNormals = true;
-  }
-  if (a.epsilon >= 0) epsilon = a.epsilon;
-  if (a.delta >= 0) delta = a.delta;
-  if (a.k > 0) k = a.k;
-  if (epsilon < 0 || delta < 0)
-    throwBadParameter("epsilon", fmt::format("{} records no tolerances (no 'eps-delta: epsilon=...' comment); "
-                                             "pass --epsilon and --delta", a.hybrid));
-  GeometryOptions go;
-  go.k = k;
-  go.recomputeNormals = computedNormals;
-  go.delaunayNeighbours = false;
-  go.curvature = false;
-  go.progress = progressBar();
-  PointGeometry geo = computePointGeometry(input, go);
-  VerifyReport r = verifyExtraction(input, &geo, hybrid, epsilon, delta);
+  a.verify.progress = progressBar();
+  const RecordedVerifyResult rv = verifyAsRecorded(input, hybrid, a.hybrid, a.verify);
+  const VerifyReport& r = rv.report;
+  const double epsilon = rv.epsilon, delta = rv.delta;
+  const int k = rv.k;
+  const bool computedNormals = rv.computedNormals;
   endProgress();
   say(fmt::format("checked      {} segments replacing {} points, {} kept points, of {} input points", r.segments,
                   r.replacedPoints, r.keptPoints, input.points.size()));
@@ -76,11 +54,13 @@ RegisterCommand reg(35, [](CLI::App& app) {
       "verify-extraction", "Prove the (epsilon, delta) bound of an extracted hybrid model (thesis §3.1); needs --provenance");
   sub->add_option("INPUT", args->input, "The point cloud the model was extracted from")->required();
   sub->add_option("HYBRID", args->hybrid, "The hybrid model written by `extract eps-delta --provenance`")->required();
-  sub->add_option("--epsilon", args->epsilon, "Distance tolerance (default: as recorded in HYBRID)")
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--delta", args->delta, "Normal tolerance (default: as recorded in HYBRID)")->check(CLI::Range(0.0, 2.0));
-  sub->add_option("-k,--neighbours", args->k, "Neighbours for computed normals (default: as recorded)")
-      ->check(CLI::Range(3, 256));
+  auto& v = args->verify;
+  sub->add_option_function<double>("--epsilon", [&v](double e) { v.epsilon = e; },
+                                   "Distance tolerance, >= 0 (default: as recorded in HYBRID)");
+  sub->add_option_function<double>("--delta", [&v](double d) { v.delta = d; },
+                                   "Normal tolerance in [0, 2] (default: as recorded in HYBRID)");
+  sub->add_option_function<int>("-k,--k,--neighbours", [&v](int k) { v.k = k; },
+                                "Neighbours for computed normals, [3, 256] (default: as recorded)");
   sub->callback([args] { run(*args); });
 });
 

@@ -10,6 +10,7 @@
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/io/model_validate.h"
+#include "linesurf/pipeline/render_job.h"
 
 namespace linesurf::cli {
 
@@ -44,22 +45,12 @@ HybridModel readDrawableModel(const std::string& path) {
 }
 
 void completePointGeometry(HybridModel& model, int k) {
-  const bool pointWithoutRadius =
-      std::any_of(model.points.begin(), model.points.end(), [](const Point& p) { return p.radius == 0.0f; });
-  if (model.points.empty() || (model.attributes.normals && model.attributes.radii && !pointWithoutRadius)) return;
-  Timer t;
-  const std::string what = !model.attributes.normals ? "normals + radii" : "radii";
-  GeometryOptions go;
-  go.k = k;
-  go.delaunayNeighbours = false;
-  go.curvature = false;
-  go.progress = progressBar();
-  PointGeometry geo = computePointGeometry(model, go);
-  applyGeometry(model, geo);
-  for (size_t i = 0; i < model.points.size() && i < geo.spacing.size(); ++i)  // hybrid: radii on segments only
-    if (model.points[i].radius == 0.0f) model.points[i].radius = geo.spacing[i] > 0 ? geo.spacing[i] : geo.averageSpacing;
+  PrepareReport r;
+  estimateMissingPointGeometry(model, k, r, progressBar());  // the library's rule, shared with Python
   endProgress();
-  say(fmt::format("geometry (§6.1): {} for {} points (k = {}) in {:.2f} s", what, model.points.size(), k, t.seconds()));
+  if (r.computedRadii)
+    say(fmt::format("geometry (§6.1): {} for {} points (k = {}) in {:.2f} s", r.computedNormals ? "normals + radii" : "radii",
+                    model.points.size(), k, r.geometrySeconds));
 }
 
 }  // namespace linesurf::cli

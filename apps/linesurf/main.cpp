@@ -10,6 +10,7 @@
 
 #include "command.h"
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/io/atomic_file.h"
 
@@ -63,6 +64,9 @@ int main(int argc, char** argv) {
       return 1;
     }
     printError(std::string("linesurf: ") + e.what() + " (see --help)");
+    return 1;
+  } catch (const OptionError& e) {
+    printError(cliMessage(e));  // names the flags as typed
     return 1;
   } catch (const Error& e) {
     printError(e.what());

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/geometry/point_geometry.h"
 
@@ -16,14 +17,18 @@ namespace {
 
 constexpr uint32_t kNone = UINT32_MAX;
 
-void checkOptions(const ClusteringOptions& o, bool hierarchical) {
+}  // namespace
+
+void validate(const ClusteringOptions& o) {
   if (!(o.deltaN > 0.0f && o.deltaN < 2.0f))
-    throwBadParameter("delta-n", "must lie in (0, 2) (got " + std::to_string(o.deltaN) +
+    throwBadOption("deltaN", "must lie in (0, 2) (got " + std::to_string(o.deltaN) +
                                      "): ||n(C) - n_j||^2 = 2 - 2 cos(angle), and at 2 a member normal may stand "
                                      "at 90 degrees to the cluster normal, folding the projection of §3.2.4.1");
-  if (hierarchical && o.maxIterations < 1)
-    throwBadParameter("max-iterations", "must be >= 1 (got " + std::to_string(o.maxIterations) + ")");
+  if (o.maxIterations < 1)
+    throwBadOption("maxIterations", "must be >= 1 (got " + std::to_string(o.maxIterations) + ")");
 }
+
+namespace {
 
 /// Symmetric neighbour graph in CSR form: local Delaunay neighbours when the geometry has them,
 /// else its k nearest neighbours. Self loops, invalid and duplicate entries are dropped.
@@ -132,7 +137,7 @@ uint64_t splitmix64(uint64_t x) {
 // §3.2.3.1 greedy clustering.
 
 Clustering clusterGreedy(const PointGeometry& geometry, const ClusteringOptions& options) {
-  checkOptions(options, false);
+  validate(options);
   const size_t n = geometry.size();
   size_t zeroNormals = 0;
   const std::vector<Vec3f> normals = usableNormals(geometry, zeroNormals);
@@ -441,7 +446,7 @@ WorkResult processWork(const Work& w, uint32_t workIndex, const SplitContext& ct
 }  // namespace
 
 Clustering clusterHierarchical(const PointGeometry& geometry, const ClusteringOptions& options) {
-  checkOptions(options, true);
+  validate(options);
   const size_t n = geometry.size();
   size_t zeroNormals = 0;
   const std::vector<Vec3f> normals = usableNormals(geometry, zeroNormals);

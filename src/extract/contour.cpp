@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/mesh_normals.h"
@@ -155,18 +156,19 @@ void weightsOf(const EdgePoint& e, double w[3]) {
   w[e.b] += e.lambda;
 }
 
-void validate(const TriangleMesh& mesh, const ContourOptions& o) {
+void checkContourOptions(const ContourOptions& o) {
   if (!std::isfinite(o.spacing) || o.spacing < 0)
-    throwBadParameter("spacing", fmt::format("must be a finite length >= 0 (0 = from the mean edge length), got {}", o.spacing));
+    throwBadOption("spacing", fmt::format("must be a finite length >= 0 (0 = from the mean edge length), got {}", o.spacing));
   if (o.spacing == 0 && !(std::isfinite(o.spacingScale) && o.spacingScale > 0))
-    throwBadParameter("spacing scale", fmt::format("must be > 0, got {}", o.spacingScale));
+    throwBadOption("spacingScale", fmt::format("must be > 0, got {}", o.spacingScale));
   if (!(std::isfinite(o.radiusScale) && o.radiusScale > 0))
-    throwBadParameter("radius scale", fmt::format("must be > 0 (> 0.5 for a hole-free model), got {}", o.radiusScale));
+    throwBadOption("radiusScale", fmt::format("must be > 0 (> 0.5 for a hole-free model), got {}", o.radiusScale));
   if (!std::isfinite(o.pointsBelow) || o.pointsBelow < 0)
-    throwBadParameter("points-below", fmt::format("must be a finite length >= 0, got {}", o.pointsBelow));
+    throwBadOption("pointsBelow", fmt::format("must be a finite length >= 0, got {}", o.pointsBelow));
   if (o.allPoints && o.pointsBelow > 0)
-    throwBadParameter("points-below", "conflicts with all-points: choose one");
-  if (!std::isfinite(o.familySwitchSine)) throwBadParameter("family switch sine", "must be finite");
+    throwBadOption("pointsBelow", "conflicts with `allPoints`: choose one");
+  if (!(o.familySwitchSine >= 0 && o.familySwitchSine <= 1))
+    throwBadOption("familySwitchSine", fmt::format("must be in [0, 1], got {}", o.familySwitchSine));
   if (o.planes) {
     for (int f = 0; f < 2; ++f)
       if (!o.planes->normal[f].allFinite() || std::abs(o.planes->normal[f].norm() - 1) > 1e-6 ||
@@ -175,6 +177,10 @@ void validate(const TriangleMesh& mesh, const ContourOptions& o) {
     if (std::abs(o.planes->normal[0].dot(o.planes->normal[1])) > 1e-6)
       throwBadParameter("planes", "the two plane families must be perpendicular");
   }
+}
+
+void validate(const TriangleMesh& mesh, const ContourOptions& o) {
+  checkContourOptions(o);
   const size_t nv = mesh.positions.size();
   for (size_t f = 0; f < mesh.faces.size(); ++f)
     for (uint32_t v : mesh.faces[f])
@@ -200,6 +206,8 @@ void blockedWithProgress(size_t n, const ProgressFn& progress, double from, doub
 }
 
 }  // namespace
+
+void validate(const ContourOptions& options) { checkContourOptions(options); }
 
 ContourPlanes randomContourPlanes(uint64_t seed, double spacing) {
   uint64_t state = seed ^ 0x6C696E6573757266ull;  // "linesurf"

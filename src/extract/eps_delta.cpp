@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/endpoint_normals.h"
@@ -196,30 +197,30 @@ Choice evaluate(const std::vector<uint32_t>& rec, const std::vector<uint8_t>& av
   return best;
 }
 
-void checkOptions(const EpsDeltaOptions& o) {
+}  // namespace
+
+void validate(const EpsDeltaOptions& o) {
   if (!(o.epsilon >= 0) || !std::isfinite(o.epsilon))
-    throwBadParameter("epsilon", "must be a finite distance > 0 (or 0 to use epsilon-rel), got " + std::to_string(o.epsilon));
+    throwBadOption("epsilon", "must be a finite distance > 0 (or 0 to use `epsilonRelative`), got " + std::to_string(o.epsilon));
   if (o.epsilon == 0 && (!(o.epsilonRelative > 0) || !std::isfinite(o.epsilonRelative)))
-    throwBadParameter("epsilon-rel", "must be a finite fraction of the average spacing > 0, got " +
+    throwBadOption("epsilonRelative", "must be a finite fraction of the average spacing > 0, got " +
                                          std::to_string(o.epsilonRelative));
   if (!(o.delta >= 0 && o.delta <= 2))
-    throwBadParameter("delta", "must lie in [0, 2] (it bounds 1 - n_i.n_j), got " + std::to_string(o.delta));
-  if (o.minReplaced < 2) throwBadParameter("min-replaced", "must be >= 2, got " + std::to_string(o.minReplaced));
+    throwBadOption("delta", "must lie in [0, 2] (it bounds 1 - n_i.n_j), got " + std::to_string(o.delta));
+  if (o.minReplaced < 2) throwBadOption("minReplaced", "must be >= 2, got " + std::to_string(o.minReplaced));
   if (o.maxReplaced != 0 && o.maxReplaced < o.minReplaced)
-    throwBadParameter("max-replaced", "must be 0 (no limit) or >= min-replaced (" + std::to_string(o.minReplaced) +
+    throwBadOption("maxReplaced", "must be 0 (no limit) or >= `minReplaced` (" + std::to_string(o.minReplaced) +
                                           "), got " + std::to_string(o.maxReplaced));
 }
 
-}  // namespace
-
 double resolveEpsilon(const EpsDeltaOptions& options, const PointGeometry& geometry) {
-  checkOptions(options);
+  validate(options);
   return options.epsilon > 0 ? options.epsilon : options.epsilonRelative * double(geometry.averageSpacing);
 }
 
 HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geometry, const EpsDeltaOptions& options,
                             EpsDeltaStats* statsOut) {
-  checkOptions(options);
+  validate(options);
   const size_t n = cloud.points.size();
   if (n >= UINT32_MAX) throwBadParameter("cloud", "too many points for 32-bit indices");
   if (geometry.size() != n)

@@ -8,26 +8,28 @@
 #include <string>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/endpoint_normals.h"
 #include "linesurf/geometry/point_geometry.h"
 
 namespace linesurf {
-namespace {
-
-void checkOptions(const ShapeApproxOptions& o) {
+void validate(const ShapeApproxOptions& o) {
+  validate(o.clustering);
   if (o.minClusterSize < 2)
-    throwBadParameter("min-cluster-size", "must be >= 2 (got " + std::to_string(o.minClusterSize) + ")");
+    throwBadOption("minClusterSize", "must be >= 2 (got " + std::to_string(o.minClusterSize) + ")");
   if (o.minRunPoints < 2)
-    throwBadParameter("min-run-points", "must be >= 2 (got " + std::to_string(o.minRunPoints) + ")");
+    throwBadOption("minRunPoints", "must be >= 2 (got " + std::to_string(o.minRunPoints) + ")");
   if (!(o.curvatureSwitchDegrees >= 0 && o.curvatureSwitchDegrees <= 90))
-    throwBadParameter("curvature-switch-degrees", "must lie in [0, 90] (got " + std::to_string(o.curvatureSwitchDegrees) + ")");
+    throwBadOption("curvatureSwitchDegrees", "must lie in [0, 90] (got " + std::to_string(o.curvatureSwitchDegrees) + ")");
   if (!(o.curvatureCoherence >= 0 && o.curvatureCoherence <= 1))
-    throwBadParameter("curvature-coherence", "must lie in [0, 1] (got " + std::to_string(o.curvatureCoherence) + ")");
+    throwBadOption("curvatureCoherence", "must lie in [0, 1] (got " + std::to_string(o.curvatureCoherence) + ")");
   if (!(o.radiusScale > 0 && std::isfinite(o.radiusScale)))
-    throwBadParameter("radius-scale", "must be a positive number (got " + std::to_string(o.radiusScale) + ")");
+    throwBadOption("radiusScale", "must be a positive number (got " + std::to_string(o.radiusScale) + ")");
 }
+
+namespace {
 
 /// What one cluster contributes; clusters are processed independently and concatenated in order.
 struct ClusterOutput {
@@ -289,7 +291,7 @@ Clustering clusterShapeApprox(const PointGeometry& geometry, const ShapeApproxOp
 
 HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& geometry, const ShapeApproxOptions& options,
                                ShapeApproxStats* stats) {
-  checkOptions(options);
+  validate(options);
   if (geometry.size() != cloud.points.size())
     throwBadParameter("geometry", "holds " + std::to_string(geometry.size()) + " points but the cloud has " +
                                       std::to_string(cloud.points.size()));
@@ -305,7 +307,7 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
 
 HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& geometry, const Clustering& clustering,
                                const ShapeApproxOptions& options, ShapeApproxStats* stats) {
-  checkOptions(options);
+  validate(options);
   const size_t n = cloud.points.size();
   if (geometry.size() != n)
     throwBadParameter("geometry", "holds " + std::to_string(geometry.size()) + " points but the cloud has " +

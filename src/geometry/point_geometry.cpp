@@ -16,6 +16,7 @@
 
 #include "geometry/detail/local_delaunay.h"
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 
@@ -461,11 +462,15 @@ size_t PointGeometry::countFlag(PointFlag f) const {
   return c;
 }
 
-PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {
-  if (options.k < 3) throwBadParameter("k", "must be at least 3 (got " + std::to_string(options.k) + ")");
+void validate(const GeometryOptions& options) {
+  if (options.k < 3) throwBadOption("k", "must be at least 3 (got " + std::to_string(options.k) + ")");
+  if (options.k > 256) throwBadOption("k", "must be at most 256 (got " + std::to_string(options.k) + ")");
   if (!(options.orientationPenalty >= 0) || !std::isfinite(options.orientationPenalty))
-    throwBadParameter("orientationPenalty", "must be finite and >= 0");
-  if (options.k > 256) throwBadParameter("k", "must be at most 256 (got " + std::to_string(options.k) + ")");
+    throwBadOption("orientationPenalty", "must be finite and >= 0");
+}
+
+PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {
+  validate(options);
   for (size_t i = 0; i < cloud.points.size(); ++i)
     if (!cloud.points[i].position.allFinite())
       throwBadParameter("points", "point " + std::to_string(i) + " has a non-finite position");

@@ -19,15 +19,19 @@
 
 namespace linesurf {
 
-std::vector<unsigned char> encodePng(const Image& image, bool withAlpha) {
-  const int channels = withAlpha ? 4 : 3;
-  std::vector<unsigned char> raw(size_t(image.width) * image.height * channels);
+void quantize8(const Image& image, int channels, unsigned char* out) {
   for (size_t i = 0; i < image.pixels.size(); ++i)
     for (int c = 0; c < channels; ++c) {
       float v = image.pixels[i][c];
       if (!(v >= 0)) v = 0;  // also maps NaN to 0
-      raw[i * channels + c] = (unsigned char)std::lround(std::min(v, 1.0f) * 255.0f);
+      out[i * channels + c] = (unsigned char)std::lround(std::min(v, 1.0f) * 255.0f);
     }
+}
+
+std::vector<unsigned char> encodePng(const Image& image, bool withAlpha) {
+  const int channels = withAlpha ? 4 : 3;
+  std::vector<unsigned char> raw(size_t(image.width) * image.height * channels);
+  quantize8(image, channels, raw.data());
   std::vector<unsigned char> out;
   auto sink = [](void* ctx, void* data, int size) {
     auto* v = static_cast<std::vector<unsigned char>*>(ctx);

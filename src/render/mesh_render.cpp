@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/mesh_normals.h"
@@ -37,7 +38,7 @@ MeshRenderer::MeshRenderer(const TriangleMesh& mesh, const RenderOptions& option
     : mesh_(mesh), options_(options), meshOptions_(mo), sphere_(boundingSphere(mesh)) {
   validate(options_);
   if (mo.supersampling < 1 || mo.supersampling > 16)
-    throwBadParameter("supersampling", "must be in [1, 16] samples per pixel side");
+    throwBadOption("supersampling", "must be in [1, 16] samples per pixel side");
   normals_ = meshVertexNormals(mesh);  // also checks the face indices
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 
 namespace linesurf {
 
@@ -13,28 +14,29 @@ bool inRange(float v, float lo, float hi) { return std::isfinite(v) && v >= lo &
 }  // namespace
 
 void validate(const RenderOptions& o) {
-  if (!inRange(o.prefilterVariance, 0, 100)) throwBadParameter("prefilter variance", "must be in [0, 100] pixels^2");
-  if (!inRange(o.cutoffRadius, 1, 5)) throwBadParameter("cutoff radius", "must be in [1, 5] standard deviations");
+  if (!inRange(o.prefilterVariance, 0, 100)) throwBadOption("prefilterVariance", "must be in [0, 100] pixels^2");
+  if (!inRange(o.cutoffRadius, 1, 5)) throwBadOption("cutoffRadius", "must be in [1, 5] standard deviations");
   if (!(o.reconstructionScale > 0 && o.reconstructionScale <= 4))
-    throwBadParameter("reconstruction scale", "must be in (0, 4]");
-  if (!inRange(o.zThreshold, 0, 1e6)) throwBadParameter("z threshold", "must be finite and >= 0");
+    throwBadOption("reconstructionScale", "must be in (0, 4]");
+  if (!inRange(o.zThreshold, 0, 1e6)) throwBadOption("zThreshold", "must be finite and >= 0");
   if (o.layers < 1 || o.layers > RenderOptions::kMaxLayers)
-    throwBadParameter("layers", "must be in [1, " + std::to_string(RenderOptions::kMaxLayers) + "]");
+    throwBadOption("layers", "must be in [1, " + std::to_string(RenderOptions::kMaxLayers) + "]");
   const Material& m = o.material;
-  if (!inRange(m.ambient, 0, 1) || !inRange(m.diffuse, 0, 1) || !inRange(m.specular, 0, 1))
-    throwBadParameter("material", "ambient, diffuse and specular must be in [0, 1]");
-  if (!inRange(m.shininess, 1e-3f, 1e4f)) throwBadParameter("shininess", "must be in (0, 10000]");
+  if (!inRange(m.ambient, 0, 1)) throwBadOption("ambient", "must be in [0, 1]");
+  if (!inRange(m.diffuse, 0, 1)) throwBadOption("diffuse", "must be in [0, 1]");
+  if (!inRange(m.specular, 0, 1)) throwBadOption("specular", "must be in [0, 1]");
+  if (!inRange(m.shininess, 1e-3f, 1e4f)) throwBadOption("shininess", "must be in (0, 10000]");
   if (!o.light.direction.allFinite() || o.light.direction.norm() == 0)
-    throwBadParameter("light direction", "must be a finite non-zero vector");
+    throwBadOption("light", "must be a finite non-zero vector");
   if (!o.light.color.allFinite() || (o.light.color.array() < 0).any())
-    throwBadParameter("light colour", "must be finite and >= 0");
+    throwBadOption("lightColor", "must be finite and >= 0");
   if (!o.defaultColor.allFinite() || (o.defaultColor.array() < 0).any() || (o.defaultColor.array() > 1).any())
-    throwBadParameter("default colour", "channels must be in [0, 1]");
+    throwBadOption("defaultColor", "channels must be in [0, 1]");
   if (!o.background.allFinite() || (o.background.array() < 0).any() || (o.background.array() > 1).any())
-    throwBadParameter("background", "channels must be in [0, 1]");
+    throwBadOption("background", "channels must be in [0, 1]");
   if (!(std::isfinite(o.alphaOverride) && o.alphaOverride <= 1))
-    throwBadParameter("alpha", "must be in [0, 1] (or negative to keep the model's alpha)");
-  if (o.tileSize < 8 || o.tileSize > 1024) throwBadParameter("tile size", "must be in [8, 1024] pixels");
+    throwBadOption("alphaOverride", "must be in [0, 1] (or negative to keep the model's alpha)");
+  if (o.tileSize < 8 || o.tileSize > 1024) throwBadOption("tileSize", "must be in [8, 1024] pixels");
 }
 
 FrameContext FrameContext::make(const Camera& camera, const RenderOptions& options, const BoundingSphere& sphere,

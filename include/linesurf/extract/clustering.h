@@ -67,6 +67,9 @@ struct Clustering {
   size_t clusterSize(size_t c) const { return offsets[c + 1] - offsets[c]; }
 };
 
+/// Throws OptionError (core/options.h) naming the first bad field (deltaN, maxIterations).
+void validate(const ClusteringOptions& options);
+
 /// §3.2.3.1 greedy clustering: points are taken in increasing order of surface variation (ties by
 /// index); each point not yet clustered seeds a cluster with its own normal as n(C), which grows
 /// breadth-first through neighbours not yet clustered whose normal passes the delta_n test.

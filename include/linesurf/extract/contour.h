@@ -86,6 +86,9 @@ struct ContourStats {
   std::vector<uint32_t> pointFaces;    ///< with recordFaces: source face of each point
 };
 
+/// Throws OptionError (core/options.h) naming the first bad field; NaN is always rejected.
+void validate(const ContourOptions& options);
+
 /// Cuts `mesh` into a line-segment (or hybrid, or point) model, thesis §3.3.
 /// Segments carry the triangle's unit normal (or interpolated vertex normals), a colour (texture
 /// sampled at the midpoint's uv when the mesh has a texture and per-corner uvs, else interpolated

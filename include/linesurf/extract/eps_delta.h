@@ -74,6 +74,9 @@ struct EpsDeltaStats {
   double replacedFraction() const { return inputPoints ? double(replacedPoints) / inputPoints : 0.0; }
 };
 
+/// Throws OptionError (core/options.h) naming the first bad field; NaN is always rejected.
+void validate(const EpsDeltaOptions& options);
+
 /// Extracts the hybrid model. `geometry` must come from computePointGeometry(cloud) with local
 /// Delaunay neighbours (stage 3); its normals are the ones the bounds refer to.
 ///

@@ -48,6 +48,9 @@ struct ShapeApproxOptions {
   ProgressFn progress;      ///< optional progress callback
 };
 
+/// Throws OptionError (core/options.h) naming the first bad field (clustering fields included).
+void validate(const ShapeApproxOptions& options);
+
 struct ShapeApproxStats {
   size_t inputPoints = 0;
   size_t clusters = 0;

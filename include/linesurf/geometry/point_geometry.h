@@ -109,6 +109,9 @@ struct PointGeometry {
   size_t countFlag(PointFlag f) const;
 };
 
+/// Throws OptionError (core/options.h) naming the first bad field (k in [3, 256], orientationPenalty).
+void validate(const GeometryOptions& options);
+
 /// Runs the §6.1 stages on the cloud's points. Normals present in the model are kept (and only
 /// oriented if needed) unless options.recomputeNormals. Deterministic for any thread count.
 /// Throws linesurf::Error (BadParameter) for k < 3; handles clouds of any size >= 1.

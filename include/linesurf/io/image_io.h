@@ -21,6 +21,9 @@ ImageInfo readImageInfo(const std::filesystem::path& path);
 /// Reads PNG/JPEG/BMP/TGA into linear-in-file RGBA floats in [0,1]; throws on failure. The
 /// size the header declares is checked against `maxPixels` before anything is decoded.
 Image readImage(const std::filesystem::path& path, size_t maxPixels = kDefaultMaxImagePixels);
+/// 8-bit channels of an image as PNG stores them: clamped to [0, 1] (NaN -> 0) and rounded; `channels`
+/// 3 (RGB) or 4 (RGBA), row-major from the top-left. `out` holds width * height * channels bytes.
+void quantize8(const Image& image, int channels, unsigned char* out);
 /// Encodes 8-bit RGBA into PNG bytes (used by writePng and tests).
 std::vector<unsigned char> encodePng(const Image& image, bool withAlpha = true);
 

@@ -1,0 +1,48 @@
+#include "extract_common.h"
+
+#include <fmt/format.h>
+
+#include "command.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/timer.h"
+#include "options_bind.h"
+
+namespace linesurf::cli {
+
+void bindGeometryOptions(CLI::App* sub, GeometryOptions& o) {
+  bind(sub, "k", o.k, "Neighbours per point for normals and spacing (§6.1), [3, 256]", "-k,--neighbours");
+  sub->add_flag(flagName("recomputeNormals"), o.recomputeNormals, "Ignore normals in the input and compute them");
+  bind(sub, "orientationPenalty", o.orientationPenalty,
+       "MST orientation: penalty on edges along the normals (0 = Hoppe's weight), >= 0");
+}
+
+CloudWithGeometry readCloudWithGeometry(const std::string& path, GeometryOptions options) {
+  validate(options);  // before reading a (large) file
+  CloudWithGeometry r;
+  Timer t;
+  r.cloud = readModel(path);
+  r.readSeconds = t.seconds();
+  if (!r.cloud.segments.empty())
+    throwBadInput(path, "segments", fmt::format("already holds {} segments; extraction needs a point cloud",
+                                                r.cloud.segments.size()));
+  if (r.cloud.points.empty()) throwBadInput(path, "vertex", "holds no points");
+  r.normalsFromFile = r.cloud.attributes.normals && !options.recomputeNormals;
+  say(fmt::format("input        {} points ({}), normals {}", r.cloud.points.size(), path,
+                  r.normalsFromFile ? "from file" : "computed (PCA, MST-oriented)"));
+  t.reset();
+  options.progress = progressBar();
+  r.geometry = computePointGeometry(r.cloud, options);
+  r.geometrySeconds = t.seconds();
+  for (auto [flag, name] : {std::pair{kPointDuplicate, "duplicate"}, {kPointFewNeighbours, "with few neighbours"},
+                            {kPointFlatNeighbourhood, "with collinear neighbourhoods"}, {kPointIsolated, "isolated"}})
+    if (size_t c = r.geometry.countFlag(flag)) say(fmt::format("warning      {} points {}", c, name));
+  return r;
+}
+
+void writeExtracted(const std::string& path, const HybridModel& model, bool ascii) {
+  WriteOptions wo;
+  if (ascii) wo.encoding = PlyEncoding::Ascii;
+  writeModel(path, model, wo);
+}
+
+}  // namespace linesurf::cli

@@ -1,0 +1,32 @@
+# PackageConsumer test: install the build into a scratch prefix, build tests/package and
+# examples/cpp against it with find_package(linesurf REQUIRED), run the consumer, check its output.
+file(REMOVE_RECURSE ${WORK_DIR})
+set(prefix ${WORK_DIR}/prefix)
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
+  endif()
+  set(out "${out}" PARENT_SCOPE)
+endfunction()
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+foreach(f lib/liblinesurf.a include/linesurf/render/renderer.h lib/cmake/linesurf/linesurfConfig.cmake
+          lib/cmake/linesurf/linesurfConfigVersion.cmake lib/cmake/linesurf/linesurfTargets.cmake bin/linesurf)
+  if(NOT EXISTS ${prefix}/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+foreach(project package:${SOURCE_DIR}/tests/package example:${SOURCE_DIR}/examples/cpp)
+  string(REPLACE ":" ";" parts ${project})
+  list(GET parts 0 name)
+  list(GET parts 1 dir)
+  # Only the installed prefix is searched: the consumer never sees the source tree.
+  run(${CMAKE_COMMAND} -S ${dir} -B ${WORK_DIR}/${name} -G ${GENERATOR} -DCMAKE_BUILD_TYPE=Release
+      -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${prefix})
+  run(${CMAKE_COMMAND} --build ${WORK_DIR}/${name})
+endforeach()
+run(${WORK_DIR}/package/consumer)
+message(STATUS "${out}")
+if(NOT out MATCHES "consumer: 2000 points, 2000 normals outward, 64x64 image, [0-9]+ pixels covered")
+  message(FATAL_ERROR "unexpected consumer output: ${out}")
+endif()

@@ -1,0 +1,48 @@
+"""§6.1 geometry through Python: normals of an analytic sphere, neighbours, curvature, spacing."""
+import numpy as np
+
+import linesurf
+from conftest import fibonacci_sphere
+
+
+def test_sphere_normals_within_one_degree_and_outward():
+    pts = fibonacci_sphere(20000, radius=2.0) + [0.3, -0.2, 0.1]
+    n = linesurf.normals(pts, k=12)
+    exact = (pts - [0.3, -0.2, 0.1]) / 2.0
+    cos = np.sum(n * exact, axis=1)
+    assert n.shape == (20000, 3) and n.dtype == np.float32
+    assert np.all(cos > np.cos(np.radians(1.0))), np.degrees(np.arccos(cos.min()))
+
+
+def test_neighbours_match_brute_force():
+    pts = np.random.default_rng(3).uniform(size=(300, 3))
+    idx, dist = linesurf.neighbours(pts, k=8)
+    d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
+    np.fill_diagonal(d, np.inf)
+    np.testing.assert_allclose(dist, np.sort(d, axis=1)[:, :8], rtol=1e-5)
+    np.testing.assert_allclose(np.take_along_axis(d, idx, axis=1), dist, rtol=1e-5)
+
+
+def test_sphere_curvature_and_spacing():
+    pts = fibonacci_sphere(6000, radius=2.0)
+    kmin, kmax, dmin, dmax = linesurf.curvature(pts, k=12, curvature_fit="quadric")
+    assert abs(np.median(kmin) - 0.5) < 0.01 and abs(np.median(kmax) - 0.5) < 0.01  # 1 / radius
+    assert dmin.shape == (6000, 3)
+    s, avg = linesurf.spacing(pts, k=6)
+    assert s.shape == (6000,) and abs(avg - s.mean()) < 1e-3 * avg
+    # Fibonacci points on a sphere of area A: spacing ~ sqrt(A / n)
+    assert 0.5 < avg / np.sqrt(4 * np.pi * 4 / 6000) < 2
+
+
+def test_geometry_namespace_fields():
+    g = linesurf.geometry(fibonacci_sphere(500), k=10, delaunay_neighbours=True)
+    assert g.neighbours.shape == (500, 10) and g.normals.shape == (500, 3)
+    assert g.delaunay_offsets.shape == (501,) and g.delaunay_indices.shape[0] == g.delaunay_offsets[-1]
+    assert g.flags.dtype == np.uint8 and g.surface_variation.shape == (500,)
+
+
+def test_prepare_adds_normals_and_radii(igea):
+    p = linesurf.prepare(igea)
+    assert igea.normals is None  # the input is not changed
+    assert p.normals.shape == igea.points.shape and p.radii.shape == (len(igea.points),)
+    assert np.all(p.radii > 0)
