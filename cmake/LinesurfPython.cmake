@@ -56,3 +56,7 @@ endif()
 # bench/python_overhead.py compares the module's render call with this C++ one.
 add_executable(linesurf_python_overhead EXCLUDE_FROM_ALL ${PROJECT_SOURCE_DIR}/bench/python_overhead.cpp)
 target_link_libraries(linesurf_python_overhead PRIVATE linesurf_lib)
+
+# The PackageConsumer test also imports the module from the installed prefix.
+set_property(TEST PackageConsumer APPEND PROPERTY ENVIRONMENT
+  "LINESURF_PYTHON=${Python3_EXECUTABLE};LINESURF_PYTHON_SITE=${LINESURF_PYTHON_INSTALL_DIR}")

@@ -16,7 +16,11 @@ namespace {
 
 struct EpsDeltaArgs {
   std::string input, output;
-  GeometryOptions geometry{.curvature = false};  // §3.1 needs normals, Delaunay neighbours and spacing only
+  GeometryOptions geometry = [] {
+    GeometryOptions g;
+    g.curvature = false;  // §3.1 needs normals, Delaunay neighbours and spacing only
+    return g;
+  }();
   EpsDeltaOptions extract;
   bool ascii = false;
 };

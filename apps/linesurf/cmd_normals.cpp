@@ -15,7 +15,11 @@ namespace {
 
 struct NormalsArgs {
   std::string in, out;
-  GeometryOptions geometry{.delaunayNeighbours = false, .curvature = false};  // --curvature turns both on
+  GeometryOptions geometry = [] {
+    GeometryOptions g;
+    g.delaunayNeighbours = g.curvature = false;  // --curvature turns both on
+    return g;
+  }();
   bool noOrient = false;
 };
 

@@ -7,10 +7,15 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/model.h"
@@ -23,6 +28,7 @@
 #include "linesurf/extract/verify.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/image_io.h"
+#include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/pipeline/verify_job.h"
@@ -63,6 +69,11 @@ std::string shapeText(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
+void requireRows(const char* name, py::ssize_t rows, size_t expected, const char* of) {
+  if (size_t(rows) != expected)
+    throw py::value_error(std::string(name) + ": has " + std::to_string(rows) + " rows for " + std::to_string(expected) + " " + of);
+}
+
 /// `shape` lists the trailing dimensions (empty: 1-D); -1 in it accepts any of `alternatives`.
 FloatArray floatArray(py::handle obj, const char* name, std::initializer_list<py::ssize_t> shape,
                       bool finite = true) {
@@ -93,6 +104,39 @@ FloatArray floatArray(py::handle obj, const char* name, std::initializer_list<py
   return v;
 }
 
+/// Row i of an (N, 3) array into dst[i * stride] (floats), in one typed pass; non-finite values
+/// are reported by row (the hot path of passing large clouds in).
+template <typename T>
+void copyRows3(const py::array& a, py::ssize_t n, float* dst, size_t stride, const char* name) {
+  const char* base = static_cast<const char*>(a.data());
+  const py::ssize_t s0 = a.strides(0), s1 = a.strides(1);
+  bool finite = true;
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const char* row = base + i * s0;
+    T x, y, z;
+    std::memcpy(&x, row, sizeof(T));
+    std::memcpy(&y, row + s1, sizeof(T));
+    std::memcpy(&z, row + 2 * s1, sizeof(T));
+    float* d = dst + size_t(i) * stride;
+    d[0] = float(x), d[1] = float(y), d[2] = float(z);
+    finite &= std::isfinite(x) & std::isfinite(y) & std::isfinite(z);
+  }
+  if (!finite)
+    for (py::ssize_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(dst[size_t(i) * stride + k]))
+          throw py::value_error(std::string(name) + ": row " + std::to_string(i) + " holds a non-finite value");
+}
+
+/// An (N, 3) float array into the Vec3f member at `first` of n structs `stride` bytes apart.
+void copyVec3(py::handle obj, const char* name, float* first, size_t strideBytes, size_t expected) {
+  FloatArray v = floatArray(obj, name, {3}, false);
+  if (expected != size_t(-1)) requireRows(name, v.n, expected, "points");
+  const size_t stride = strideBytes / sizeof(float);
+  if (v.f64) copyRows3<double>(v.array, v.n, first, stride, name);
+  else copyRows3<float>(v.array, v.n, first, stride, name);
+}
+
 Vec3f vec3At(const FloatArray& a, py::ssize_t i, py::ssize_t j = -1) {
   if (j < 0) return Vec3f(float(a.at(i, 0)), float(a.at(i, 1)), float(a.at(i, 2)));
   return Vec3f(float(a.at(i, j, 0)), float(a.at(i, j, 1)), float(a.at(i, j, 2)));
@@ -112,11 +156,6 @@ FloatArray colorArray(py::handle obj, const char* name) {
   py::array a = py::array::ensure(obj);
   const bool four = a && a.ndim() == 2 && a.shape(1) == 4;
   return four ? floatArray(obj, name, {4}) : floatArray(obj, name, {3});
-}
-
-void requireRows(const char* name, py::ssize_t rows, size_t expected, const char* of) {
-  if (size_t(rows) != expected)
-    throw py::value_error(std::string(name) + ": has " + std::to_string(rows) + " rows for " + std::to_string(expected) + " " + of);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -146,14 +185,36 @@ py::array_t<float> floatVector(const std::vector<float>& v) {
 // ---------------------------------------------------------------------------------------------
 // Models.
 
+/// Reserves n elements and, for large blocks, asks Linux for transparent huge pages before the
+/// memory is first touched (as numpy does): 1 M points are 48 MB, whose 12 k page faults of 4 KB
+/// otherwise cost more than the conversion itself.
+template <typename T>
+void reserveHugePages(std::vector<T>& v, size_t n) {
+  v.reserve(n);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  const size_t bytes = n * sizeof(T);
+  if (bytes >= (size_t(4) << 20)) {
+    const uintptr_t page = 4096;
+    const uintptr_t b = (reinterpret_cast<uintptr_t>(v.data()) + page - 1) & ~(page - 1);
+    const uintptr_t e = (reinterpret_cast<uintptr_t>(v.data()) + bytes) & ~(page - 1);
+    if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
+  }
+#endif
+}
+
 void setPoints(HybridModel& m, py::handle obj) {
-  FloatArray a = floatArray(obj, "points", {3});
-  if (size_t(a.n) != m.points.size()) {
-    m.points.assign(size_t(a.n), Point{});
+  FloatArray a = floatArray(obj, "points", {3}, false);
+  std::vector<Point> points;  // the model changes only once the array is known good
+  reserveHugePages(points, size_t(a.n));
+  points.resize(size_t(a.n));
+  if (a.n) copyVec3(a.array, "points", points[0].position.data(), sizeof(Point), size_t(a.n));
+  if (points.size() != m.points.size()) {
+    m.points = std::move(points);
     m.attributes.normals = m.attributes.colors = m.attributes.radii = false;
     m.pointProperties.clear();
+  } else {
+    for (size_t i = 0; i < points.size(); ++i) m.points[i].position = points[i].position;
   }
-  for (py::ssize_t i = 0; i < a.n; ++i) m.points[i].position = vec3At(a, i);
 }
 
 void setSegments(HybridModel& m, py::handle obj) {
@@ -382,6 +443,17 @@ py::dict geometryDict(const PointGeometry& g) {
     d["max_curvature_dir"] = vec3Array(n, [&](size_t i) { return g.maxCurvatureDir[i]; });
   }
   return d;
+}
+
+/// Whether prepareForRendering would change the model (it is copied only then).
+bool needsPreparation(const HybridModel& m, float radiusScale) {
+  if (radiusScale != 1.0f) return true;
+  if (!m.points.empty() && (!m.attributes.normals || !m.attributes.radii)) return true;
+  for (const Point& p : m.points)
+    if (p.radius == 0.0f) return true;
+  for (const Segment& s : m.segments)
+    if (s.radius == 0.0f) return true;
+  return false;
 }
 
 std::unique_ptr<ThreadLimit>& threadLimit() {
@@ -974,14 +1046,15 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
 
         ModelArg a = modelArg(model);
         if (a.model->empty()) throwBadOption("model", "holds no points and no segments");
-        const bool prepare = radius_scale != 1.0f ||
-                             (!a.model->points.empty() && (!a.model->attributes.normals || !a.model->attributes.radii));
         RenderResult r;
         {
           py::gil_scoped_release release;
-          if (prepare) prepareForRendering(a.mutableCopy(), p);
+          // What `linesurf render` does to a model before drawing it; a copy only when it changes it.
+          const ModelFrame frame = normalizingFrame(a.model->bounds());
+          if (!frame.identity()) toFrame(a.mutableCopy(), frame);
+          if (needsPreparation(*a.model, radius_scale)) prepareForRendering(a.mutableCopy(), p);
           Renderer renderer(*a.model, o);
-          r = renderer.render(viewCameras(renderer.sphere(), v).front());
+          r = renderer.render(viewCameras(renderer.sphere(), v, frame).front());
         }
         py::array_t<uint8_t> color = rgba8(r.color);
         if (!depth && !alpha && !normal) return color;

@@ -186,7 +186,7 @@ TEST(Clustering, RejectsAbsurdParameters) {
     clusterGreedy(g, {.deltaN = 3.0f});
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), Error::Kind::BadParameter);
-    EXPECT_NE(std::string(e.what()).find("delta-n"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("deltaN"), std::string::npos);
   }
 }
 
