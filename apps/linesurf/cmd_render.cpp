@@ -191,7 +191,10 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bind(g, "distance", v.distance, "Orbit distance from the centre (0 = frame the model)");
   bind(g, "zoom", v.zoom, "Divide the framed distance by this factor (> 0)");
   bind(g, "fov", v.fov, "Vertical field of view, degrees in [1, 170]");
-  bind(g, "views", v.views, "Render N views spread over the sphere (deterministic), [1, 10000]");
+  g->add_option_function<int>(flagName("views"), [&v](int n) {
+        if (n < 1) throwBadOption("views", "must be in [1, 10000] (leave it out for one view), got " + std::to_string(n));
+        v.views = n;
+      }, "Render N views spread over the sphere (deterministic), [1, 10000]");
   g->add_option_function<std::string>(flagName("upAxis"), [&v](const std::string& s) { v.upAxis = parseUpAxis(s); },
                                       "World up axis of the orbit: x, y, z, -x, -y, -z (santa, rockerarm: z)")
       ->default_str("y");
