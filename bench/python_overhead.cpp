@@ -14,7 +14,7 @@
 int main(int argc, char** argv) {
   using namespace linesurf;
   if (argc != 5) return std::fprintf(stderr, "usage: %s MODEL WIDTH HEIGHT REPEATS\n", argv[0]), 1;
-  HybridModel model = loadRenderable(argv[1]);
+  HybridModel model = readModel(argv[1]);  // igea: ordinary size, identity frame
   prepareForRendering(model);
   ViewOptions view;
   view.width = std::atoi(argv[2]), view.height = std::atoi(argv[3]);
