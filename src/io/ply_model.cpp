@@ -456,7 +456,9 @@ std::string headerStart(const WriteOptions& o, const std::vector<std::string>& c
     std::replace(line.begin(), line.end(), '\r', ' ');
     // A free comment that reads as "TextureFile NAME" would make the reader look for a texture
     // (found by the round-trip fuzzer, from an .xyz comment): keep it, but not as a key.
-    if (std::string_view(line).substr(0, kTextureKey.size()) == kTextureKey) line = "(" + line + ")";
+    const size_t start = line.find_first_not_of(" \t\v\f");
+    if (start != std::string::npos && std::string_view(line).substr(start, kTextureKey.size()) == kTextureKey)
+      line = "(" + line.substr(start) + ")";
     h += "comment " + line + "\n";
   }
   if (!texture.empty()) h += "comment TextureFile " + texture + "\n";
