@@ -95,8 +95,8 @@ for model in ["igea", "armadillo", "dragon vertices"]:
 if "points" in rates and "segments" in rates:
     p, s = rates["points"], rates["segments"]
     lines.append("")
-    lines.append(f"Fragment cost from the renderer's own counters (raster+resolve time / Z³ fragments, one plane at 512², "
-                 f"2 threads; `BM_PointRate` and `BM_SegmentRate/0`, the same plane as 40,000 points or as 4,000 ScreenSpace segments of 10 points): "
+    lines.append(f"Fragment cost from the renderer's own counters (rasterisation thread time without the per-pixel resolve / Z³ fragments, one plane at 512², "
+                 f"1 thread; `BM_PointRate` and `BM_SegmentRate/0`, the same plane as 40,000 points or as 4,000 ScreenSpace segments of 10 points): "
                  f"point fragment **{p['ns/frag']:.2f} ns** ({p['fragments'] / 1e3:.0f} k fragments), "
                  f"segment fragment **{s['ns/frag']:.2f} ns** ({s['fragments'] / 1e3:.0f} k fragments): "
                  f"ratio **{s['ns/frag'] / p['ns/frag']:.2f}x**; frame {p['real_time']:.2f} ms (points) vs {s['real_time']:.2f} ms (segments).")

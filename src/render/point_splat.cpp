@@ -276,33 +276,117 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   return status;
 }
 
+detail::PointSetupFrame pointSetupFrame(const FrameContext& frame) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  detail::PointSetupFrame f;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) f.rot[3 * r + c] = cam.rotation()(r, c);
+    f.trans[r] = cam.cameraFromWorld()(r, 3);
+  }
+  f.f = cam.focalPixels();
+  f.cx = cam.principalPoint().x(), f.cy = cam.principalPoint().y();
+  f.nearD = cam.nearDepth(), f.farD = cam.farDepth();
+  f.prefilter = opt.prefilterVariance;
+  f.reconstructionScale = opt.reconstructionScale;
+  f.cutoff = opt.cutoffRadius;
+  f.cutoffQ = frame.cutoffQ;
+  f.backfaceCulling = opt.backfaceCulling;
+  f.light = !opt.perPixelLighting;
+  for (int k = 0; k < 3; ++k) f.lightDir[k] = frame.lightDirCamera[k];
+  f.ambient = opt.material.ambient, f.diffuse = opt.material.diffuse, f.specular = opt.material.specular;
+  f.shininess = opt.material.shininess;
+  return f;
+}
+
+void preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
+                   const detail::PointSetupFrame& setup, PreparedPoint* out, PrimitiveStatus* status) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  detail::PointSetupBatch b;
+  for (int j = 0; j < count; ++j) {  // AoS -> SoA
+    const Point& p = points[first + j];
+    b.px[j] = p.position.x(), b.py[j] = p.position.y(), b.pz[j] = p.position.z();
+    b.nx[j] = p.normal.x(), b.ny[j] = p.normal.y(), b.nz[j] = p.normal.z();
+    b.radius[j] = p.radius;
+  }
+  detail::pointSetup(setup, b, count);
+  for (int j = 0; j < count; ++j) {
+    const uint32_t index = first + uint32_t(j);
+    const Point& point = points[index];
+    PreparedPoint& o = out[j];
+    o.index = index;
+    o.bounds = {};
+    if (b.status[j] == 1.0f) {
+      status[j] = PrimitiveStatus::Culled;
+      continue;
+    }
+    bool cut = false;
+    if (b.status[j] == 0.0f) o.bounds = pixelBounds(cam, b.x0[j], b.y0[j], b.x1[j], b.y1[j], cut);
+    if (b.status[j] != 0.0f) {  // the exact path
+      status[j] = preparePoint(point, index, frame, o);
+      continue;
+    }
+    if (o.bounds.empty()) {
+      status[j] = PrimitiveStatus::Outside;
+      continue;
+    }
+    o.raster.N = {b.Nx[j], b.Ny[j], b.N0[j]};
+    o.raster.S = {b.Sx[j], b.Sy[j], b.S0[j]};
+    o.raster.T = {b.Tx[j], b.Ty[j], b.T0[j]};
+    o.raster.depthNum = b.depthNum[j];
+    o.raster.weightScale = b.weightScale[j];
+    o.raster.cutoffQ = frame.cutoffQ;
+    o.raster.clipDepth = false;
+    o.raster.nearD = cam.nearDepth();
+    o.raster.farD = cam.farDepth();
+    o.zThreshold = frame.zThreshold(b.depthExtent[j] + point.radius);
+    const Color col = frame.primitiveColor(point.color);
+    Vec3f c = col.head<3>();
+    o.gouraud = false;
+    if (!opt.perPixelLighting) {  // Phong, as light() does: flat at the centre or Gouraud
+      const Vec3f& lc = opt.light.color;
+      const Vec3f base = c * b.diffuseFactor[j];
+      const bool flat = o.bounds.width() <= PreparedPoint::kFlatShadeSpan && o.bounds.height() <= PreparedPoint::kFlatShadeSpan;
+      if (flat) {
+        c = (base + Vec3f::Constant(b.specular[0][j])).cwiseProduct(lc);
+      } else {
+        const float s00 = b.specular[1][j], s10 = b.specular[2][j], s01 = b.specular[3][j], s11 = b.specular[4][j];
+        const float inv2R = 0.5f / opt.cutoffRadius;
+        o.gouraud = true;
+        o.C0 = (base + Vec3f::Constant(0.25f * (s00 + s10 + s01 + s11))).cwiseProduct(lc);
+        o.Cs = (0.5f * inv2R * (s10 - s00 + s11 - s01)) * lc;
+        o.Ct = (0.5f * inv2R * (s01 - s00 + s11 - s10)) * lc;
+        o.Cst = (inv2R * inv2R * (s00 - s10 - s01 + s11)) * lc;
+      }
+    }
+    const float attr[Z3Tile::kAttrs] = {c.x(), c.y(), c.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, b.onx[j], b.ony[j], b.onz[j]};
+    std::copy(attr, attr + Z3Tile::kAttrs, o.attr);
+    status[j] = cut ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
+  }
+}
+
 void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);
   if (r.empty()) return;
   float attr[Z3Tile::kAttrs];
   std::copy(sp.attr, sp.attr + Z3Tile::kAttrs, attr);
-  constexpr int kPad = detail::kBlock + detail::kMaxLanes;
-  alignas(64) float w[kPad], depth[kPad], s[kPad], t[kPad];
+  detail::FragmentBlock fb;
   const int W = r.width(), total = W * r.height();
+  uint64_t inserted = 0;
   for (int k0 = 0; k0 < total; k0 += detail::kBlock) {
-    const int count = std::min(detail::kBlock, total - k0);
-    detail::pointWeights(sp.raster, r.x0, r.y0, W, k0, count, w, depth, sp.gouraud ? s : nullptr,
-                         sp.gouraud ? t : nullptr);
-    int x = r.x0 + k0 % W, y = r.y0 + k0 / W;
-    for (int i = 0; i < count; ++i) {
-      if (w[i] > 0) {
-        if (sp.gouraud) {  // bilinear Gouraud over the quad
-          const Vec3f c = sp.C0 + s[i] * sp.Cs + t[i] * sp.Ct + (s[i] * t[i]) * sp.Cst;
-          attr[0] = c.x(), attr[1] = c.y(), attr[2] = c.z();
-        }
-        ctx.tile.insert(x, y, depth[i], sp.zThreshold, w[i], attr);
+    const int m = detail::pointFragments(sp.raster, r.x0, r.y0, W, k0, std::min(detail::kBlock, total - k0), sp.gouraud, fb);
+    for (int i = 0; i < m; ++i) {
+      if (sp.gouraud) {  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
+        const float s = fb.p[i], t = fb.q[i];
+        const Vec3f c = sp.C0 + s * sp.Cs + t * sp.Ct + (s * t) * sp.Cst;
+        attr[0] = c.x(), attr[1] = c.y(), attr[2] = c.z();
       }
-      if (++x == r.x1) {
-        x = r.x0;
-        ++y;
-      }
+      ctx.tile.insert(int(fb.x[i]), int(fb.y[i]), fb.depth[i], sp.zThreshold, fb.weight[i], attr);
     }
+    inserted += uint64_t(m);
   }
+  ctx.tile.addFragments(inserted);
 }
 
 }  // namespace linesurf

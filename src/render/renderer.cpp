@@ -3,6 +3,7 @@
 #include "linesurf/render/renderer.h"
 
 #include <algorithm>
+#include <ctime>
 #include <memory>
 
 #include "linesurf/core/parallel.h"
@@ -38,6 +39,13 @@ void count(PrimitiveStatus s, uint64_t& drawn, uint64_t& clipped, uint64_t& cull
   }
 }
 
+// CPU time of the calling thread (robust against other processes on a shared machine).
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
 bool visible(PrimitiveStatus s) { return s == PrimitiveStatus::Drawn || s == PrimitiveStatus::Clipped; }
 
 }  // namespace
@@ -58,7 +66,13 @@ RenderResult Renderer::render(const Camera& cam) const {
   std::vector<PreparedPoint> pts(np);
   std::vector<PreparedSegment> segs(ns);
   std::vector<PrimitiveStatus> status(np + ns);
-  parallelFor(0, np, [&](size_t i) { status[i] = preparePoint(model_.points[i], uint32_t(i), frame, pts[i]); }, 1024);
+  const detail::PointSetupFrame setup = pointSetupFrame(frame);
+  const size_t batches = (np + detail::kSetupBatch - 1) / detail::kSetupBatch;
+  parallelFor(0, batches, [&](size_t k) {
+    const size_t i = k * detail::kSetupBatch;
+    preparePoints(model_.points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, np - i)), frame, setup,
+                  pts.data() + i, status.data() + i);
+  }, 16);
   parallelFor(0, ns, [&](size_t i) { status[np + i] = prepareSegment(model_.segments[i], uint32_t(i), frame, segs[i]); }, 256);
   for (size_t i = 0; i < np; ++i)
     count(status[i], st.pointsDrawn, st.pointsClipped, st.pointsCulled, st.pointsOutside, st.pointsDegenerate);
@@ -120,6 +134,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   if (opt.alphaBuffer) res.alpha = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
   if (opt.normalBuffer) res.normal = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
   std::vector<Z3Counters> tileCounters(tiles);
+  std::vector<std::pair<double, double>> tileSeconds(tiles);  // rasterise, resolve
   const Color bg = opt.background;
   auto doTile = [&](size_t tile) {
     const int tx = int(tile % size_t(tilesX)), ty = int(tile / size_t(tilesX));
@@ -130,11 +145,14 @@ RenderResult Renderer::render(const Camera& cam) const {
     else buffer->reset(rect);
     Z3Tile& z3 = *buffer;
     SplatContext ctx{frame, rect, z3};
+    const double t0 = threadCpuSeconds();
     for (size_t k = tileStart[tile]; k < tileStart[tile + 1]; ++k) {
       uint32_t p = refs[k];
       if (p < np) rasterizePoint(pts[p], ctx);
       else rasterizeSegment(segs[p - np], ctx);
     }
+    const double t1 = threadCpuSeconds();
+    tileSeconds[tile].first = t1 - t0;
     for (int y = rect.y0; y < rect.y1; ++y)
       for (int x = rect.x0; x < rect.x1; ++x) {
         if (z3.layerCount(x, y) == 0) continue;
@@ -160,11 +178,16 @@ RenderResult Renderer::render(const Camera& cam) const {
           res.normal->at(x, y) = Color(0.5f * (px.normal.x() + 1), 0.5f * (px.normal.y() + 1), 0.5f * (px.normal.z() + 1), 1);
       }
     tileCounters[tile] = z3.counters();
+    tileSeconds[tile].second = threadCpuSeconds() - t1;
   };
   const size_t batch = 64;
   for (size_t b0 = 0; b0 < tiles; b0 += batch) {
     parallelFor(b0, std::min(tiles, b0 + batch), doTile, 1);
     reportProgress(opt.progress, "render", 0.1 + 0.9 * double(std::min(tiles, b0 + batch)) / double(tiles));
+  }
+  for (const auto& [raster, resolve] : tileSeconds) {
+    st.fragmentThreadSeconds += raster;
+    st.resolveThreadSeconds += resolve;
   }
   for (const Z3Counters& c : tileCounters) {
     st.fragments += c.fragments;

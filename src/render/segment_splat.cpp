@@ -762,7 +762,21 @@ bool rowSpan(const PreparedSegment& sp, const PixelRect& r, float py, int& xb, i
 struct SegmentShading {
   const PreparedSegment& sp;
   const FrameContext& frame;
+  // untextured, one normal, two stations (the common case): the colour is linear in u
+  bool linear = false;
+  Vec3f c0 = Vec3f::Zero(), dc = Vec3f::Zero();
+  SegmentShading(const PreparedSegment& s, const FrameContext& f) : sp(s), frame(f) {
+    if (!sp.textured && !sp.smooth && sp.diffuse.size() == 2) {
+      linear = true;
+      c0 = sp.albedo.cwiseProduct(sp.diffuse[0]) + sp.specular[0];
+      dc = sp.albedo.cwiseProduct(sp.diffuse[1]) + sp.specular[1] - c0;
+    }
+  }
   void at(float u, float* attr) const {
+    if (linear) {
+      attr[Z3Tile::kR] = c0.x() + u * dc.x(), attr[Z3Tile::kG] = c0.y() + u * dc.y(), attr[Z3Tile::kB] = c0.z() + u * dc.z();
+      return;  // the other attributes are constant (constantExceptColour())
+    }
     Vec3f c = sp.albedo;
     if (sp.textured) {  // §5.2.4: interpolated between the endpoints, constant beyond
       const Vec2f uv = sp.uv0 + u * (sp.uv1 - sp.uv0);
@@ -782,6 +796,13 @@ struct SegmentShading {
     attr[Z3Tile::kA] = sp.alpha;
     attr[Z3Tile::kW] = 1.0f;
     attr[Z3Tile::kNx] = n.x(), attr[Z3Tile::kNy] = n.y(), attr[Z3Tile::kNz] = n.z();
+  }
+  /// Fills every attribute (call once per segment before at()).
+  void init(float* attr) const {
+    attr[Z3Tile::kA] = sp.alpha;
+    attr[Z3Tile::kW] = 1.0f;
+    attr[Z3Tile::kNx] = sp.normal.x(), attr[Z3Tile::kNy] = sp.normal.y(), attr[Z3Tile::kNz] = sp.normal.z();
+    at(0, attr);
   }
   /// Same attributes for every fragment: deferred lighting of an untextured, one-normal segment.
   bool constant() const { return !sp.textured && !sp.smooth && sp.diffuse.empty(); }
@@ -810,24 +831,41 @@ void rasterizeSingleSpan(const PreparedSegment& sp, const SplatContext& ctx, con
   k.zThreshold0 = sp.zThreshold0, k.zThreshold1 = sp.zThreshold1;
   k.nearD = cam.nearDepth(), k.farD = cam.farDepth();
   k.clipDepth = sp.clipped;
-  const SegmentShading shading{sp, frame};
+  const SegmentShading shading(sp, frame);
   float attr[Z3Tile::kAttrs];
-  if (shading.constant()) shading.at(0, attr);
-  constexpr int kPad = detail::kBlock + detail::kMaxLanes;
-  alignas(64) float w[kPad], depth[kPad], u[kPad], thr[kPad];
-  for (int y = r.y0; y < r.y1; ++y) {
+  shading.init(attr);
+  detail::FragmentBlock fb;
+  detail::RowSpan spans[detail::kBlock];
+  int spanCount = 0, pixels = 0;
+  uint64_t inserted = 0;
+  auto flush = [&] {
+    const int m = detail::segmentFragments(k, spans, spanCount, fb);
+    for (int i = 0; i < m; ++i) {
+      const float u = fb.p[i];
+      if (shading.linear) {
+        attr[Z3Tile::kR] = shading.c0.x() + u * shading.dc.x();
+        attr[Z3Tile::kG] = shading.c0.y() + u * shading.dc.y();
+        attr[Z3Tile::kB] = shading.c0.z() + u * shading.dc.z();
+      } else if (!shading.constant()) {
+        shading.at(u, attr);
+      }
+      ctx.tile.insert(int(fb.x[i]), int(fb.y[i]), fb.depth[i], fb.q[i], fb.weight[i], attr);
+    }
+    inserted += uint64_t(m);
+    spanCount = pixels = 0;
+  };
+  for (int y = r.y0; y < r.y1; ++y) {  // rows' spans gathered into blocks of at most kBlock pixels
     int xb, xe;
     if (!rowSpan(sp, r, float(y) + 0.5f, xb, xe)) continue;
     for (int x0 = xb; x0 < xe; x0 += detail::kBlock) {
-      const int count = std::min(detail::kBlock, xe - x0);
-      detail::segmentWeights(k, x0, y, count, 0, count, w, depth, u, thr);
-      for (int i = 0; i < count; ++i) {
-        if (!(w[i] > 0)) continue;
-        if (!shading.constant()) shading.at(u[i], attr);
-        ctx.tile.insert(x0 + i, y, depth[i], thr[i], w[i], attr);
-      }
+      const int x1 = std::min(xe, x0 + detail::kBlock);
+      if (pixels + (x1 - x0) > detail::kBlock) flush();
+      spans[spanCount++] = {y, x0, x1};
+      pixels += x1 - x0;
     }
   }
+  if (spanCount > 0) flush();
+  ctx.tile.addFragments(inserted);
 }
 
 }  // namespace
@@ -846,10 +884,12 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   const float no = sp.normal.dot(sp.origin), eo = sp.along.dot(sp.origin), so = sp.across.dot(sp.origin);
   const detail::Affine2 N = detail::rayDot(cam, sp.normal), E = detail::rayDot(cam, sp.along),
                         S = detail::rayDot(cam, sp.across);
-  const SegmentShading shading{sp, frame};
+  const SegmentShading shading(sp, frame);
   float attr[Z3Tile::kAttrs];
+  shading.init(attr);
   const float L = sp.length;
   const bool screenSpace = sp.method == SegmentMethod::ScreenSpace;
+  uint64_t inserted = 0;
   for (int y = r.y0; y < r.y1; ++y) {
     const float py = float(y) + 0.5f;
     int xb, xe;
@@ -870,8 +910,10 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
       const float u = std::clamp(a / L, 0.0f, 1.0f);
       shading.at(u, attr);
       ctx.tile.insert(x, y, t, sp.zThreshold0 + u * (sp.zThreshold1 - sp.zThreshold0), w, attr);
+      ++inserted;
     }
   }
+  ctx.tile.addFragments(inserted);
 }
 
 }  // namespace linesurf

@@ -49,25 +49,39 @@ struct PlaneHit {
   }
 };
 
-void PointWeights(const PointRaster& P, int x0, int y0, int width, int k0, int n, float* HWY_RESTRICT weight,
-                  float* HWY_RESTRICT depth, float* HWY_RESTRICT sOut, float* HWY_RESTRICT tOut) {
+// Packs the lanes of `keep` into the block at `at`; returns how many. Compress in registers and
+// store whole vectors (the arrays are padded): a compressing store to memory is microcoded on
+// some CPUs (Zen 4).
+HWY_INLINE int pack(DF d, hn::Mask<DF> keep, VF x, VF y, VF w, VF z, VF p, VF q, bool withPQ, FragmentBlock& out, int at) {
+  hn::StoreU(hn::Compress(x, keep), d, out.x + at);
+  hn::StoreU(hn::Compress(y, keep), d, out.y + at);
+  hn::StoreU(hn::Compress(w, keep), d, out.weight + at);
+  hn::StoreU(hn::Compress(z, keep), d, out.depth + at);
+  if (withPQ) {
+    hn::StoreU(hn::Compress(p, keep), d, out.p + at);
+    hn::StoreU(hn::Compress(q, keep), d, out.q + at);
+  }
+  return int(hn::CountTrue(d, keep));
+}
+
+int PointFragments(const PointRaster& P, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
+                   FragmentBlock& out) {
   const BlockWalker walk(width, x0, y0);
   const DF d;
+  const int L = int(hn::Lanes(d));
   const VF cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
-  for (int i = 0; i < n; i += int(hn::Lanes(d))) {
+  const VF lane = hn::Iota(d, 0.0f), count = hn::Set(d, float(n));
+  int m = 0;
+  for (int i = 0; i < n; i += L) {
     const PlaneHit h(walk, k0 + i, P.N, P.depthNum, P.clipDepth, P.nearD, P.farD);
     const VF s = hn::Mul(affine(d, P.S, h.px, h.py), h.iN), t = hn::Mul(affine(d, P.T, h.px, h.py), h.iN);
     const VF q = hn::MulAdd(s, s, hn::Mul(t, t));
-    const VF z = h.z;
-    const auto inside = hn::And(h.front, hn::Le(q, cutoff));
+    auto inside = hn::And(hn::And(h.front, hn::Le(q, cutoff)), hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
     const VF w = hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale);
-    hn::StoreU(hn::IfThenElseZero(inside, w), d, weight + i);
-    hn::StoreU(z, d, depth + i);
-    if (sOut) {
-      hn::StoreU(s, d, sOut + i);
-      hn::StoreU(t, d, tOut + i);
-    }
+    inside = hn::And(inside, hn::Gt(w, hn::Zero(d)));
+    m += pack(d, inside, h.px, h.py, w, h.z, s, t, withPlaneCoords, out, m);
   }
+  return m;
 }
 
 // erf(x) from exp(-x^2) (Abramowitz & Stegun 7.1.26, absolute error < 1.5e-7).
@@ -84,9 +98,7 @@ HWY_INLINE VF erfFromExp(DF d, VF x, VF expMinusX2) {
   return hn::CopySign(r, x);
 }
 
-void SegmentWeights(const SegmentRaster& S, int x0, int y0, int width, int k0, int n, float* HWY_RESTRICT weight,
-                    float* HWY_RESTRICT depth, float* HWY_RESTRICT uOut, float* HWY_RESTRICT thrOut) {
-  const BlockWalker walk(width, x0, y0);
+int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount, FragmentBlock& out) {
   const DF d;
   const VF one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
   const VF a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0);
@@ -96,11 +108,18 @@ void SegmentWeights(const SegmentRaster& S, int x0, int y0, int width, int k0, i
   const VF kk = hn::Set(d, S.k), erfScale = hn::Set(d, S.erfScale), scale0 = hn::Set(d, S.scale0),
            slope = hn::Set(d, S.slope);
   const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
+  const VF lane = hn::Iota(d, 0.0f);
+  int m = 0;
+  for (int r = 0; r < spanCount; ++r) {
+  const RowSpan& span = spans[r];
+  const BlockWalker walk(span.x1 - span.x0, span.x0, span.y);
+  const int n = span.x1 - span.x0;
+  const VF count = hn::Set(d, float(n));
   for (int i = 0; i < n; i += int(hn::Lanes(d))) {
-    const PlaneHit h(walk, k0 + i, S.N, S.depthNum, S.clipDepth, S.nearD, S.farD);
-    const VF z = h.z;
+    const PlaneHit h(walk, i, S.N, S.depthNum, S.clipDepth, S.nearD, S.farD);
     const VF a = hn::MulSub(affine(d, S.A, h.px, h.py), h.iN, a0), b = hn::MulSub(affine(d, S.B, h.px, h.py), h.iN, b0);
     auto inside = hn::And(h.front, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
+    inside = hn::And(inside, hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
     // the integral along the sub-segment in closed form (segment_splat.cpp, screenSpaceWeight)
     const VF tauStar = hn::MulAdd(skew, b, a);
     const VF qmin = hn::Mul(hn::Mul(b, b), across);
@@ -116,11 +135,11 @@ void SegmentWeights(const SegmentRaster& S, int x0, int y0, int width, int k0, i
     VF w = hn::Mul(hn::Mul(hn::MulAdd(slope, tauStar, scale0), i0), g);
     w = hn::MulAdd(hn::Mul(hn::Mul(slope, invM00), g), hn::Sub(e0, e1), w);
     const VF u = hn::Min(one, hn::Max(zero, hn::Mul(a, invLen)));
-    hn::StoreU(hn::IfThenElseZero(inside, w), d, weight + i);
-    hn::StoreU(z, d, depth + i);
-    hn::StoreU(u, d, uOut + i);
-    hn::StoreU(hn::MulAdd(u, thrD, thr0), d, thrOut + i);
+    inside = hn::And(inside, hn::Gt(w, zero));
+    m += pack(d, inside, h.px, h.py, w, h.z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
   }
+  }
+  return m;
 }
 
 int64_t Target() { return HWY_TARGET; }
@@ -131,17 +150,16 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace linesurf::detail {
-HWY_EXPORT(PointWeights);
-HWY_EXPORT(SegmentWeights);
+HWY_EXPORT(PointFragments);
+HWY_EXPORT(SegmentFragments);
 HWY_EXPORT(Target);
 
-void pointWeights(const PointRaster& p, int x0, int y0, int width, int k0, int n, float* weight, float* depth,
-                  float* s, float* t) {
-  HWY_DYNAMIC_DISPATCH(PointWeights)(p, x0, y0, width, k0, n, weight, depth, s, t);
+int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
+                   FragmentBlock& out) {
+  return HWY_DYNAMIC_DISPATCH(PointFragments)(p, x0, y0, width, k0, n, withPlaneCoords, out);
 }
-void segmentWeights(const SegmentRaster& s, int x0, int y0, int width, int k0, int n, float* weight, float* depth,
-                    float* u, float* zThreshold) {
-  HWY_DYNAMIC_DISPATCH(SegmentWeights)(s, x0, y0, width, k0, n, weight, depth, u, zThreshold);
+int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, FragmentBlock& out) {
+  return HWY_DYNAMIC_DISPATCH(SegmentFragments)(s, spans, count, out);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

@@ -10,7 +10,7 @@
 namespace linesurf {
 
 Z3Tile::Z3Tile(const PixelRect& rect, int layers)
-    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)), stride_(size_t(kStride) * size_t(layers_)) {
+    : layers_(std::clamp(layers, 1, RenderOptions::kMaxLayers)) {
   reset(rect);
 }
 
@@ -18,14 +18,21 @@ void Z3Tile::reset(const PixelRect& rect) {
   rect_ = rect;
   size_t pixels = rect.empty() ? 0 : size_t(rect.width()) * size_t(rect.height());
   count_.assign(pixels, 0);
-  if (data_.size() < pixels * stride_) data_.resize(pixels * stride_);
+  if (pixels > capacity_) {
+    capacity_ = pixels;
+    layerStride_ = capacity_ * kStride;
+    data_.resize(layerStride_ * size_t(layers_));
+  }
   counters_ = {};
+  fragments_ = direct_ = 0;
 }
 
 namespace {
 constexpr int kRecord = 16;  // floats per layer record (Z3Tile::kStride)
-// Moves layer s to slot d within one pixel block.
-inline void moveLayer(float* px, int d, int s) { std::memcpy(px + d * kRecord, px + s * kRecord, sizeof(float) * kRecord); }
+// Moves layer s to slot d within one pixel (layers `stride` floats apart).
+inline void moveLayer(float* px, size_t stride, int d, int s) {
+  std::memcpy(px + d * stride, px + s * stride, sizeof(float) * kRecord);
+}
 }  // namespace
 
 // Composites the adjacent pair of layers (i, i+1) with the smallest depth gap into one (step c).
@@ -36,11 +43,11 @@ void Z3Tile::compress(float* px, int& n) {
   int best = 0;
   float bestGap = INFINITY;
   for (int i = 0; i + 1 < n; ++i) {
-    const float gap = px[(i + 1) * kStride + kZ] - px[i * kStride + kZ];
+    const float gap = px[(i + 1) * layerStride_ + kZ] - px[i * layerStride_ + kZ];
     if (gap < bestGap) { bestGap = gap; best = i; }
   }
-  float* F = px + best * kStride;
-  const float* B = F + kStride;
+  float* F = px + best * layerStride_;
+  const float* B = F + layerStride_;
   const float iwf = 1.0f / F[kW], iwb = 1.0f / B[kW];
   const float af = F[kA] * iwf, ab = B[kA] * iwb;
   const float tb = ab * (1 - af);
@@ -54,20 +61,19 @@ void Z3Tile::compress(float* px, int& n) {
   F[kThr] = std::max(F[kThr], B[kThr]);
   F[kW] = W;
   F[kOpaque] = am >= 1.0f ? 1.0f : 0.0f;
-  for (int i = best + 1; i + 1 < n; ++i) moveLayer(px, i, i + 1);
+  for (int i = best + 1; i + 1 < n; ++i) moveLayer(px, layerStride_, i, i + 1);
   --n;
   if (F[kOpaque] != 0) n = best + 1;  // an opaque merged layer hides everything behind it
   ++counters_.compressed;
 }
 
 void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const float* attr) {
-  ++counters_.fragments;
   float* px = block(p);
   const int L = layers_;
   int n = count_[p];
   const float alpha = attr[kA];
   // behind an opaque layer (always the last one): occluded
-  if (n > 0 && px[(n - 1) * kStride + kOpaque] != 0 && depth > px[(n - 1) * kStride + kZ]) {
+  if (n > 0 && px[(n - 1) * layerStride_ + kOpaque] != 0 && depth > px[(n - 1) * layerStride_ + kZ]) {
     ++counters_.occluded;
     return;
   }
@@ -93,11 +99,12 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
       px[kW] = W;
       px[kOpaque] = am >= 1.0f ? 1.0f : 0.0f;
       ++counters_.compressed;
+      ++direct_;
       return;
     }
     compress(px, n);
     // the compression may have produced an opaque layer in front of the fragment
-    const float* last = px + (n - 1) * kStride;
+    const float* last = px + (n - 1) * layerStride_;
     if (last[kOpaque] != 0 && depth > last[kZ] + std::max(zThreshold, last[kThr])) {
       count_[p] = uint8_t(n);
       ++counters_.occluded;
@@ -106,11 +113,11 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
   }
   // b. allocation, keeping the layers sorted front to back
   int pos = n;
-  while (pos > 0 && px[(pos - 1) * kStride + kZ] > depth) --pos;
+  while (pos > 0 && px[(pos - 1) * layerStride_ + kZ] > depth) --pos;
   const bool opaque = alpha >= 1.0f;
   if (opaque) n = pos;  // everything behind an opaque fragment is occluded: free it
-  for (int i = n; i > pos; --i) moveLayer(px, i, i - 1);
-  float* ly = px + pos * kStride;
+  for (int i = n; i > pos; --i) moveLayer(px, layerStride_, i, i - 1);
+  float* ly = px + pos * layerStride_;
   for (int k = 0; k < kAttrs; ++k) ly[k] = w * attr[k];
   ly[kZ] = depth;
   ly[kThr] = zThreshold;

@@ -25,6 +25,10 @@ struct RenderStats {
   uint64_t tileBins = 0;  ///< (primitive, tile) pairs rasterised
   // seconds
   double prepareSeconds = 0, binSeconds = 0, rasterSeconds = 0, totalSeconds = 0;
+  /// Within the raster stage: CPU time spent rasterising primitives (fragments into Z^3) and
+  /// resolving pixels, each summed over the worker threads (for per-fragment costs: robust
+  /// against other processes on a shared machine).
+  double fragmentThreadSeconds = 0, resolveThreadSeconds = 0;
 };
 
 struct RenderResult {

@@ -14,7 +14,8 @@
 ///  2. resolve: layers normalised (C/W, A/W), lit when shading is deferred (C is then the
 ///     weighted albedo, lit once per layer with the normalised N), composited back to front.
 /// Storage: a fixed number of layers per pixel, one 64-byte record per layer whose first eight
-/// floats are the blended sums, so a merge is one 8-wide multiply-add (no allocation per fragment).
+/// floats are the blended sums, so a merge is one 8-wide multiply-add (no allocation per fragment);
+/// layer-major, so that the front layers of a tile (nearly every access) are dense.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -82,22 +83,32 @@ class Z3Tile {
 
   /// Inserts a fragment at absolute pixel (x, y), which must lie inside rect(): weight > 0 (else
   /// ignored), linear depth, z threshold, attr[kAttrs] = (r, g, b, alpha, 1, nx, ny, nz).
-  /// The common case (merge into an existing layer, step a) is inline.
+  /// The common case (merge into an existing layer, step a) is inline. The caller counts the
+  /// fragments of positive weight it inserts (addFragments): no counter update per fragment.
   void insert(int x, int y, float depth, float zThreshold, float weight, const float* attr) {
     if (!(weight > 0)) return;
     const size_t p = index(x, y);
     float* px = block(p);
     const int n = count_[p];
+    if (n == 0) {  // the pixel's first fragment opens its first layer (step b, inline)
+      for (int k = 0; k < kAttrs; ++k) px[k] = weight * attr[k];
+      px[kZ] = depth;
+      px[kThr] = zThreshold;
+      px[kOpaque] = attr[kA] >= 1.0f ? 1.0f : 0.0f;
+      count_[p] = 1;
+      ++counters_.allocated;
+      return;
+    }
     int hit = -1;
     float hitDz = INFINITY;
     for (int i = 0; i < n; ++i) {
-      const float* ly = px + i * kStride;
+      const float* ly = px + i * layerStride_;
       const float dz = std::abs(depth - ly[kZ]);
       const float t = zThreshold > ly[kThr] ? zThreshold : ly[kThr];
       if (dz <= t && dz < hitDz) { hit = i; hitDz = dz; }
     }
     if (hit < 0) return insertNew(p, depth, zThreshold, weight, attr);
-    float* ly = px + hit * kStride;
+    float* ly = px + hit * layerStride_;
 #if defined(__SSE2__)
     const __m128 wv = _mm_set1_ps(weight);  // the sums: two 4-wide multiply-adds
     _mm_storeu_ps(ly, _mm_add_ps(_mm_loadu_ps(ly), _mm_mul_ps(wv, _mm_loadu_ps(attr))));
@@ -106,12 +117,13 @@ class Z3Tile {
     for (int k = 0; k < kAttrs; ++k) ly[k] += weight * attr[k];
 #endif
     if (attr[kA] < 1.0f) ly[kOpaque] = 0;
-    ++counters_.fragments;
-    ++counters_.merged;
   }
+  void addFragments(uint64_t n) { fragments_ += n; }
+  /// The same for one Fragment, counted.
   void insert(int x, int y, const Fragment& f) {
     const float attr[kAttrs] = {f.color.x(), f.color.y(), f.color.z(), f.alpha, 1.0f, f.normal.x(), f.normal.y(), f.normal.z()};
     insert(x, y, f.depth, f.zThreshold, f.weight, attr);
+    if (f.weight > 0) addFragments(1);
   }
 
   /// Resolves pixel (x, y) (absolute, inside rect()): front-to-back "under" compositing of its
@@ -131,7 +143,7 @@ class Z3Tile {
     Vec3f c = Vec3f::Zero();
     float a = 0;
     for (int i = 0; i < n && a < 1.0f; ++i) {
-      const float* ly = px + i * kStride;
+      const float* ly = px + i * layerStride_;
       const float iw = 1.0f / ly[kW];
       const float al = std::clamp(ly[kA] * iw, 0.0f, 1.0f);
       const float t = (1 - a) * al;
@@ -148,22 +160,33 @@ class Z3Tile {
   /// Number of layers in use at (x, y).
   int layerCount(int x, int y) const { return count_[index(x, y)]; }
 
-  const Z3Counters& counters() const { return counters_; }
+  /// merged = fragments that neither opened a layer, nor were occluded, nor were composited
+  /// directly into a single full layer.
+  Z3Counters counters() const {
+    Z3Counters c = counters_;
+    c.fragments = fragments_;
+    c.merged = fragments_ - c.allocated - c.occluded - direct_;
+    return c;
+  }
 
  private:
   // Layer record: the kAttrs sums, then depth, threshold and the opaque flag; 16 floats.
   enum Field { kZ = kAttrs, kThr, kOpaque, kStride = 16 };
   size_t index(int x, int y) const { return size_t(y - rect_.y0) * size_t(rect_.width()) + size_t(x - rect_.x0); }
-  float* block(size_t pixel) { return data_.data() + pixel * stride_; }
-  const float* block(size_t pixel) const { return data_.data() + pixel * stride_; }
+  // Layer-major: the records of layer i of all pixels are contiguous (layerStride_ floats per
+  // layer), so the front layers of neighbouring pixels share cache lines' neighbourhoods and pages.
+  float* block(size_t pixel) { return data_.data() + pixel * kStride; }
+  const float* block(size_t pixel) const { return data_.data() + pixel * kStride; }
   void compress(float* px, int& n);
   void insertNew(size_t pixel, float depth, float zThreshold, float weight, const float* attr);  // steps b and c
   PixelRect rect_;
   int layers_;
-  size_t stride_;  ///< kStride * layers_
+  size_t capacity_ = 0;     ///< pixels per layer the storage holds
+  size_t layerStride_ = 0;  ///< kStride * capacity_
   std::vector<uint8_t> count_;
   std::vector<float> data_;
-  Z3Counters counters_;
+  Z3Counters counters_;  ///< allocated, occluded, compressed (fragments and merged: counters())
+  uint64_t fragments_ = 0, direct_ = 0;
 };
 
 }  // namespace linesurf

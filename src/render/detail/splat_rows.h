@@ -19,15 +19,23 @@ struct PointRaster {
   bool clipDepth = false;
 };
 
-/// Pixels are visited in blocks of at most this many; output arrays hold kBlock + kMaxLanes floats.
+/// Pixels are visited in blocks of at most kBlock; a block's fragments are returned packed.
 inline constexpr int kBlock = 256;
 inline constexpr int kMaxLanes = 16;
 
-/// Weights and depths of the pixels k0 .. k0 + n - 1 (row-major) of the rectangle of `width`
-/// pixels starting at (x0, y0); weight 0 outside the splat. n <= kBlock. With s and t non-null,
-/// also the plane coordinates (for Gouraud colours).
-void pointWeights(const PointRaster& p, int x0, int y0, int width, int k0, int n, float* weight, float* depth,
-                  float* s = nullptr, float* t = nullptr);
+/// The fragments of one block of pixels, packed (only pixels inside the splat, in pixel order):
+/// pixel centre, weight > 0, depth, and per kind two more values (points: plane coordinates s, t
+/// for Gouraud colours; segments: along-axis parameter u in [0, 1] and z threshold).
+struct FragmentBlock {
+  alignas(64) float x[kBlock + kMaxLanes], y[kBlock + kMaxLanes], weight[kBlock + kMaxLanes], depth[kBlock + kMaxLanes];
+  alignas(64) float p[kBlock + kMaxLanes], q[kBlock + kMaxLanes];
+};
+
+/// Fragments of the pixels k0 .. k0 + n - 1 (row-major) of the rectangle of `width` pixels
+/// starting at (x0, y0), n <= kBlock: returns how many of them lie inside the splat. p, q (s, t)
+/// are filled only when withPlaneCoords.
+int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
+                   FragmentBlock& out);
 
 /// Per-pixel constants of one ScreenSpace segment splat of a single sub-segment (§5, the
 /// closed form of segment_splat.cpp): the ray through (px, py) meets the strip's plane at depth
@@ -44,12 +52,54 @@ struct SegmentRaster {
   bool clipDepth = false;
 };
 
-/// As pointWeights for one segment; also the along-axis parameter u = clamp(a / length, 0, 1)
-/// and the z threshold of each pixel.
-void segmentWeights(const SegmentRaster& s, int x0, int y0, int width, int k0, int n, float* weight, float* depth,
-                    float* u, float* zThreshold);
+/// A run of pixels [x0, x1) of row y.
+struct RowSpan {
+  int y, x0, x1;
+};
+
+/// As pointFragments for one segment, over `count` row spans holding at most kBlock pixels in
+/// all; p = the along-axis parameter u = clamp(a / length, 0, 1), q = the z threshold.
+int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, FragmentBlock& out);
 
 /// Name of the target the functions above dispatch to (Highway's TargetName).
 const char* simdTargetName();
+
+}  // namespace linesurf::detail
+
+namespace linesurf::detail {
+
+/// Per-frame constants of the SIMD point set-up (pointSetup).
+struct PointSetupFrame {
+  float rot[9] = {}, trans[3] = {};  ///< world -> camera (row-major rotation)
+  float f = 1, cx = 0, cy = 0, nearD = 0, farD = 0;
+  float prefilter = 0, reconstructionScale = 0, cutoff = 0, cutoffQ = 0;
+  bool backfaceCulling = true;
+  bool light = false;                ///< compute the Phong factors (flat shading)
+  float lightDir[3] = {}, ambient = 0, diffuse = 0, specular = 0, shininess = 1;
+};
+
+/// SoA input and output of a batch of at most kSetupBatch points.
+inline constexpr int kSetupBatch = 64;
+struct PointSetupBatch {
+  // input
+  alignas(64) float px[kSetupBatch], py[kSetupBatch], pz[kSetupBatch], nx[kSetupBatch], ny[kSetupBatch],
+      nz[kSetupBatch], radius[kSetupBatch];
+  // output: 0 = set up here; 1 = culled (back-facing); 2 = needs the exact scalar path
+  alignas(64) float status[kSetupBatch];
+  alignas(64) float Nx[kSetupBatch], Ny[kSetupBatch], N0[kSetupBatch], Sx[kSetupBatch], Sy[kSetupBatch],
+      S0[kSetupBatch], Tx[kSetupBatch], Ty[kSetupBatch], T0[kSetupBatch];
+  alignas(64) float depthNum[kSetupBatch], weightScale[kSetupBatch], depthExtent[kSetupBatch];
+  alignas(64) float x0[kSetupBatch], y0[kSetupBatch], x1[kSetupBatch], y1[kSetupBatch];  ///< conic bounds
+  alignas(64) float onx[kSetupBatch], ony[kSetupBatch], onz[kSetupBatch];  ///< unit normal facing the viewer
+  /// Phong (FrameContext::shade without the albedo): ambient + diffuse n.l, and the specular term
+  /// at the centre and at the Gouraud corners (s, t) = (-R,-R), (R,-R), (-R,R), (R,R).
+  alignas(64) float diffuseFactor[kSetupBatch], specular[5][kSetupBatch];
+};
+
+/// Culling, transform, closed-form warp (§4.2.2: V = sigma_r^2 I + V_h J^-1 J^-T, V^-1 = L L^T),
+/// plane constants and conic bounds of points 0 .. n-1 of the batch, in SIMD. Lanes that need
+/// anything else (degenerate input, no normal, behind the eye, stretched past kMaxStretch,
+/// crossing near/far, nearly edge-on) are marked 2 for the scalar path.
+void pointSetup(const PointSetupFrame& frame, PointSetupBatch& batch, int n);
 
 }  // namespace linesurf::detail

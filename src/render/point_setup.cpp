@@ -1,0 +1,179 @@
+// SIMD set-up of point splats (see detail/splat_rows.h, pointSetup; the scalar reference is
+// preparePoint in point_splat.cpp, which handles every lane this code marks for it).
+#include "detail/splat_rows.h"
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "render/point_setup.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+#include <hwy/contrib/math/math-inl.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace linesurf::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
+  using DF = hn::ScalableTag<float>;
+  using VF = hn::Vec<DF>;
+  const DF d;
+  const int L = int(hn::Lanes(d));
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  const VF f = S(F.f);
+  for (int i = 0; i < n; i += L) {
+    const VF px = hn::LoadU(d, B.px + i), py = hn::LoadU(d, B.py + i), pz = hn::LoadU(d, B.pz + i);
+    const VF wx = hn::LoadU(d, B.nx + i), wy = hn::LoadU(d, B.ny + i), wz = hn::LoadU(d, B.nz + i);
+    const VF rad = hn::LoadU(d, B.radius + i);
+    auto mat = [&](VF a, VF b, VF c, int row) {
+      return hn::MulAdd(S(F.rot[3 * row]), a, hn::MulAdd(S(F.rot[3 * row + 1]), b, hn::Mul(S(F.rot[3 * row + 2]), c)));
+    };
+    // model-view transform; back-face culling before anything else
+    const VF cx = hn::Add(mat(px, py, pz, 0), S(F.trans[0])), cy = hn::Add(mat(px, py, pz, 1), S(F.trans[1])),
+             cz = hn::Add(mat(px, py, pz, 2), S(F.trans[2]));
+    VF nx = mat(wx, wy, wz, 0), ny = mat(wx, wy, wz, 1), nz = mat(wx, wy, wz, 2);
+    const VF nn2 = hn::MulAdd(nx, nx, hn::MulAdd(ny, ny, hn::Mul(nz, nz)));
+    const VF nDotEye = hn::Neg(hn::MulAdd(nx, cx, hn::MulAdd(ny, cy, hn::Mul(nz, cz))));
+    auto culled = hn::And(hn::Gt(nn2, zero), hn::Lt(nDotEye, zero));
+    if (!F.backfaceCulling) culled = hn::Lt(one, zero);  // never
+    // degenerate or unusual input (non-finite, radius <= 0, no normal): the scalar path decides
+    const VF inf = S(INFINITY);
+    auto bad = hn::Not(hn::And(hn::Gt(rad, zero), hn::Lt(rad, inf)));
+    for (VF v : {px, py, pz, wx, wy, wz}) bad = hn::Or(bad, hn::Not(hn::Lt(hn::Abs(v), inf)));
+    bad = hn::Or(bad, hn::Not(hn::Gt(nn2, zero)));
+    auto slow = bad;
+    const VF cn2 = hn::MulAdd(cx, cx, hn::MulAdd(cy, cy, hn::Mul(cz, cz)));
+    const VF invN = hn::Div(one, hn::Sqrt(nn2)), invC = hn::Div(one, hn::Sqrt(cn2));
+    nx = hn::Mul(nx, invN), ny = hn::Mul(ny, invN), nz = hn::Mul(nz, invN);
+    VF facing = hn::Mul(hn::Mul(nDotEye, invN), invC);
+    const auto flip = hn::Lt(facing, zero);  // two-sided: lit from the viewer's side
+    nx = hn::IfThenElse(flip, hn::Neg(nx), nx), ny = hn::IfThenElse(flip, hn::Neg(ny), ny),
+    nz = hn::IfThenElse(flip, hn::Neg(nz), nz);
+    facing = hn::Abs(facing);
+    slow = hn::Or(slow, hn::Not(hn::Ge(facing, S(kMinFacing))));
+    const VF dd = hn::Neg(cz);
+    slow = hn::Or(slow, hn::Not(hn::Gt(dd, zero)));
+    // tangent frame u = normalize(X x n) (or Y x n), v = n x u
+    const auto useX = hn::Lt(hn::Abs(nx), S(0.9f));
+    VF ux = hn::IfThenElse(useX, zero, nz), uy = hn::IfThenElse(useX, hn::Neg(nz), zero),
+       uz = hn::IfThenElse(useX, ny, hn::Neg(nx));
+    const VF invU = hn::Div(one, hn::Sqrt(hn::MulAdd(ux, ux, hn::MulAdd(uy, uy, hn::Mul(uz, uz)))));
+    ux = hn::Mul(ux, invU), uy = hn::Mul(uy, invU), uz = hn::Mul(uz, invU);
+    const VF vx = hn::MulSub(ny, uz, hn::Mul(nz, uy)), vy = hn::MulSub(nz, ux, hn::Mul(nx, uz)),
+             vz = hn::MulSub(nx, uy, hn::Mul(ny, ux));
+    // warping: V = sigma_r^2 I + V_h (J^T J)^-1
+    const VF sigma = hn::Mul(S(F.reconstructionScale), rad), s2 = hn::Mul(sigma, sigma);
+    VF a = s2, b = zero, c = s2;
+    if (F.prefilter > 0) {
+      const VF id = hn::Div(one, dd), fd = hn::Mul(f, id);
+      const VF gxz = hn::Mul(hn::Mul(fd, cx), id), gyz = hn::Neg(hn::Mul(hn::Mul(fd, cy), id));
+      const VF j00 = hn::MulAdd(fd, ux, hn::Mul(gxz, uz)), j01 = hn::MulAdd(fd, vx, hn::Mul(gxz, vz));
+      const VF j10 = hn::MulSub(gyz, uz, hn::Mul(fd, uy)), j11 = hn::MulSub(gyz, vz, hn::Mul(fd, vy));
+      const VF p = hn::MulAdd(j00, j00, hn::Mul(j10, j10)), q = hn::MulAdd(j00, j01, hn::Mul(j10, j11)),
+               r = hn::MulAdd(j01, j01, hn::Mul(j11, j11));
+      const VF det = hn::MulSub(p, r, hn::Mul(q, q));
+      slow = hn::Or(slow, hn::Not(hn::Gt(det, zero)));
+      const VF k = hn::Div(S(F.prefilter), det);
+      a = hn::MulAdd(k, r, a), b = hn::Neg(hn::Mul(k, q)), c = hn::MulAdd(k, p, c);
+    }
+    const VF mean = hn::Mul(S(0.5f), hn::Add(a, c)), diff = hn::Mul(S(0.5f), hn::Sub(a, c));
+    const VF maxS = hn::Mul(S(kMaxStretch), sigma);
+    slow = hn::Or(slow, hn::Not(hn::Le(hn::Add(mean, hn::Sqrt(hn::MulAdd(diff, diff, hn::Mul(b, b)))), hn::Mul(maxS, maxS))));
+    const VF detV = hn::MulSub(a, c, hn::Mul(b, b));
+    slow = hn::Or(slow, hn::Not(hn::Gt(detV, zero)));
+    const VF idet = hn::Div(one, detV);
+    const VF l00 = hn::Sqrt(hn::Mul(c, idet)), l10 = hn::Div(hn::Neg(hn::Mul(b, idet)), l00);
+    const VF l11 = hn::Sqrt(hn::Max(zero, hn::NegMulAdd(l10, l10, hn::Mul(a, idet))));
+    slow = hn::Or(slow, hn::Not(hn::Gt(l11, zero)));
+    const VF a0x = hn::MulAdd(l00, ux, hn::Mul(l10, vx)), a0y = hn::MulAdd(l00, uy, hn::Mul(l10, vy)),
+             a0z = hn::MulAdd(l00, uz, hn::Mul(l10, vz));
+    const VF a1x = hn::Mul(l11, vx), a1y = hn::Mul(l11, vy), a1z = hn::Mul(l11, vz);
+    const VF wscale = hn::Div(one, hn::Sqrt(detV));
+    const VF ext = hn::Mul(S(F.cutoff), hn::Sqrt(hn::Max(zero, hn::MulAdd(a, hn::Mul(uz, uz), hn::MulAdd(hn::Mul(two, b), hn::Mul(uz, vz), hn::Mul(c, hn::Mul(vz, vz)))))));
+    slow = hn::Or(slow, hn::Not(hn::And(hn::Ge(hn::Sub(dd, ext), S(F.nearD)), hn::Le(hn::Add(dd, ext), S(F.farD)))));
+    // ray/plane constants: k.r(px, py) = k.x/f px - k.y/f py + (-k.x cx/f + k.y cy/f - k.z)
+    const VF invf = S(1.0f / F.f);
+    auto rayDx = [&](VF kx) { return hn::Mul(kx, invf); };
+    auto rayDy = [&](VF ky) { return hn::Neg(hn::Mul(ky, invf)); };
+    auto rayC = [&](VF kx, VF ky, VF kz) {
+      return hn::Sub(hn::Mul(invf, hn::MulSub(ky, S(F.cy), hn::Mul(kx, S(F.cx)))), kz);
+    };
+    auto dot3 = [&](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
+    const VF nc = dot3(nx, ny, nz, cx, cy, cz), a0c = dot3(a0x, a0y, a0z, cx, cy, cz), a1c = dot3(a1x, a1y, a1z, cx, cy, cz);
+    const VF Nx = rayDx(nx), Ny = rayDy(ny), N0 = rayC(nx, ny, nz);
+    const VF Sx = hn::MulSub(nc, rayDx(a0x), hn::Mul(a0c, Nx)), Sy = hn::MulSub(nc, rayDy(a0y), hn::Mul(a0c, Ny)),
+             S0 = hn::MulSub(nc, rayC(a0x, a0y, a0z), hn::Mul(a0c, N0));
+    const VF Tx = hn::MulSub(nc, rayDx(a1x), hn::Mul(a1c, Nx)), Ty = hn::MulSub(nc, rayDy(a1y), hn::Mul(a1c, Ny)),
+             T0 = hn::MulSub(nc, rayC(a1x, a1y, a1z), hn::Mul(a1c, N0));
+    // conic bounds about the projected centre, where S = T = 0 and N = nc / d
+    const VF id = hn::Div(one, dd);
+    const VF pcx = hn::MulAdd(hn::Mul(f, cx), id, S(F.cx)), pcy = hn::NegMulAdd(hn::Mul(f, cy), id, S(F.cy));
+    const VF Nc = hn::Mul(nc, id), cq = S(F.cutoffQ);
+    const VF A00 = hn::Sub(hn::MulAdd(Sx, Sx, hn::Mul(Tx, Tx)), hn::Mul(cq, hn::Mul(Nx, Nx)));
+    const VF A01 = hn::Sub(hn::MulAdd(Sx, Sy, hn::Mul(Tx, Ty)), hn::Mul(cq, hn::Mul(Nx, Ny)));
+    const VF A11 = hn::Sub(hn::MulAdd(Sy, Sy, hn::Mul(Ty, Ty)), hn::Mul(cq, hn::Mul(Ny, Ny)));
+    const VF b0 = hn::Neg(hn::Mul(cq, hn::Mul(Nx, Nc))), b1 = hn::Neg(hn::Mul(cq, hn::Mul(Ny, Nc)));
+    const VF m = hn::Neg(hn::Mul(cq, hn::Mul(Nc, Nc)));
+    const VF det = hn::MulSub(A00, A11, hn::Mul(A01, A01));
+    slow = hn::Or(slow, hn::Not(hn::And(hn::Gt(A00, zero), hn::Gt(det, zero))));
+    const VF idt = hn::Div(one, det);
+    const VF ox = hn::Mul(hn::MulSub(A01, b1, hn::Mul(A11, b0)), idt), oy = hn::Mul(hn::MulSub(A01, b0, hn::Mul(A00, b1)), idt);
+    const VF kk = hn::Neg(hn::MulAdd(b0, ox, hn::MulAdd(b1, oy, m)));
+    slow = hn::Or(slow, hn::Not(hn::Gt(kk, zero)));
+    const VF hx = hn::Sqrt(hn::Mul(hn::Mul(kk, A11), idt)), hy = hn::Sqrt(hn::Mul(hn::Mul(kk, A00), idt));
+    const VF slack = hn::MulAdd(S(1e-4f), hn::Add(hx, hy), S(0.01f));
+    const VF bx = hn::Add(pcx, ox), by = hn::Add(pcy, oy), ex = hn::Add(hx, slack), ey = hn::Add(hy, slack);
+    hn::StoreU(hn::Sub(bx, ex), d, B.x0 + i), hn::StoreU(hn::Add(bx, ex), d, B.x1 + i);
+    hn::StoreU(hn::Sub(by, ey), d, B.y0 + i), hn::StoreU(hn::Add(by, ey), d, B.y1 + i);
+    // Phong factors (FrameContext::shade): n.l is the same over the splat, the specular term is
+    // taken at the centre and at the Gouraud corners c +- R B0 +- R B1
+    if (F.light) {
+      const VF ndl = hn::Max(zero, dot3(nx, ny, nz, S(F.lightDir[0]), S(F.lightDir[1]), S(F.lightDir[2])));
+      hn::StoreU(hn::MulAdd(S(F.diffuse), ndl, S(F.ambient)), d, B.diffuseFactor + i);
+      // B0 = u / l00, B1 = (v - (l10 / l00) u) / l11: unit plane coordinates
+      const VF il00 = hn::Div(one, l00), il11 = hn::Div(one, l11), r = hn::Mul(l10, il00);
+      const VF R = S(F.cutoff);
+      const VF b0x = hn::Mul(hn::Mul(ux, il00), R), b0y = hn::Mul(hn::Mul(uy, il00), R), b0z = hn::Mul(hn::Mul(uz, il00), R);
+      const VF b1x = hn::Mul(hn::Mul(hn::NegMulAdd(r, ux, vx), il11), R), b1y = hn::Mul(hn::Mul(hn::NegMulAdd(r, uy, vy), il11), R),
+               b1z = hn::Mul(hn::Mul(hn::NegMulAdd(r, uz, vz), il11), R);
+      const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+      for (int k = 0; k < 5; ++k) {
+        VF spec = zero;
+        if (F.specular > 0) {
+          const VF ss = S(sgn[k][0]), tt = S(sgn[k][1]);
+          const VF qx = hn::MulAdd(tt, b1x, hn::MulAdd(ss, b0x, cx)), qy = hn::MulAdd(tt, b1y, hn::MulAdd(ss, b0y, cy)),
+                   qz = hn::MulAdd(tt, b1z, hn::MulAdd(ss, b0z, cz));
+          const VF qn2 = dot3(qx, qy, qz, qx, qy, qz);
+          const VF iq = hn::Neg(hn::Div(one, hn::Sqrt(qn2)));  // view vector -q / |q|
+          const VF hx3 = hn::MulAdd(qx, iq, S(F.lightDir[0])), hy3 = hn::MulAdd(qy, iq, S(F.lightDir[1])),
+                   hz3 = hn::MulAdd(qz, iq, S(F.lightDir[2]));
+          const VF hn2 = dot3(hx3, hy3, hz3, hx3, hy3, hz3);
+          const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(nx, ny, nz, hx3, hy3, hz3), hn::Sqrt(hn2))));
+          const VF pw = hn::Exp(d, hn::Mul(S(F.shininess), hn::Log(d, hn::Max(ndh, S(1e-30f)))));
+          spec = hn::IfThenElseZero(hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(hn2, zero)), hn::Gt(qn2, zero)),
+                                    hn::Mul(S(F.specular), pw));
+        }
+        hn::StoreU(spec, d, B.specular[k] + i);
+      }
+    }
+    hn::StoreU(hn::IfThenElse(bad, S(2.0f), hn::IfThenElse(culled, one, hn::IfThenElseZero(slow, S(2.0f)))), d, B.status + i);
+    hn::StoreU(Nx, d, B.Nx + i), hn::StoreU(Ny, d, B.Ny + i), hn::StoreU(N0, d, B.N0 + i);
+    hn::StoreU(Sx, d, B.Sx + i), hn::StoreU(Sy, d, B.Sy + i), hn::StoreU(S0, d, B.S0 + i);
+    hn::StoreU(Tx, d, B.Tx + i), hn::StoreU(Ty, d, B.Ty + i), hn::StoreU(T0, d, B.T0 + i);
+    hn::StoreU(nc, d, B.depthNum + i), hn::StoreU(wscale, d, B.weightScale + i), hn::StoreU(ext, d, B.depthExtent + i);
+    hn::StoreU(nx, d, B.onx + i), hn::StoreU(ny, d, B.ony + i), hn::StoreU(nz, d, B.onz + i);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace linesurf::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace linesurf::detail {
+HWY_EXPORT(PointSetup);
+void pointSetup(const PointSetupFrame& frame, PointSetupBatch& batch, int n) {
+  HWY_DYNAMIC_DISPATCH(PointSetup)(frame, batch, n);
+}
+}  // namespace linesurf::detail
+#endif
