@@ -265,6 +265,18 @@ ClusterOutput extractCluster(size_t c, const Context& ctx) {
       if (opt.endpointNormals) detail::setEndpointNormals(s, g.normals[members[ls]], g.normals[members[le]]);
       s.color = colors ? Color((col / double(count)).cast<float>()) : Color(1, 1, 1, 1);
       s.radius = float(opt.radiusScale * std::clamp(sliceWidth, dAvgX, 2.0 * dAvgX));
+      // Hybrids close where their point models close (issue 14): with point radii, the strip
+      // covers exactly every replaced point's disc (its radius plus its distance to the segment,
+      // the rule of §3.1.5); the slice-width rule above left holes with hole-free point radii.
+      if (ctx.cloud.attributes.radii) {
+        double cover = 0;
+        for (size_t e = begin; e < ownPos; ++e) {
+          const uint32_t p = members[own[e].second];
+          const Vec3d w = position(p) - ps;
+          cover = std::max(cover, double(ctx.cloud.points[p].radius) + (w - w.dot(dir) * dir).norm());
+        }
+        s.radius = float(cover);
+      }
       out.segments.push_back(s);
       std::vector<uint32_t> prov;
       prov.reserve(count);

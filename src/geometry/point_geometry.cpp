@@ -322,6 +322,11 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
 
 // ---------------------------------------------------------------------------------------------
 // Stages 3 and 4.
+// Hole-free radius = this x the largest star circumradius: the splat's cutoff reaches the
+// Voronoi vertices in the tangent plane exactly at 1.0; 10% covers the surface's deviation from
+// it and pixel sampling (sphere 200k at 1024^2 left 2 pixels open at 1.0).
+constexpr double kCoverMargin = 1.1;
+
 void computeDelaunay(const std::vector<Vec3f>& pos, const std::vector<uint32_t>& order, int k, float dupTol, bool useCgal, PointGeometry& g,
                      const ProgressFn& progress) {
   const size_t n = pos.size();
@@ -357,6 +362,19 @@ void computeDelaunay(const std::vector<Vec3f>& pos, const std::vector<uint32_t>&
       }
       count[i] = uint32_t(s);
       if (star.triangles == 0) g.flags[i] |= kPointNoStar;
+      if (!g.coverRadius.empty()) {
+        // largest circumradius of the star triangles (0, q_a, q_b), consecutive counter-clockwise
+        // neighbours turning by less than pi: R = |a| |b| |a - b| / (2 |a x b|)
+        double rmax = 0;
+        for (size_t t = 0; t < s && s >= 2; ++t) {
+          if (star.boundary && t + 1 == s) break;  // the open side of a boundary star
+          const Vec2d a = q[size_t(star.ids[t])], b = q[size_t(star.ids[(t + 1) % s])];
+          const double cr = a.x() * b.y() - a.y() * b.x();
+          if (!(cr > 0)) continue;
+          rmax = std::max(rmax, a.norm() * b.norm() * (a - b).norm() / (2 * cr));
+        }
+        g.coverRadius[i] = float(kCoverMargin * rmax);
+      }
     }
   });
   g.delaunayOffsets.assign(n + 1, 0);
@@ -507,9 +525,15 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   }
   g.times.orientation = timer.seconds();
 
-  if (options.delaunayNeighbours || options.curvature) {
+  if (options.delaunayNeighbours || options.curvature || options.coverRadius) {
     timer.reset();
+    if (options.coverRadius) g.coverRadius.assign(n, 0.0f);
     computeDelaunay(pos, order, k, dupTol, options.cgalDelaunay, g, progress);
+    if (!options.delaunayNeighbours && !options.curvature) {  // stage 3 ran only for the radii
+      g.delaunayOffsets.clear();
+      g.delaunayIndices.clear();
+      g.delaunayWeights.clear();
+    }
     g.times.delaunay = timer.seconds();
   }
   if (options.curvature) {
@@ -534,6 +558,8 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   for (size_t i = 0; i < n; ++i)
     if (g.neighbours.empty() || g.neighbours[i * k] != kNone) total += g.spacing[i], ++counted;
   g.averageSpacing = counted > 0 ? float(total / double(counted)) : 0.0f;
+  for (size_t i = 0; i < g.coverRadius.size(); ++i)  // a degenerate star must not blow a disc up
+    g.coverRadius[i] = std::min(g.coverRadius[i], 3.0f * (g.spacing[i] > 0 ? g.spacing[i] : g.averageSpacing));
   g.times.spacing = timer.seconds();
   return g;
 }
@@ -543,9 +569,13 @@ void applyGeometry(HybridModel& cloud, const PointGeometry& geometry) {
   for (size_t i = 0; i < n; ++i) cloud.points[i].normal = geometry.normals[i];
   cloud.attributes.normals = true;
   if (!cloud.attributes.radii && geometry.spacing.size() >= n) {
-    // Radius rule (docs/decisions.md): the per-point spacing, else the cloud's average.
+    // Radius rule (docs/decisions.md): the hole-free cover radius, else the per-point spacing,
+    // else the cloud's average.
+    const bool cover = geometry.coverRadius.size() >= n;
     for (size_t i = 0; i < n; ++i)
-      cloud.points[i].radius = geometry.spacing[i] > 0 ? geometry.spacing[i] : geometry.averageSpacing;
+      cloud.points[i].radius = cover && geometry.coverRadius[i] > 0 ? geometry.coverRadius[i]
+                               : geometry.spacing[i] > 0            ? geometry.spacing[i]
+                                                                    : geometry.averageSpacing;
     cloud.attributes.radii = true;
   }
 }

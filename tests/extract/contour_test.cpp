@@ -155,7 +155,7 @@ TEST(Contour, SphereEndpointsLieOnTheirSourceTriangles) {
     EXPECT_LT(std::abs(s.normal.dot((s.p1 - s.p0).normalized())), 1e-5f + 4e-7f / s.length());
     EXPECT_GT(s.normal.dot(s.p0), 0.0f);  // outward, like the faces
     EXPECT_GT(s.length(), 0.0f);
-    EXPECT_FLOAT_EQ(s.radius, float(0.75 * st.spacing));
+    EXPECT_FLOAT_EQ(s.radius, float(0.55 * st.spacing));
   }
   EXPECT_TRUE(model.points.empty());
   EXPECT_FALSE(model.attributes.texcoords);

@@ -312,9 +312,42 @@ TEST(PointGeometry, ApplyWritesNormalsRadiiAndCurvatureProperties) {
   applyGeometry(cloud, g);
   addCurvatureProperties(cloud, g);
   EXPECT_TRUE(cloud.attributes.normals && cloud.attributes.radii);
-  for (size_t i = 0; i < cloud.points.size(); ++i) EXPECT_EQ(cloud.points[i].radius, g.spacing[i]);
+  ASSERT_EQ(g.coverRadius.size(), cloud.points.size());
+  for (size_t i = 0; i < cloud.points.size(); ++i) {
+    EXPECT_GT(g.coverRadius[i], 0.0f);
+    EXPECT_EQ(cloud.points[i].radius, g.coverRadius[i]);
+  }
+  // without cover radii: the per-point spacing (the earlier rule)
+  GeometryOptions o = recompute();
+  o.coverRadius = false;
+  auto g2 = computePointGeometry(cloud, o);
+  EXPECT_TRUE(g2.coverRadius.empty());
+  cloud.attributes.radii = false;
+  applyGeometry(cloud, g2);
+  for (size_t i = 0; i < cloud.points.size(); ++i) EXPECT_EQ(cloud.points[i].radius, g2.spacing[i]);
   for (const char* name : {"k_min", "k_max", "dmin_x", "dmin_y", "dmin_z"})
     EXPECT_EQ(cloud.pointProperties.at(name).size(), cloud.points.size()) << name;
+}
+
+TEST(PointGeometry, CoverRadiusIsTheLargestStarCircumradius) {
+  // A regular square grid: every star is the 4 (or 8, co-circular) grid neighbours, every star
+  // triangle a right isosceles one with circumradius h / sqrt(2): cover radius 1.1 h / sqrt(2).
+  auto cloud = shapes::plane(1, 1, 21, 21);
+  auto g = computePointGeometry(cloud, recompute());
+  const float h = 1.0f / 20;
+  const size_t centre = 10 * 21 + 10;
+  EXPECT_NEAR(g.coverRadius[centre], 1.1f * h / std::sqrt(2.0f), 1e-4f);
+  // a gap: remove the 3x3 block left of the centre; the centre's Voronoi cell reaches into it
+  HybridModel holed;
+  for (size_t i = 0; i < cloud.points.size(); ++i) {
+    const int x = int(i % 21), y = int(i / 21);
+    if (!(y >= 9 && y <= 11 && x >= 7 && x <= 9)) holed.points.push_back(cloud.points[i]);
+  }
+  auto gh = computePointGeometry(holed, recompute());
+  size_t c = 0;
+  for (size_t i = 0; i < holed.points.size(); ++i)
+    if ((holed.points[i].position - cloud.points[centre].position).norm() < 1e-6f) c = i;
+  EXPECT_GT(gh.coverRadius[c], 1.4f * h);  // the gap's circumradius (>= 2 h / 2 x 1.1 + ...)
 }
 
 TEST(PointGeometry, NeighboursAreExactKNearest) {

@@ -39,6 +39,9 @@ struct GeometryOptions {
   float orientationPenalty = 0.5f;
   bool delaunayNeighbours = true;  ///< stage 3
   bool curvature = true;           ///< stage 4 (needs stage 3)
+  /// Hole-free radii (issue 14): PointGeometry::coverRadius from the local Delaunay star (runs
+  /// stage 3 even when delaunayNeighbours is off; its neighbour lists are then not kept).
+  bool coverRadius = true;
   CurvatureFit curvatureFit = CurvatureFit::Taubin;  ///< stage 4 formula
   /// Stage 3 with CGAL::Delaunay_triangulation_2 per point instead of the default star by
   /// inversion (same neighbours except on co-circular sets; see docs/decisions.md). For comparison.
@@ -102,6 +105,13 @@ struct PointGeometry {
   std::vector<float> spacing;
   float averageSpacing = 0;
 
+  /// Hole-free radius per point (beyond the thesis, issue 14): 1.1 x the largest circumradius of the
+  /// triangles of its local Delaunay star (tangent plane), capped at 3 x spacing. The Voronoi
+  /// cell of a point is the polygon of its star triangles' circumcentres, so a disc of this
+  /// radius covers the cell, and the discs of all points cover the surface. 0 where the point
+  /// has no star triangle; empty unless GeometryOptions::coverRadius.
+  std::vector<float> coverRadius;
+
   std::vector<uint8_t> flags;  ///< PointFlag bits per point
   GeometryStageTimes times;
 
@@ -117,8 +127,9 @@ void validate(const GeometryOptions& options);
 /// Throws linesurf::Error (BadParameter) for k < 3; handles clouds of any size >= 1.
 PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options = {});
 
-/// Writes the geometry's normals into the model's points, and radii from the per-point spacing
-/// where the model has none (radius rule in docs/decisions.md), setting the attribute flags.
+/// Writes the geometry's normals into the model's points, and radii where the model has none:
+/// coverRadius where positive, else the per-point spacing, else the average spacing (radius rule
+/// in docs/decisions.md), setting the attribute flags.
 void applyGeometry(HybridModel& cloud, const PointGeometry& geometry);
 
 /// Adds the curvature of `geometry` to cloud.pointProperties as "k_min", "k_max", "dmin_x",

@@ -1,0 +1,113 @@
+// No holes (issue 14): uniformly random samples of a sphere and a torus, normals and radii from
+// the geometry stage (as `linesurf normals` computes them), rendered at 512^2 and 1024^2 from a
+// few views: no background pixel inside the analytic silhouette (shrunk by 1.5 pixels), for the
+// point models and for the (eps, delta) and shape-approximation hybrids extracted from them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+
+#include "linesurf/core/shapes.h"
+#include "linesurf/extract/eps_delta.h"
+#include "linesurf/extract/shape_approx.h"
+#include "linesurf/geometry/point_geometry.h"
+#include "linesurf/render/renderer.h"
+
+namespace linesurf {
+namespace {
+
+/// Signed distance of a world point to the analytic surface (negative inside).
+using Sdf = std::function<float(const Vec3f&)>;
+
+/// Pixels whose centre ray passes at least `marginPx` pixels inside the silhouette of the solid
+/// `sdf` (sphere tracing of the inner offset surface sdf + margin, a valid distance bound) and
+/// that the render left uncovered.
+struct HoleCount {
+  int covered = 0, holes = 0;
+};
+HoleCount countHoles(const Image& alpha, const Camera& cam, const Sdf& sdf, float marginPx) {
+  HoleCount hc;
+  const Mat3f toWorld = cam.rotation().transpose();
+  const Vec3f eye = cam.eye();
+  for (int y = 0; y < cam.height(); ++y)
+    for (int x = 0; x < cam.width(); ++x) {
+      if (alpha.at(x, y).w() > 0) {
+        ++hc.covered;
+        continue;
+      }
+      // an uncovered pixel: is its centre ray at least marginPx inside the silhouette?
+      const Vec3f dir = (toWorld * cam.rayThrough(x + 0.5f, y + 0.5f)).normalized();
+      float t = cam.nearDepth();
+      for (int it = 0; it < 512 && t < cam.farDepth(); ++it) {
+        const float m = marginPx * t / cam.focalPixels();  // marginPx pixels at depth ~t
+        const float d = sdf(eye + t * dir) + m;
+        if (d < 1e-5f) {
+          ++hc.holes;
+          break;
+        }
+        t += d;
+      }
+    }
+  return hc;
+}
+
+HybridModel withGeometry(HybridModel cloud, PointGeometry* geoOut) {
+  GeometryOptions go;  // as `linesurf normals`: k = 12, PCA normals, MST orientation
+  go.recomputeNormals = true;
+  go.curvature = true;  // shape approximation's clustering uses it
+  PointGeometry geo = computePointGeometry(cloud, go);
+  cloud.attributes.radii = false;
+  applyGeometry(cloud, geo);
+  if (geoOut) *geoOut = std::move(geo);
+  return cloud;
+}
+
+void expectClosed(const std::string& name, const HybridModel& model, const Sdf& sdf) {
+  RenderOptions o;
+  o.alphaBuffer = true;
+  const Renderer r(model, o);
+  for (int size : {512, 1024})
+    for (const Camera& cam : Camera::spreadViews(r.sphere(), 3, size, size)) {
+      const RenderResult res = r.render(cam);
+      const HoleCount hc = countHoles(*res.alpha, cam, sdf, 1.5f);
+      EXPECT_GT(hc.covered, size * size / 8) << name;
+      EXPECT_EQ(hc.holes, 0) << name << " at " << size << "^2: " << hc.holes << " background pixels inside";
+      std::printf("%s %d^2: %d holes, %d pixels covered, %llu fragments\n", name.c_str(), size, hc.holes, hc.covered,
+                  static_cast<unsigned long long>(res.stats.fragments));
+    }
+}
+
+void checkShape(const std::string& name, HybridModel cloud, const Sdf& sdf) {
+  PointGeometry geo;
+  const HybridModel points = withGeometry(std::move(cloud), &geo);
+  expectClosed(name + " points", points, sdf);
+  expectClosed(name + " eps-delta", extractEpsDelta(points, geo), sdf);
+  ShapeApproxOptions so;
+  expectClosed(name + " shape-approx", extractShapeApprox(points, geo, clusterShapeApprox(geo, so), so), sdf);
+}
+
+shapes::SampleOptions random(uint64_t seed) {
+  shapes::SampleOptions o;
+  o.irregular = true;
+  o.seed = seed;
+  return o;
+}
+
+TEST(Holes, RandomSphere100k) {
+  checkShape("sphere 100k", shapes::sphere(1, 100000, random(1)), [](const Vec3f& p) { return p.norm() - 1; });
+}
+
+TEST(Holes, RandomSphere200k) {
+  checkShape("sphere 200k", shapes::sphere(1, 200000, random(2)), [](const Vec3f& p) { return p.norm() - 1; });
+}
+
+TEST(Holes, RandomTorus200k) {
+  // torus about z, R = 1, r = 0.35
+  checkShape("torus 200k", shapes::torus(1, 0.35f, 800, 250, random(3)), [](const Vec3f& p) {
+    return Vec2f(Vec2f(p.x(), p.y()).norm() - 1.0f, p.z()).norm() - 0.35f;
+  });
+}
+
+}  // namespace
+}  // namespace linesurf
