@@ -28,10 +28,10 @@ test-fast: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-sanitize: setup
-	cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1 -g1" -DLINESURF_SANITIZE=ON -DLINESURF_BENCH=OFF
+	cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1 -g1" -DLINESURF_SANITIZE=ON -DLINESURF_BENCH=OFF -DLINESURF_PYTHON=OFF
 	cmake --build build-asan -j $(JOBS) --target linesurf_tests linesurf
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --output-on-failure -j $(JOBS) -E '^Shared'
+	  ctest --output-on-failure -j $(JOBS) -E '^(Shared|PackageConsumer|Browser)'
 
 fuzz: setup
 	bash scripts/fuzz.sh 30
