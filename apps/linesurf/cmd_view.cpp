@@ -10,6 +10,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/pipeline/render_job.h"
 #include "linesurf/view/viewer_page.h"
 
 namespace linesurf::cli {
@@ -21,18 +22,6 @@ struct ViewArgs {
   int k = 12;
   size_t maxPrimitives = ViewerPageOptions{}.maxPrimitives;
 };
-
-Vec3f parseUpAxis(std::string u) {
-  float sign = 1;
-  if (!u.empty() && (u[0] == '-' || u[0] == '+')) {
-    sign = u[0] == '-' ? -1.f : 1.f;
-    u = u.substr(1);
-  }
-  if (u == "x") return Vec3f(sign, 0, 0);
-  if (u == "y") return Vec3f(0, sign, 0);
-  if (u == "z") return Vec3f(0, 0, sign);
-  throwBadParameter("--up-axis", "expected x, y, z, -x, -y or -z, got '" + u + "'");
-}
 
 void run(const ViewArgs& a) {
   Timer total;
