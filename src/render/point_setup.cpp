@@ -1,4 +1,4 @@
-// SIMD set-up of point splats (see detail/splat_rows.h, pointSetup; the scalar reference is
+// SIMD set-up of point splats (thesis §4.2, §6.2: object-to-screen warp, culling, bounds) (see detail/splat_rows.h, pointSetup; the scalar reference is
 // preparePoint in point_splat.cpp, which handles every lane this code marks for it).
 #include "detail/splat_rows.h"
 

@@ -1,4 +1,4 @@
-// SIMD splat weights over pixel blocks with Google Highway's runtime dispatch (see
+// SIMD splat weights (thesis §4.2.2 EWA point kernel, §5.2 segment kernel in closed form) over pixel blocks with Google Highway's runtime dispatch (see
 // detail/splat_rows.h). Compiled once per x86 target; hwy picks the best the CPU runs.
 #include "detail/splat_rows.h"
 
