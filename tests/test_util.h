@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <string>
 
+#include <unistd.h>
+
 namespace linesurf::test {
 
 /// tests/data inside the repository.
@@ -21,9 +23,24 @@ inline std::filesystem::path sharedData() {
   return std::filesystem::is_directory(p, ec) ? std::filesystem::canonical(p) : std::filesystem::path();
 }
 
+/// The folder of this test process's scratch folders: private to the process (its pid in the
+/// name), so concurrent test runs from several checkouts never share files; removed at exit.
+inline const std::filesystem::path& scratchRoot() {
+  struct Root {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("linesurf_test_" + std::to_string(::getpid()));
+    ~Root() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  };
+  static const Root root;
+  return root.path;
+}
+
 /// A fresh empty folder for one test's outputs.
 inline std::filesystem::path scratchDir(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("linesurf_test_" + name);
+  auto p = scratchRoot() / name;
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p;
