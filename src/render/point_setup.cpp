@@ -1,5 +1,12 @@
 // SIMD set-up of point splats (thesis §4.2, §6.2: object-to-screen warp, culling, bounds) (see detail/splat_rows.h, pointSetup; the scalar reference is
-// preparePoint in point_splat.cpp, which handles every lane this code marks for it).
+// preparePoint in point_splat.cpp, which handles every lane this code marks for it), and the
+// batches around it (point_setup.h: early culling, packing of the visible points).
+#include "point_setup.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "detail/splat_math.h"
 #include "detail/splat_rows.h"
 
 #undef HWY_TARGET_INCLUDE
@@ -176,4 +183,133 @@ void pointSetup(const PointSetupFrame& frame, PointSetupBatch& batch, int n) {
   HWY_DYNAMIC_DISPATCH(PointSetup)(frame, batch, n);
 }
 }  // namespace linesurf::detail
+
+namespace linesurf {
+
+detail::PointSetupFrame pointSetupFrame(const FrameContext& frame) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  detail::PointSetupFrame f;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) f.rot[3 * r + c] = cam.rotation()(r, c);
+    f.trans[r] = cam.cameraFromWorld()(r, 3);
+  }
+  for (int c = 0; c < 3; ++c) {  // eye = -R^T t
+    double e = 0;
+    for (int r = 0; r < 3; ++r) e -= double(cam.rotation()(r, c)) * double(cam.cameraFromWorld()(r, 3));
+    f.eye[c] = float(e);
+  }
+  f.f = cam.focalPixels();
+  f.cx = cam.principalPoint().x(), f.cy = cam.principalPoint().y();
+  f.nearD = cam.nearDepth(), f.farD = cam.farDepth();
+  f.prefilter = opt.prefilterVariance;
+  f.reconstructionScale = opt.reconstructionScale;
+  f.cutoff = opt.cutoffRadius;
+  f.cutoffQ = frame.cutoffQ;
+  f.backfaceCulling = opt.backfaceCulling;
+  f.light = !opt.perPixelLighting;
+  for (int k = 0; k < 3; ++k) f.lightDir[k] = frame.lightDirCamera[k];
+  f.ambient = opt.material.ambient, f.diffuse = opt.material.diffuse, f.specular = opt.material.specular;
+  f.shininess = opt.material.shininess;
+  return f;
+}
+
+namespace {
+
+// Early back-face test in world space: n.(p - eye) > 0 is the camera-space test -n'.c < 0 of
+// pointSetup and preparePoint. Only points back-facing by a clear margin are taken (relative
+// 1e-4 of |n| (|p - eye| + |p| + |eye|), far above the rounding of either test), and only with
+// valid input, so that a point culled here is one the exact test culls too.
+bool clearlyBackFacing(const detail::PointSetupFrame& F, const Point& p) {
+  const float dx = p.position.x() - F.eye[0], dy = p.position.y() - F.eye[1], dz = p.position.z() - F.eye[2];
+  const float w = p.normal.x() * dx + p.normal.y() * dy + p.normal.z() * dz;
+  const float nn2 = p.normal.squaredNorm(), d2 = dx * dx + dy * dy + dz * dz;
+  const float scale2 = d2 + p.position.squaredNorm() + (F.eye[0] * F.eye[0] + F.eye[1] * F.eye[1] + F.eye[2] * F.eye[2]);
+  return w > 0 && w * w > 3e-8f * nn2 * scale2 && w * w < INFINITY && nn2 < INFINITY && scale2 < INFINITY &&
+         p.radius > 0 && p.radius < INFINITY;
+}
+
+}  // namespace
+
+int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
+                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointSetupCounts& counts) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  detail::PointSetupBatch b;
+  int m = 0;
+  for (int j = 0; j < count; ++j) {  // early culling; AoS -> SoA of the rest
+    const Point& p = points[first + uint32_t(j)];
+    b.lane[m] = j;
+    b.px[m] = p.position.x(), b.py[m] = p.position.y(), b.pz[m] = p.position.z();
+    b.nx[m] = p.normal.x(), b.ny[m] = p.normal.y(), b.nz[m] = p.normal.z();
+    b.radius[m] = p.radius;
+    m += !(setup.backfaceCulling && clearlyBackFacing(setup, p));
+  }
+  counts.culled += uint32_t(count - m);
+  detail::pointSetup(setup, b, m);
+  int k = 0;
+  for (int j = 0; j < m; ++j) {
+    const uint32_t index = first + uint32_t(b.lane[j]);
+    const Point& point = points[index];
+    PreparedPoint& o = out[k];
+    if (b.status[j] == 1.0f) {
+      ++counts.culled;
+      continue;
+    }
+    PrimitiveStatus status;
+    if (b.status[j] != 0.0f) {  // the exact path
+      status = preparePoint(point, index, frame, o);
+    } else {
+      bool cut = false;
+      o.index = index;
+      o.bounds = detail::pixelBounds(cam, b.x0[j], b.y0[j], b.x1[j], b.y1[j], cut);
+      if (o.bounds.empty()) {
+        ++counts.outside;
+        continue;
+      }
+      o.raster.N = {b.Nx[j], b.Ny[j], b.N0[j]};
+      o.raster.S = {b.Sx[j], b.Sy[j], b.S0[j]};
+      o.raster.T = {b.Tx[j], b.Ty[j], b.T0[j]};
+      o.raster.depthNum = b.depthNum[j];
+      o.raster.weightScale = b.weightScale[j];
+      o.raster.cutoffQ = frame.cutoffQ;
+      o.raster.clipDepth = false;
+      o.raster.nearD = cam.nearDepth();
+      o.raster.farD = cam.farDepth();
+      o.zThreshold = frame.zThreshold(b.depthExtent[j] + point.radius);
+      const Color col = frame.primitiveColor(point.color);
+      Vec3f c = col.head<3>();
+      o.gouraud = false;
+      if (!opt.perPixelLighting) {  // Phong, as preparePoint's light() does: flat at the centre or Gouraud
+        const Vec3f& lc = opt.light.color;
+        const Vec3f base = c * b.diffuseFactor[j];
+        const bool flat = o.bounds.width() <= PreparedPoint::kFlatShadeSpan && o.bounds.height() <= PreparedPoint::kFlatShadeSpan;
+        if (flat) {
+          c = (base + Vec3f::Constant(b.specular[0][j])).cwiseProduct(lc);
+        } else {
+          const float s00 = b.specular[1][j], s10 = b.specular[2][j], s01 = b.specular[3][j], s11 = b.specular[4][j];
+          const float inv2R = 0.5f / opt.cutoffRadius;
+          o.gouraud = true;
+          o.C0 = (base + Vec3f::Constant(0.25f * (s00 + s10 + s01 + s11))).cwiseProduct(lc);
+          o.Cs = (0.5f * inv2R * (s10 - s00 + s11 - s01)) * lc;
+          o.Ct = (0.5f * inv2R * (s01 - s00 + s11 - s10)) * lc;
+          o.Cst = (inv2R * inv2R * (s00 - s10 - s01 + s11)) * lc;
+        }
+      }
+      const float attr[Z3Tile::kAttrs] = {c.x(), c.y(), c.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, b.onx[j], b.ony[j], b.onz[j]};
+      std::copy(attr, attr + Z3Tile::kAttrs, o.attr);
+      status = cut ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
+    }
+    switch (status) {
+      case PrimitiveStatus::Drawn: ++counts.drawn, ++k; break;
+      case PrimitiveStatus::Clipped: ++counts.clipped, ++k; break;
+      case PrimitiveStatus::Culled: ++counts.culled; break;
+      case PrimitiveStatus::Outside: ++counts.outside; break;
+      case PrimitiveStatus::Degenerate: ++counts.degenerate; break;
+    }
+  }
+  return k;
+}
+
+}  // namespace linesurf
 #endif

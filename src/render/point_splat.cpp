@@ -13,6 +13,7 @@ namespace {
 using detail::Affine2;
 using detail::kMaxStretch;
 using detail::kMinFacing;
+using detail::pixelBounds;
 
 // The splat in camera space after culling and warping: centre, unit normal facing the viewer,
 // plane axes scaled so that q = (axis0.(p - c))^2 + (axis1.(p - c))^2 is the Mahalanobis
@@ -59,18 +60,6 @@ bool conicBounds(const detail::PointRaster& r, double c, double& x0, double& y0,
   const double slack = 0.01 + 1e-4 * (hx + hy);  // against the float rounding of the per-pixel test
   x0 = cx - hx - slack, x1 = cx + hx + slack, y0 = cy - hy - slack, y1 = cy + hy + slack;
   return std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1);
-}
-
-// Pixels whose centres (i + 0.5) lie in [x0, x1] x [y0, y1], clamped to the view; `cut` tells
-// whether the view clamped them.
-PixelRect pixelBounds(const Camera& cam, double x0, double y0, double x1, double y1, bool& cut) {
-  const double lim = 1e7;
-  auto lo = [&](double v) { return int(std::ceil(std::clamp(v, -lim, lim) - 0.5)); };
-  auto hi = [&](double v) { return int(std::floor(std::clamp(v, -lim, lim) - 0.5)) + 1; };
-  const PixelRect bb{lo(x0), lo(y0), hi(x1), hi(y1)};
-  const PixelRect out = bb.intersect(PixelRect{0, 0, cam.width(), cam.height()});
-  cut = out.x0 != bb.x0 || out.y0 != bb.y0 || out.x1 != bb.x1 || out.y1 != bb.y1;
-  return out;
 }
 
 // Closed-form warp (common case): V^-1 = L L^T. False when the exact path must run instead
@@ -274,96 +263,6 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   std::copy(attr, attr + Z3Tile::kAttrs, out.attr);
   if (!opt.perPixelLighting) light(frame, s, out);
   return status;
-}
-
-detail::PointSetupFrame pointSetupFrame(const FrameContext& frame) {
-  const Camera& cam = frame.cam();
-  const RenderOptions& opt = frame.opt();
-  detail::PointSetupFrame f;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) f.rot[3 * r + c] = cam.rotation()(r, c);
-    f.trans[r] = cam.cameraFromWorld()(r, 3);
-  }
-  f.f = cam.focalPixels();
-  f.cx = cam.principalPoint().x(), f.cy = cam.principalPoint().y();
-  f.nearD = cam.nearDepth(), f.farD = cam.farDepth();
-  f.prefilter = opt.prefilterVariance;
-  f.reconstructionScale = opt.reconstructionScale;
-  f.cutoff = opt.cutoffRadius;
-  f.cutoffQ = frame.cutoffQ;
-  f.backfaceCulling = opt.backfaceCulling;
-  f.light = !opt.perPixelLighting;
-  for (int k = 0; k < 3; ++k) f.lightDir[k] = frame.lightDirCamera[k];
-  f.ambient = opt.material.ambient, f.diffuse = opt.material.diffuse, f.specular = opt.material.specular;
-  f.shininess = opt.material.shininess;
-  return f;
-}
-
-void preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
-                   const detail::PointSetupFrame& setup, PreparedPoint* out, PrimitiveStatus* status) {
-  const Camera& cam = frame.cam();
-  const RenderOptions& opt = frame.opt();
-  detail::PointSetupBatch b;
-  for (int j = 0; j < count; ++j) {  // AoS -> SoA
-    const Point& p = points[first + j];
-    b.px[j] = p.position.x(), b.py[j] = p.position.y(), b.pz[j] = p.position.z();
-    b.nx[j] = p.normal.x(), b.ny[j] = p.normal.y(), b.nz[j] = p.normal.z();
-    b.radius[j] = p.radius;
-  }
-  detail::pointSetup(setup, b, count);
-  for (int j = 0; j < count; ++j) {
-    const uint32_t index = first + uint32_t(j);
-    const Point& point = points[index];
-    PreparedPoint& o = out[j];
-    o.index = index;
-    o.bounds = {};
-    if (b.status[j] == 1.0f) {
-      status[j] = PrimitiveStatus::Culled;
-      continue;
-    }
-    bool cut = false;
-    if (b.status[j] == 0.0f) o.bounds = pixelBounds(cam, b.x0[j], b.y0[j], b.x1[j], b.y1[j], cut);
-    if (b.status[j] != 0.0f) {  // the exact path
-      status[j] = preparePoint(point, index, frame, o);
-      continue;
-    }
-    if (o.bounds.empty()) {
-      status[j] = PrimitiveStatus::Outside;
-      continue;
-    }
-    o.raster.N = {b.Nx[j], b.Ny[j], b.N0[j]};
-    o.raster.S = {b.Sx[j], b.Sy[j], b.S0[j]};
-    o.raster.T = {b.Tx[j], b.Ty[j], b.T0[j]};
-    o.raster.depthNum = b.depthNum[j];
-    o.raster.weightScale = b.weightScale[j];
-    o.raster.cutoffQ = frame.cutoffQ;
-    o.raster.clipDepth = false;
-    o.raster.nearD = cam.nearDepth();
-    o.raster.farD = cam.farDepth();
-    o.zThreshold = frame.zThreshold(b.depthExtent[j] + point.radius);
-    const Color col = frame.primitiveColor(point.color);
-    Vec3f c = col.head<3>();
-    o.gouraud = false;
-    if (!opt.perPixelLighting) {  // Phong, as light() does: flat at the centre or Gouraud
-      const Vec3f& lc = opt.light.color;
-      const Vec3f base = c * b.diffuseFactor[j];
-      const bool flat = o.bounds.width() <= PreparedPoint::kFlatShadeSpan && o.bounds.height() <= PreparedPoint::kFlatShadeSpan;
-      if (flat) {
-        c = (base + Vec3f::Constant(b.specular[0][j])).cwiseProduct(lc);
-      } else {
-        const float s00 = b.specular[1][j], s10 = b.specular[2][j], s01 = b.specular[3][j], s11 = b.specular[4][j];
-        const float inv2R = 0.5f / opt.cutoffRadius;
-        o.gouraud = true;
-        o.C0 = (base + Vec3f::Constant(0.25f * (s00 + s10 + s01 + s11))).cwiseProduct(lc);
-        o.Cs = (0.5f * inv2R * (s10 - s00 + s11 - s01)) * lc;
-        o.Ct = (0.5f * inv2R * (s01 - s00 + s11 - s10)) * lc;
-        o.Cst = (inv2R * inv2R * (s00 - s10 - s01 + s11)) * lc;
-      }
-    }
-    const float attr[Z3Tile::kAttrs] = {c.x(), c.y(), c.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, b.onx[j], b.ony[j], b.onz[j]};
-    std::copy(attr, attr + Z3Tile::kAttrs, o.attr);
-    status[j] = cut ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
-  }
 }
 
 void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {

@@ -49,14 +49,6 @@ struct PreparedPoint {
 /// non-finite, or zero normal: Degenerate.
 PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out);
 
-/// The same for points [first, first + count) of `points` (count <= detail::kSetupBatch), in
-/// SIMD (detail::pointSetup), with the lanes it cannot handle passed to preparePoint; writes
-/// out[0 .. count) and status[0 .. count). Same results as preparePoint up to float rounding.
-void preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
-                   const detail::PointSetupFrame& setup, PreparedPoint* out, PrimitiveStatus* status);
-/// The per-frame constants of preparePoints.
-detail::PointSetupFrame pointSetupFrame(const FrameContext& frame);
-
 /// Rasterise stage: writes the splat's fragments inside ctx.rect into ctx.tile.
 void rasterizePoint(const PreparedPoint& splat, const SplatContext& ctx);
 

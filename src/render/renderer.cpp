@@ -5,18 +5,43 @@
 #include <algorithm>
 #include <ctime>
 #include <memory>
+#include <mutex>
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/splat_rows.h"
+#include "point_setup.h"
 #include "point_splat.h"
 #include "linesurf/render/segment_splat.h"
 #include "linesurf/render/splat_context.h"
 
 namespace linesurf {
 
+namespace detail {
+/// The screen tiles a primitive touches: columns x0 .. x1, rows y0 .. y1 (inclusive).
+struct TileSpan {
+  uint16_t x0, y0, x1, y1;
+};
+}  // namespace detail
+using detail::TileSpan;
+
+/// Per-frame buffers, kept from one frame to the next (no allocation, page faults or zeroing of
+/// the prepared primitives per frame); one render() at a time uses them, a concurrent one its own.
+struct Renderer::Buffers {
+  std::mutex mutex;
+  std::vector<PreparedPoint> pts;     ///< point slots: per chunk, its visible points first
+  std::vector<TileSpan> pointTiles;   ///< tiles each point slot touches
+  std::vector<PreparedSegment> segs;
+  std::vector<PrimitiveStatus> segStatus;
+  std::vector<uint32_t> chunkVisible;
+  std::vector<PointSetupCounts> chunkCounts;
+  std::vector<uint32_t> counts;       ///< per chunk and tile: bins
+  std::vector<size_t> tileStart, offset;
+  std::vector<uint32_t> refs;         ///< tile lists: point slot, or pointSlots + segment index
+};
+
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
-    : model_(model), options_(options), sphere_(boundingSphere(model)) {
+    : model_(model), options_(options), sphere_(boundingSphere(model)), buffers_(std::make_shared<Buffers>()) {
   validate(options_);
 }
 
@@ -48,6 +73,7 @@ double threadCpuSeconds() {
 
 bool visible(PrimitiveStatus s) { return s == PrimitiveStatus::Drawn || s == PrimitiveStatus::Clipped; }
 
+
 }  // namespace
 
 RenderResult Renderer::render(const Camera& cam) const {
@@ -60,69 +86,108 @@ RenderResult Renderer::render(const Camera& cam) const {
                          model_.attributes.texcoords ? model_.texture.get() : nullptr);
   frame.endpointNormals = model_.attributes.endpointNormals;
 
-  // 1. prepare (per primitive, parallel, each writes its own slot)
+  // 1. prepare (parallel) and count the tile bins. Points go in chunks of kChunkBatches batches
+  // of detail::kSetupBatch; a chunk writes its visible points densely into its own range of
+  // slots (in primitive order) and counts, per tile, the points whose bounds touch it. Chunks
+  // are fixed (not a function of the thread count), so the bins below are too. Segments: one
+  // slot each, counted after.
   Timer t;
   const size_t np = model_.points.size(), ns = model_.segments.size();
-  std::vector<PreparedPoint> pts(np);
-  std::vector<PreparedSegment> segs(ns);
-  std::vector<PrimitiveStatus> status(np + ns);
-  const detail::PointSetupFrame setup = pointSetupFrame(frame);
-  const size_t batches = (np + detail::kSetupBatch - 1) / detail::kSetupBatch;
-  parallelFor(0, batches, [&](size_t k) {
-    const size_t i = k * detail::kSetupBatch;
-    preparePoints(model_.points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, np - i)), frame, setup,
-                  pts.data() + i, status.data() + i);
-  }, 16);
-  parallelFor(0, ns, [&](size_t i) { status[np + i] = prepareSegment(model_.segments[i], uint32_t(i), frame, segs[i]); }, 256);
-  for (size_t i = 0; i < np; ++i)
-    count(status[i], st.pointsDrawn, st.pointsClipped, st.pointsCulled, st.pointsOutside, st.pointsDegenerate);
-  for (size_t i = 0; i < ns; ++i)
-    count(status[np + i], st.segmentsDrawn, st.segmentsClipped, st.segmentsCulled, st.segmentsOutside,
-          st.segmentsDegenerate);
-  for (size_t i = 0; i < ns; ++i) st.segmentsFallback += segs[i].fallback;
-  st.prepareSeconds = t.seconds();
-  reportProgress(opt.progress, "render", 0.1);
-
-  // 2. binning: primitive p (points 0..np-1, then segments) goes to every tile its bounds touch.
-  // Chunks of a fixed size (not a function of the thread count) count, then fill, so every
-  // tile's list is in primitive order.
-  t.reset();
+  std::unique_lock<std::mutex> lock(buffers_->mutex, std::try_to_lock);
+  std::unique_ptr<Buffers> own;  // another render() of this Renderer holds the shared buffers
+  Buffers& buf = lock.owns_lock() ? *buffers_ : *(own = std::make_unique<Buffers>());
   const int T = opt.tileSize;
   const int tilesX = (cam.width() + T - 1) / T, tilesY = (cam.height() + T - 1) / T;
   const size_t tiles = size_t(tilesX) * size_t(tilesY);
-  const size_t total_prims = np + ns;
-  const size_t chunkSize = 8192;
-  const size_t chunks = (total_prims + chunkSize - 1) / chunkSize;
-  auto boundsOf = [&](size_t p) -> const PixelRect& { return p < np ? pts[p].bounds : segs[p - np].bounds; };
-  auto forTiles = [&](size_t p, auto&& fn) {
-    const PixelRect& b = boundsOf(p);
-    if (b.empty()) return;
-    int tx0 = b.x0 / T, tx1 = (b.x1 - 1) / T, ty0 = b.y0 / T, ty1 = (b.y1 - 1) / T;
-    for (int ty = ty0; ty <= ty1; ++ty)
-      for (int tx = tx0; tx <= tx1; ++tx) fn(size_t(ty) * size_t(tilesX) + size_t(tx));
+  // the per-chunk tile counts stay small: larger chunks for small tiles
+  const size_t chunkBatches = std::max<size_t>(32, (tiles / 256) * 32);
+  const size_t chunkPoints = chunkBatches * detail::kSetupBatch;
+  const size_t pointChunks = (np + chunkPoints - 1) / chunkPoints;
+  const size_t segChunkSize = 8192;
+  const size_t segChunks = (ns + segChunkSize - 1) / segChunkSize;
+  const size_t chunks = pointChunks + segChunks;
+  const size_t pointSlots = pointChunks * chunkPoints;  // refs below pointSlots are points
+  if (buf.pts.size() < pointSlots) buf.pts.resize(pointSlots);
+  if (buf.pointTiles.size() < pointSlots) buf.pointTiles.resize(pointSlots);
+  if (buf.segs.size() < ns) buf.segs.resize(ns);
+  buf.segStatus.resize(ns);
+  buf.counts.assign(chunks * tiles, 0);
+  buf.chunkVisible.assign(pointChunks, 0);
+  buf.chunkCounts.assign(pointChunks, PointSetupCounts{});
+  PreparedPoint* const pts = buf.pts.data();
+  PreparedSegment* const segs = buf.segs.data();
+  TileSpan* const spans = buf.pointTiles.data();
+  auto tileSpan = [&](const PixelRect& b) {
+    return TileSpan{uint16_t(b.x0 / T), uint16_t(b.y0 / T), uint16_t((b.x1 - 1) / T), uint16_t((b.y1 - 1) / T)};
   };
-  std::vector<uint32_t> counts(chunks * tiles, 0);
-  parallelFor(0, chunks, [&](size_t c) {
-    uint32_t* cnt = counts.data() + c * tiles;
-    for (size_t p = c * chunkSize, e = std::min(total_prims, p + chunkSize); p < e; ++p)
-      if (visible(status[p])) forTiles(p, [&](size_t tile) { ++cnt[tile]; });
+  auto countSpan = [&](uint32_t* cnt, const TileSpan& s) {
+    for (int ty = s.y0; ty <= s.y1; ++ty)
+      for (int tx = s.x0; tx <= s.x1; ++tx) ++cnt[size_t(ty) * size_t(tilesX) + size_t(tx)];
+  };
+  const detail::PointSetupFrame setup = pointSetupFrame(frame);
+  parallelFor(0, pointChunks, [&](size_t c) {
+    uint32_t* cnt = buf.counts.data() + c * tiles;
+    const size_t base = c * chunkPoints;
+    size_t k = base;
+    for (size_t i = base, e = std::min(np, base + chunkPoints); i < e; i += detail::kSetupBatch) {
+      const int n = preparePoints(model_.points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, e - i)),
+                                  frame, setup, pts + k, buf.chunkCounts[c]);
+      for (size_t j = k; j < k + size_t(n); ++j) countSpan(cnt, spans[j] = tileSpan(pts[j].bounds));
+      k += size_t(n);
+    }
+    buf.chunkVisible[c] = uint32_t(k - base);
   }, 1);
-  // offsets: tile-major, chunk-minor
-  std::vector<size_t> tileStart(tiles + 1, 0), offset(chunks * tiles, 0);
+  PrimitiveStatus* const segStatus = buf.segStatus.data();
+  parallelFor(0, ns, [&](size_t i) { segStatus[i] = prepareSegment(model_.segments[i], uint32_t(i), frame, segs[i]); }, 256);
+  for (const PointSetupCounts& c : buf.chunkCounts) {
+    st.pointsDrawn += c.drawn + c.clipped;
+    st.pointsClipped += c.clipped;
+    st.pointsCulled += c.culled;
+    st.pointsOutside += c.outside;
+    st.pointsDegenerate += c.degenerate;
+  }
+  for (size_t i = 0; i < ns; ++i)
+    count(segStatus[i], st.segmentsDrawn, st.segmentsClipped, st.segmentsCulled, st.segmentsOutside,
+          st.segmentsDegenerate);
+  for (size_t i = 0; i < ns; ++i) st.segmentsFallback += segs[i].fallback;
+  parallelFor(0, segChunks, [&](size_t c) {
+    uint32_t* cnt = buf.counts.data() + (pointChunks + c) * tiles;
+    for (size_t i = c * segChunkSize, e = std::min(ns, i + segChunkSize); i < e; ++i)
+      if (visible(segStatus[i])) countSpan(cnt, tileSpan(segs[i].bounds));
+  }, 1);
+  st.prepareSeconds = t.seconds();
+  reportProgress(opt.progress, "render", 0.1);
+
+  // 2. binning: every visible primitive goes to every tile its bounds touch; each tile's list is
+  // in primitive order (points, then segments): offsets tile-major, chunk-minor.
+  t.reset();
+  buf.tileStart.resize(tiles + 1);
+  buf.offset.resize(chunks * tiles);
   size_t run = 0;
   for (size_t tile = 0; tile < tiles; ++tile) {
-    tileStart[tile] = run;
+    buf.tileStart[tile] = run;
     for (size_t c = 0; c < chunks; ++c) {
-      offset[c * tiles + tile] = run;
-      run += counts[c * tiles + tile];
+      buf.offset[c * tiles + tile] = run;
+      run += buf.counts[c * tiles + tile];
     }
   }
-  tileStart[tiles] = run;
-  std::vector<uint32_t> refs(run);
+  buf.tileStart[tiles] = run;
+  if (buf.refs.size() < run) buf.refs.resize(run);
+  uint32_t* const refs = buf.refs.data();
+  const size_t* const tileStart = buf.tileStart.data();
+  auto fillSpan = [&](size_t* off, const TileSpan& s, uint32_t ref) {
+    for (int ty = s.y0; ty <= s.y1; ++ty)
+      for (int tx = s.x0; tx <= s.x1; ++tx) refs[off[size_t(ty) * size_t(tilesX) + size_t(tx)]++] = ref;
+  };
   parallelFor(0, chunks, [&](size_t c) {
-    size_t* off = offset.data() + c * tiles;
-    for (size_t p = c * chunkSize, e = std::min(total_prims, p + chunkSize); p < e; ++p)
-      if (visible(status[p])) forTiles(p, [&](size_t tile) { refs[off[tile]++] = uint32_t(p); });
+    size_t* off = buf.offset.data() + c * tiles;
+    if (c < pointChunks) {
+      for (size_t j = c * chunkPoints, e = j + buf.chunkVisible[c]; j < e; ++j) fillSpan(off, spans[j], uint32_t(j));
+    } else {
+      const size_t c0 = (c - pointChunks) * segChunkSize;
+      for (size_t i = c0, e = std::min(ns, c0 + segChunkSize); i < e; ++i)
+        if (visible(segStatus[i])) fillSpan(off, tileSpan(segs[i].bounds), uint32_t(pointSlots + i));
+    }
   }, 1);
   st.tileBins = run;
   st.binSeconds = t.seconds();
@@ -148,8 +213,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     const double t0 = threadCpuSeconds();
     for (size_t k = tileStart[tile]; k < tileStart[tile + 1]; ++k) {
       uint32_t p = refs[k];
-      if (p < np) rasterizePoint(pts[p], ctx);
-      else rasterizeSegment(segs[p - np], ctx);
+      if (p < pointSlots) rasterizePoint(pts[p], ctx);
+      else rasterizeSegment(segs[p - pointSlots], ctx);
     }
     const double t1 = threadCpuSeconds();
     tileSeconds[tile].first = t1 - t0;

@@ -6,6 +6,7 @@
 /// back-to-front resolve composited over the background. Images are identical for any thread
 /// count.
 #include <cstdint>
+#include <memory>
 #include <optional>
 
 #include "linesurf/core/image.h"
@@ -54,6 +55,8 @@ class Renderer {
   const HybridModel& model_;
   RenderOptions options_;
   BoundingSphere sphere_;
+  struct Buffers;  // per-frame buffers reused by the next frame (renderer.cpp)
+  std::shared_ptr<Buffers> buffers_;
 };
 
 /// The SIMD target the rasteriser's rows run on in this process, chosen at run time (Highway's

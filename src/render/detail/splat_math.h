@@ -5,6 +5,7 @@
 
 #include "linesurf/core/math.h"
 #include "linesurf/render/camera.h"
+#include "linesurf/render/z3_buffer.h"
 
 namespace linesurf::detail {
 
@@ -56,6 +57,18 @@ inline const GaussTable kGaussTable;
 
 /// exp(-q/2) with q clamped to the table's range.
 inline float gaussHalf(float q) { return kGaussTable(std::clamp(q, 0.0f, GaussTable::kMaxQ)); }
+
+/// Pixels whose centres (i + 0.5) lie in [x0, x1] x [y0, y1], clamped to the view; `cut` tells
+/// whether the view clamped them.
+inline PixelRect pixelBounds(const Camera& cam, double x0, double y0, double x1, double y1, bool& cut) {
+  const double lim = 1e7;
+  auto lo = [&](double v) { return int(std::ceil(std::clamp(v, -lim, lim) - 0.5)); };
+  auto hi = [&](double v) { return int(std::floor(std::clamp(v, -lim, lim) - 0.5)) + 1; };
+  const PixelRect bb{lo(x0), lo(y0), hi(x1), hi(y1)};
+  const PixelRect out = bb.intersect(PixelRect{0, 0, cam.width(), cam.height()});
+  cut = out.x0 != bb.x0 || out.y0 != bb.y0 || out.x1 != bb.x1 || out.y1 != bb.y1;
+  return out;
+}
 
 /// Clips a convex camera-space polygon of n <= 16 vertices against the near and far planes and
 /// returns the screen bounding box of what remains; false when nothing remains. `clipped` tells

@@ -71,6 +71,7 @@ namespace linesurf::detail {
 /// Per-frame constants of the SIMD point set-up (pointSetup).
 struct PointSetupFrame {
   float rot[9] = {}, trans[3] = {};  ///< world -> camera (row-major rotation)
+  float eye[3] = {};                 ///< the eye in world space (the early back-face test)
   float f = 1, cx = 0, cy = 0, nearD = 0, farD = 0;
   float prefilter = 0, reconstructionScale = 0, cutoff = 0, cutoffQ = 0;
   bool backfaceCulling = true;
@@ -81,6 +82,7 @@ struct PointSetupFrame {
 /// SoA input and output of a batch of at most kSetupBatch points.
 inline constexpr int kSetupBatch = 64;
 struct PointSetupBatch {
+  int lane[kSetupBatch];  ///< the point's place in its batch of the model (not read by pointSetup)
   // input
   alignas(64) float px[kSetupBatch], py[kSetupBatch], pz[kSetupBatch], nx[kSetupBatch], ny[kSetupBatch],
       nz[kSetupBatch], radius[kSetupBatch];
