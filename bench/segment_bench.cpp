@@ -6,6 +6,10 @@
 //    methods: (eps, delta) (1, Table 1), shape approximation with greedy (2, Table 2) and
 //    hierarchical (3, Table 3) clustering. Eight orbit views cycled; the thesis's "speedup" is
 //    1 - t_hybrid / t_points (docs/results.md "Rendering speedups").
+//  - BM_ContourFrame/<mesh>/<kind>: the same for the pure point (kind 0) and pure line (kind 1)
+//    models that contour extraction (§3.3, Table 5) cuts from a shared mesh with its defaults, at
+//    512^2 on 2 threads, 8 views; counters: the stages' milliseconds per frame (prepare: wall;
+//    raster, resolve: CPU of all threads) and fragments.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -15,12 +19,15 @@
 #include <mutex>
 
 #include "linesurf/core/parallel.h"
+#include "linesurf/extract/contour.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/render/renderer.h"
 #include "linesurf/render/segment_splat.h"
+#include "render/point_setup.h"
+#include "render/segment_splat.h"
 
 namespace {
 
@@ -100,40 +107,37 @@ void BM_PointRate(benchmark::State& state) {
 }
 BENCHMARK(BM_PointRate)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
-// kind 0: points; 1: eps-delta; 2: shape approx greedy; 3: shape approx hierarchical.
-const HybridModel* model(int m, int kind, std::string& error) {
+// The model made by `make` from the shared file `name`, once per (name, kind); null (and
+// `error`) when the shared data is absent.
+template <class Make>
+const HybridModel* cachedModel(const std::string& name, int kind, std::string& error, Make&& make) {
   static std::mutex mutex;
-  static std::map<std::pair<int, int>, std::unique_ptr<HybridModel>> cache;
+  static std::map<std::pair<std::string, int>, std::unique_ptr<HybridModel>> cache;
   std::lock_guard<std::mutex> lock(mutex);
-  auto key = std::make_pair(m, kind);
-  if (cache.count(key)) return cache[key].get();
-  const auto path = sharedData() / (std::string(kModels[m]) + "_points.ply");
+  auto& slot = cache[{name, kind}];
+  if (slot) return slot.get();
+  const auto path = sharedData() / name;
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     error = "shared data absent: " + path.string();
     return nullptr;
   }
-  static std::map<int, std::pair<HybridModel, PointGeometry>> clouds;
-  if (!clouds.count(m)) {
+  slot = std::make_unique<HybridModel>(make(path));
+  return slot.get();
+}
+
+// kind 0: points; 1: eps-delta; 2: shape approx greedy; 3: shape approx hierarchical.
+const HybridModel* model(int m, int kind, std::string& error) {
+  return cachedModel(std::string(kModels[m]) + "_points.ply", kind, error, [&](const std::filesystem::path& path) {
     HybridModel cloud = readModel(path);
-    PointGeometry geo = computePointGeometry(cloud);
+    const PointGeometry geo = computePointGeometry(cloud);
     applyGeometry(cloud, geo);
-    clouds.emplace(m, std::make_pair(std::move(cloud), std::move(geo)));
-  }
-  const auto& [cloud, geo] = clouds.at(m);
-  HybridModel out;
-  if (kind == 0) {
-    out = cloud;
-  } else if (kind == 1) {
-    out = extractEpsDelta(cloud, geo);
-  } else {
+    if (kind == 1) return extractEpsDelta(cloud, geo);
+    if (kind == 0) return cloud;
     ShapeApproxOptions o;
     o.method = kind == 2 ? ClusteringMethod::Greedy : ClusteringMethod::Hierarchical;
-    out = extractShapeApprox(cloud, geo, o);
-  }
-  auto& slot = cache[key];
-  slot = std::make_unique<HybridModel>(std::move(out));
-  return slot.get();
+    return extractShapeApprox(cloud, geo, o);
+  });
 }
 
 void BM_HybridFrame(benchmark::State& state) {
@@ -155,6 +159,84 @@ BENCHMARK(BM_HybridFrame)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1, 2, 3}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()  // CPU seconds of both threads: robust on a shared, loaded machine
+    ->UseRealTime()
+    ->MinTime(1.0);
+
+const char* kMeshes[] = {"bunny", "dragon", "horse", "gargoyle", "al", "buddha", "skull"};
+
+// kind 0: the contour point model; 1: the contour line model (experiment.cpp, Table 5).
+const HybridModel* contourModel(int m, int kind, std::string& error) {
+  return cachedModel(std::string(kMeshes[m]) + "_mesh.ply", kind, error, [&](const std::filesystem::path& path) {
+    ContourOptions co;
+    co.allPoints = kind == 0;
+    return extractContour(readMesh(path), co);
+  });
+}
+
+void BM_ContourFrame(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = contourModel(int(state.range(0)), int(state.range(1)), error);
+  if (!m) return state.SkipWithError(error.c_str());
+  ThreadLimit limit(2);
+  RenderOptions o;
+  o.alphaBuffer = true;  // as the experiment renders meshes' models
+  const Renderer r(*m, o);
+  const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
+  size_t v = 0;
+  double prepare = 0, raster = 0, resolve = 0, fragments = 0;
+  for (auto _ : state) {
+    const RenderStats st = r.render(views[v++ % views.size()]).stats;
+    prepare += st.prepareSeconds;
+    raster += st.fragmentThreadSeconds;
+    resolve += st.resolveThreadSeconds;
+    fragments += double(st.fragments);
+  }
+  const double n = double(std::max<int64_t>(1, state.iterations()));
+  state.counters["prepare_ms"] = 1e3 * prepare / n;
+  state.counters["raster_cpu_ms"] = 1e3 * raster / n;
+  state.counters["resolve_cpu_ms"] = 1e3 * resolve / n;
+  state.counters["kfrags"] = fragments / n / 1e3;
+  state.counters["ns/frag"] = 1e9 * raster / std::max(1.0, fragments);
+  state.counters["primitives"] = double(m->points.size() + m->segments.size());
+  state.SetLabel(std::string(kMeshes[state.range(0)]) + (state.range(1) == 0 ? " points" : " lines") +
+                 " simd=" + renderSimdTarget());
+}
+// The prepare stage alone, one thread: ns per primitive of the bunny's contour points (SIMD
+// batches, as the renderer runs them) and contour segments.
+void BM_ContourPrepare(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = contourModel(0, int(state.range(0)), error);
+  if (!m) return state.SkipWithError(error.c_str());
+  RenderOptions o;
+  const Renderer r(*m, o);
+  const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
+  std::vector<PreparedPoint> pts(m->points.size());
+  std::vector<PreparedSegment> segs(m->segments.size());
+  std::vector<PrimitiveStatus> status(std::max(pts.size(), segs.size()));
+  size_t v = 0;
+  for (auto _ : state) {
+    FrameContext frame = FrameContext::make(views[v++ % views.size()], o, r.sphere(), m->attributes.colors);
+    frame.endpointNormals = m->attributes.endpointNormals;
+    if (!pts.empty()) {
+      const detail::PointSetupFrame setup = pointSetupFrame(frame);
+      PointSetupCounts counts;
+      for (size_t i = 0; i < pts.size(); i += detail::kSetupBatch)
+        preparePoints(m->points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, pts.size() - i)), frame,
+                      setup, pts.data() + i, counts);
+    }
+    for (size_t i = 0; i < segs.size(); ++i) status[i] = prepareSegment(m->segments[i], uint32_t(i), frame, segs[i]);
+    benchmark::DoNotOptimize(status.data());
+  }
+  state.counters["ns/primitive"] = benchmark::Counter(double(pts.size() + segs.size()),
+                                                      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.SetLabel(state.range(0) == 0 ? "bunny contour points" : "bunny contour lines");
+}
+BENCHMARK(BM_ContourPrepare)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+BENCHMARK(BM_ContourFrame)
+    ->ArgsProduct({{0, 1, 2, 3, 4, 5, 6}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
     ->UseRealTime()
     ->MinTime(1.0);
 

@@ -12,7 +12,7 @@
 #include "detail/splat_rows.h"
 #include "point_setup.h"
 #include "point_splat.h"
-#include "linesurf/render/segment_splat.h"
+#include "segment_splat.h"
 #include "linesurf/render/splat_context.h"
 
 namespace linesurf {

@@ -1,413 +1,73 @@
-// Object-space EWA splatting of line segments, thesis §5 (see segment_splat.h and
-// docs/segment-splatting.md). Three evaluations of the same filter: the thesis's weight-texture
-// quadrilaterals (§5.2.3, Approx), a per-pixel closed form in erf over sub-segments (after §9.3,
-// ScreenSpace) and per-pixel quadrature (Reference).
-#include "detail/splat_math.h"
-#include "detail/splat_rows.h"
-#include "linesurf/render/segment_splat.h"
+// Object-space EWA splatting of line segments, thesis §5 (see linesurf/render/segment_splat.h
+// for the method, segment_splat.h for the stages, docs/segment-splatting.md). The evaluations
+// themselves (ScreenSpace closed form, Reference quadrature, Approx quadrilaterals) are in
+// segment_methods.cpp; the SIMD rows of the common case in splat_rows.cpp.
+#include "segment_splat.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <map>
-#include <memory>
-#include <mutex>
 
-#include <Eigen/Eigenvalues>
+#include "detail/splat_math.h"
+#include "segment_methods.h"
 
 namespace linesurf {
 
 namespace {
 
-using Mat2d = Eigen::Matrix2d;
-using Vec2dd = Eigen::Vector2d;
-using detail::kPi;
-// Same limits as point splats (detail/splat_math.h): the resampling filter is never stretched
-// beyond kMaxStretch sigma_r, and strips seen closer to edge-on than kMinFacing everywhere are culled.
-constexpr double kMaxStretch = detail::kMaxStretch;
+using segment::Mat2d;
+using segment::Vec2dd;
+// Same limits as point splats (detail/splat_math.h): strips seen closer to edge-on than
+// kMinFacing everywhere are culled, and no kernel reaches farther than kMaxStretch sigma_r.
 constexpr double kMinFacing = detail::kMinFacing;
+constexpr double kMaxStretch = detail::kMaxStretch;
 // ScreenSpace subdivision: a new sub-segment wherever M changes by more than this (relative
 // Frobenius norm) from one end of the sub-segment to the other.
 constexpr double kPieceTolerance = 0.04;
-// Reference quadrature: node spacing sigma_r / kNodesPerSigma, at most kMaxNodes nodes.
-constexpr double kNodesPerSigma = 32.0;
-constexpr int kMaxNodes = 1 << 16;
 // Rasterisation visits the pixel centres within this distance (pixels) of the projected footprint
 // box: the projection and the per-pixel ray-plane intersection differ by rounding only.
 constexpr float kSpanSlack = 0.05f;
+// Smooth segments get one lighting station per this many radians the shading normal turns.
+constexpr float kStationTurn = 0.1f;
+// Rectangles of at most this many pixels are rasterised in whole rows, larger ones in the spans
+// of the projected footprint box.
+constexpr int kFullRowsArea = 64;
 
-// --- the resampling covariance along the segment (§5.1.2) -------------------------------------
-
-// Symmetric 2x2 with eigenvalues clamped to [lo, hi].
-Mat2d clampEigen(const Mat2d& M, double lo, double hi) {
-  const double a = M(0, 0), b = M(0, 1), c = M(1, 1);
-  const double mean = 0.5 * (a + c), diff = 0.5 * (a - c);
-  const double rad = std::sqrt(diff * diff + b * b);
-  double l0 = mean + rad, l1 = mean - rad;
-  if (l0 <= hi && l1 >= lo) return M;
-  Vec2dd e0 = rad > 0 ? (std::abs(b) > 0 ? Vec2dd(l0 - c, b).normalized() : (a >= c ? Vec2dd(1, 0) : Vec2dd(0, 1)))
-                      : Vec2dd(1, 0);
-  if (!e0.allFinite()) e0 = Vec2dd(1, 0);
-  const Vec2dd e1(-e0.y(), e0.x());
-  l0 = std::clamp(l0, lo, hi);
-  l1 = std::clamp(l1, lo, hi);
-  return l0 * e0 * e0.transpose() + l1 * e1 * e1.transpose();
+SegmentExtra& extraOf(PreparedSegment& out) {
+  if (!out.extra) out.extra = std::make_unique<SegmentExtra>();
+  return *out.extra;
 }
 
-// Object-space resampling covariance M = sigma_r^2 I + V_h J^-1 J^-T of the point p (camera
-// space) of a strip with unit axes e (a, along) and s (b, across), in (a, b) coordinates. J is
-// the Jacobian of the perspective projection restricted to the strip's plane at p (§5.1.2, RPZ02).
-// Behind the eye the prefilter is dropped, as for point splats.
-Mat2d resamplingCovariance(const Vec3d& p, const Vec3d& e, const Vec3d& s, double sigmaR, double Vh, double f) {
-  Mat2d M = Mat2d::Identity() * (sigmaR * sigmaR);
-  const double d = -p.z();
-  const double hi = (kMaxStretch * sigmaR) * (kMaxStretch * sigmaR);
-  if (d > 0 && Vh > 0) {
-    const Vec3d gx(f / d, 0, f * p.x() / (d * d));
-    const Vec3d gy(0, -f / d, -f * p.y() / (d * d));
-    Mat2d J;
-    J << gx.dot(e), gx.dot(s), gy.dot(e), gy.dot(s);
-    const Mat2d JtJ = J.transpose() * J;
-    const double det = JtJ.determinant();
-    if (det > 0 && std::isfinite(det)) {
-      Mat2d adj;
-      adj << JtJ(1, 1), -JtJ(0, 1), -JtJ(1, 0), JtJ(0, 0);
-      M += (Vh / det) * adj;
-    } else {
-      return Mat2d::Identity() * hi;  // edge-on here: as stretched as allowed
-    }
-  }
-  return clampEigen(M, sigmaR * sigmaR, hi);
-}
+// --- prepare, stage 1: the strip in camera space ------------------------------------------
 
-Mat2d inverse2(const Mat2d& M) {
-  const double det = M.determinant();
-  Mat2d inv;
-  inv << M(1, 1), -M(0, 1), -M(1, 0), M(0, 0);
-  return inv / det;
-}
-
-// --- weight textures (§5.2.3.2) --------------------------------------------------------------
-
-// Closed forms, in this project's weight units (no 1/(2 pi)): the cut-off unit Gaussian
-// integrated over t in [0, inf) at (x - t, y), and over all t.
-double t1Exact(double R, double x, double y) {
-  if (std::abs(y) >= R) return 0;
-  const double w = std::sqrt(R * R - y * y);
-  const double xc = std::clamp(x, -w, w);
-  return std::sqrt(kPi / 2) * std::exp(-0.5 * y * y) * (std::erf(w / std::sqrt(2.0)) + std::erf(xc / std::sqrt(2.0)));
-}
-double t2Exact(double R, double y) {
-  if (std::abs(y) >= R) return 0;
-  const double w = std::sqrt(R * R - y * y);
-  return std::sqrt(2 * kPi) * std::exp(-0.5 * y * y) * std::erf(w / std::sqrt(2.0));
-}
-
-}  // namespace
-
-/// §5.2.3.2 tables for one cutoff radius: T1 on a (N+1) x (N/2+1) grid over [-R, R] x [0, R],
-/// T2 on N/2+1 samples over [0, R]; bilinear lookups, symmetric in y.
-struct WeightTextures {
-  float R = 0;
-  static constexpr int nx = kWeightTextureSize, ny = kWeightTextureSize / 2;
-  std::vector<float> t1, t2;
-  explicit WeightTextures(float cutoff) : R(cutoff), t1(size_t(nx + 1) * (ny + 1)), t2(ny + 1) {
-    for (int j = 0; j <= ny; ++j) {
-      const double y = double(R) * j / ny;
-      t2[j] = float(t2Exact(R, y));
-      for (int i = 0; i <= nx; ++i) t1[size_t(j) * (nx + 1) + i] = float(t1Exact(R, -double(R) + 2.0 * R * i / nx, y));
-    }
-  }
-  float lookupT1(float x, float y) const {
-    y = std::abs(y);
-    if (y >= R || x <= -R) return 0;
-    if (x >= R) return lookupT2(y);
-    const float fx = (x + R) / (2 * R) * nx, fy = y / R * ny;
-    const int i = std::min(int(fx), nx - 1), j = std::min(int(fy), ny - 1);
-    const float u = fx - i, v = fy - j;
-    const float* r0 = t1.data() + size_t(j) * (nx + 1) + i;
-    const float* r1 = r0 + (nx + 1);
-    return (1 - v) * ((1 - u) * r0[0] + u * r0[1]) + v * ((1 - u) * r1[0] + u * r1[1]);
-  }
-  float lookupT2(float y) const {
-    y = std::abs(y);
-    if (y >= R) return 0;
-    const float fy = y / R * ny;
-    const int j = std::min(int(fy), ny - 1);
-    const float v = fy - j;
-    return (1 - v) * t2[j] + v * t2[j + 1];
-  }
+// p0, the unit axes (e along, n the plane's normal facing the viewer, s = e x n across) and
+// the length, in double: the construction must not lose short segments.
+struct Strip {
+  Vec3d c0 = Vec3d::Zero(), e = Vec3d::Zero(), n = Vec3d::Zero(), s = Vec3d::Zero();
+  double L = 0;
+  bool smooth = false;  ///< usable endpoint normals shade it (smooth line models)
 };
 
-namespace {
-
-// One table per cutoff radius for the life of the program (a handful at most).
-const WeightTextures* weightTextures(float R) {
-  thread_local const WeightTextures* last = nullptr;
-  if (last && last->R == R) return last;
-  static std::mutex mutex;
-  static std::map<float, std::unique_ptr<WeightTextures>> cache;
-  std::lock_guard<std::mutex> lock(mutex);
-  auto& slot = cache[R];
-  if (!slot) slot = std::make_unique<WeightTextures>(R);
-  last = slot.get();
-  return last;
-}
-
-// --- the Approx construction (§5.2.3.1) ------------------------------------------------------
-
-double cross2(const Vec2dd& a, const Vec2dd& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-// Intersection of the lines n1.u = k1 and n2.u = k2; false when (nearly) parallel.
-bool intersectLines(const Vec2dd& n1, double k1, const Vec2dd& n2, double k2, Vec2dd& out) {
-  const double det = cross2(n1, n2);
-  if (!(std::abs(det) > 1e-9 * n1.norm() * n2.norm())) return false;
-  out = Vec2dd((k1 * n2.y() - k2 * n1.y()) / det, (n1.x() * k2 - n2.x() * k1) / det);
-  return out.allFinite();
-}
-
-struct ApproxInput {
-  Mat2d A0, A1;  // cutoff ellipses R^2 M_k, (a, b) coordinates, centres (0,0) and (L,0)
-  Mat2d M0, M1;
-  double L = 0, R = 0, h = 0;
-};
-
-// Root of f on [lo, hi] with f(lo), f(hi) of opposite signs (Illinois false position).
-template <class F>
-double bracketRoot(F&& f, double lo, double hi, double flo, double fhi) {
-  int side = 0;
-  double x = lo;
-  for (int it = 0; it < 80; ++it) {
-    x = fhi != flo ? (lo * fhi - hi * flo) / (fhi - flo) : 0.5 * (lo + hi);
-    if (!(x > std::min(lo, hi) && x < std::max(lo, hi))) x = 0.5 * (lo + hi);
-    const double fx = f(x);
-    if (fx == 0 || std::abs(hi - lo) < 1e-13) break;
-    if ((fx > 0) == (fhi > 0)) {
-      hi = x;
-      fhi = fx;
-      if (side == -1) flo *= 0.5;
-      side = -1;
-    } else {
-      lo = x;
-      flo = fx;
-      if (side == 1) fhi *= 0.5;
-      side = 1;
-    }
-  }
-  return x;
-}
-
-// Builds the 10 (long) or 8 (short) quadrilaterals; false when the construction is unsound
-// (the caller then falls back to the ScreenSpace evaluation and counts it).
-bool buildApprox(const ApproxInput& in, std::vector<SegmentQuad>& quads, bool& longCase) {
-  const double L = in.L, R = in.R;
-  const Vec2dd c0(0, 0), c1(L, 0);
-  auto support = [&](const Mat2d& A, const Vec2dd& n) { return std::sqrt(std::max(0.0, n.dot(A * n))); };
-  // Outer common tangents (points 1-4): lines n.u = k supporting both ellipses, both on the
-  // side n.u <= k: f(phi) = h1(n) - h0(n) = L cos(phi) + s1(n) - s0(n) = 0 (n = (cos, sin)).
-  auto f = [&](double phi) {
-    const Vec2dd n(std::cos(phi), std::sin(phi));
-    return L * n.x() + support(in.A1, n) - support(in.A0, n);
-  };
-  const double f0 = f(0), fpi = f(kPi);
-  // One ellipse reaches past the other at both ends of the axis (nested along the axis).
-  if (!(f0 > 1e-9 * L && fpi < -1e-9 * L)) return false;
-  const double phiT = bracketRoot(f, 0.0, kPi, f0, fpi);
-  const double phiB = bracketRoot(f, kPi, 2 * kPi, fpi, f0);
-  const Vec2dd nT(std::cos(phiT), std::sin(phiT)), nB(std::cos(phiB), std::sin(phiB));
-  const double kT = support(in.A0, nT), kB = support(in.A0, nB);
-  auto touch = [&](const Mat2d& A, const Vec2dd& c, const Vec2dd& n) -> Vec2dd { return c + A * n / support(A, n); };
-  const Vec2dd p1 = touch(in.A0, c0, nT), p2 = touch(in.A1, c1, nT), p3 = touch(in.A1, c1, nB), p4 = touch(in.A0, c0, nB);
-  if (!(p1.y() > 0 && p2.y() > 0 && p3.y() < 0 && p4.y() < 0)) return false;
-  // Points 9, 10: the crossing lines 1-4 and 2-3 meet the axis b = 0.
-  const double a9 = p1.x() + (p4.x() - p1.x()) * p1.y() / (p1.y() - p4.y());
-  const double a10 = p2.x() + (p3.x() - p2.x()) * p2.y() / (p2.y() - p3.y());
-  // Points 5-8: the axis meets the ellipses at c_k +- rho_k, rho_k = 1 / sqrt((A_k^-1)_aa).
-  const Mat2d A0i = inverse2(in.A0), A1i = inverse2(in.A1);
-  const double rho0 = 1 / std::sqrt(A0i(0, 0)), rho1 = 1 / std::sqrt(A1i(0, 0));
-  const double a5 = -rho0, a6 = rho0, a7 = L - rho1, a8 = L + rho1;
-  if (!(a5 < a9 && a9 < a6 && a7 < a10 && a10 < a8 && a9 < a10)) return false;
-  // Tangent lines at the axis points (11-18): normal A^-1 (P - c) = +-(A^-1)_{.,0}.
-  const Vec2dd t0(A0i(0, 0), A0i(1, 0)), t1(A1i(0, 0), A1i(1, 0));
-  Vec2dd q11, q12, q13, q14, q15, q16, q17, q18;
-  auto meet = [&](const Vec2dd& tn, double a, Vec2dd& top, Vec2dd& bottom) {
-    const double k = tn.x() * a;  // the tangent line passes through (a, 0)
-    return intersectLines(tn, k, nT, kT, top) && intersectLines(tn, k, nB, kB, bottom);
-  };
-  if (!meet(t0, a5, q11, q18) || !meet(t0, a6, q12, q17) || !meet(t1, a7, q13, q16) || !meet(t1, a8, q14, q15))
-    return false;
-  // Order along the top line (direction (sin, -cos) of nT) and the bottom one.
-  const Vec2dd dT(nT.y(), -nT.x()), dB(-nB.y(), nB.x());
-  auto ordered = [](std::initializer_list<double> v) {
-    double prev = -std::numeric_limits<double>::infinity();
-    for (double x : v) {
-      if (!(x >= prev)) return false;
-      prev = x;
-    }
-    return true;
-  };
-  if (!ordered({dT.dot(q11), dT.dot(p1), dT.dot(q12)}) || !ordered({dT.dot(q13), dT.dot(p2), dT.dot(q14)}) ||
-      !ordered({dB.dot(q18), dB.dot(p4), dB.dot(q17)}) || !ordered({dB.dot(q16), dB.dot(p3), dB.dot(q15)}))
-    return false;
-  longCase = a6 < a7 && dT.dot(q12) <= dT.dot(q13) && dB.dot(q17) <= dB.dot(q16);
-  double am = 0;  // short case: where the separating line meets the axis
-  if (!longCase) {
-    // The line through the ellipses' intersection points: walk E0's boundary from point 6
-    // (inside E1 in the short case) up to 5 and down to 5, finding where it leaves E1.
-    const Mat2d M0h = [&] {  // A0^(1/2): the boundary is c0 + A0^(1/2) (cos, sin)
-      Eigen::SelfAdjointEigenSolver<Mat2d> es(in.A0);
-      return Mat2d(es.eigenvectors() * es.eigenvalues().cwiseMax(0).cwiseSqrt().asDiagonal() *
-                   es.eigenvectors().transpose());
-    }();
-    const Mat2d M0hi = inverse2(M0h);
-    auto g = [&](double th) {
-      const Vec2dd u = M0h * Vec2dd(std::cos(th), std::sin(th)) - c1;
-      return u.dot(A1i * u) - 1;
-    };
-    const Vec2dd y6 = M0hi * Vec2dd(a6, 0);
-    const double th6 = std::atan2(y6.y(), y6.x());
-    const double g6 = g(th6), g5 = g(th6 + kPi);
-    if (!(g6 < 0 && g5 > 0)) return false;
-    const double thT = bracketRoot(g, th6, th6 + kPi, g6, g5);
-    const double thB = bracketRoot(g, th6, th6 - kPi, g6, g5);
-    const Vec2dd xT = M0h * Vec2dd(std::cos(thT), std::sin(thT)), xB = M0h * Vec2dd(std::cos(thB), std::sin(thB));
-    if (!(xT.y() > 0 && xB.y() < 0)) return false;
-    const Vec2dd dir = xT - xB;
-    const Vec2dd sn(dir.y(), -dir.x());  // separating line sn.u = sn.xT
-    const double ks = sn.dot(xT);
-    Vec2dd m;
-    if (!intersectLines(sn, ks, Vec2dd(0, 1), 0, m) || !intersectLines(sn, ks, nT, kT, q12) ||
-        !intersectLines(sn, ks, nB, kB, q17))
-      return false;
-    am = m.x();
-    q13 = q12;
-    q16 = q17;
-    if (!(a9 < am && am < a10)) return false;
-    if (!ordered({dT.dot(q11), dT.dot(p1), dT.dot(q12), dT.dot(p2), dT.dot(q14)}) ||
-        !ordered({dB.dot(q18), dB.dot(p4), dB.dot(q17), dB.dot(p3), dB.dot(q15)}))
-      return false;
-  }
-  const double a6m = longCase ? a6 : am, a7m = longCase ? a7 : am;
-  // Weight scaling (§5.2.3.3, Figure 19): 1 / (h r0 r1 lambda) at points 9 and 10, lambda the
-  // texture units per object length along the axis (the thesis omits it: docs/decisions.md),
-  // linear along the axis and constant across it.
-  const double lam0 = R / (a6 - a9), lam1 = R / (a10 - a7);
-  const double s9 = 1 / (in.h * std::sqrt(in.M0.determinant()) * lam0);
-  const double s10 = 1 / (in.h * std::sqrt(in.M1.determinant()) * lam1);
-  const double sMin = 0.25 * std::min(s9, s10);
-  auto scaleAt = [&](double a) { return float(std::max(sMin, s9 + (s10 - s9) * (a - a9) / (a10 - a9))); };
-  // Texture coordinates: x inward from the endpoint (9 -> 0, 6 -> R; 10 -> 0, 7 -> R), y across.
-  const float Rf = float(R);
-  const float xs0 = float(R * (a6m - a9) / (a6 - a9)), xs1 = float(R * (a10 - a7m) / (a10 - a7));
-  const float tail0 = float(R * (a10 - a9) / (a6 - a9)), tail1 = float(R * (a10 - a9) / (a10 - a7));
-  const Vec2dd p5(a5, 0), p6(a6m, 0), p7(a7m, 0), p8(a8, 0), p9(a9, 0), p10(a10, 0);
-  const float s5 = scaleAt(a5), s6 = scaleAt(a6m), s7 = scaleAt(a7m), s8 = scaleAt(a8), sc9 = scaleAt(a9),
-              sc10 = scaleAt(a10);
-  quads.clear();
-  auto add = [&](std::array<Vec2dd, 4> c, std::array<Vec2f, 4> t, std::array<float, 4> s, bool middle, float tail) {
-    SegmentQuad q;
-    for (int i = 0; i < 4; ++i) {
-      q.corner[i] = c[i].cast<float>();
-      q.tex[i] = t[i];
-      q.scale[i] = s[i];
-    }
-    q.middle = middle;
-    q.tail = tail;
-    q.lo = q.corner[0].cwiseMin(q.corner[1]).cwiseMin(q.corner[2]).cwiseMin(q.corner[3]);
-    q.hi = q.corner[0].cwiseMax(q.corner[1]).cwiseMax(q.corner[2]).cwiseMax(q.corner[3]);
-    quads.push_back(q);
-  };
-  // endpoint 0 (quads 11-1-9-5, 1-12-6-9, 5-9-4-18, 9-6-17-4)
-  add({p5, p9, p1, q11}, {Vec2f(-Rf, 0), Vec2f(0, 0), Vec2f(0, Rf), Vec2f(-Rf, Rf)}, {s5, sc9, sc9, s5}, false, tail0);
-  add({p9, p6, q12, p1}, {Vec2f(0, 0), Vec2f(xs0, 0), Vec2f(xs0, Rf), Vec2f(0, Rf)}, {sc9, s6, s6, sc9}, false, tail0);
-  add({q18, p4, p9, p5}, {Vec2f(-Rf, -Rf), Vec2f(0, -Rf), Vec2f(0, 0), Vec2f(-Rf, 0)}, {s5, sc9, sc9, s5}, false, tail0);
-  add({p4, q17, p6, p9}, {Vec2f(0, -Rf), Vec2f(xs0, -Rf), Vec2f(xs0, 0), Vec2f(0, 0)}, {sc9, s6, s6, sc9}, false, tail0);
-  // endpoint 1 (mirrored: x grows towards endpoint 0)
-  add({p7, p10, p2, q13}, {Vec2f(xs1, 0), Vec2f(0, 0), Vec2f(0, Rf), Vec2f(xs1, Rf)}, {s7, sc10, sc10, s7}, false, tail1);
-  add({p10, p8, q14, p2}, {Vec2f(0, 0), Vec2f(-Rf, 0), Vec2f(-Rf, Rf), Vec2f(0, Rf)}, {sc10, s8, s8, sc10}, false, tail1);
-  add({q16, p3, p10, p7}, {Vec2f(xs1, -Rf), Vec2f(0, -Rf), Vec2f(0, 0), Vec2f(xs1, 0)}, {s7, sc10, sc10, s7}, false, tail1);
-  add({p3, q15, p8, p10}, {Vec2f(0, -Rf), Vec2f(-Rf, -Rf), Vec2f(-Rf, 0), Vec2f(0, 0)}, {sc10, s8, s8, sc10}, false, tail1);
-  if (longCase) {  // middle portion 12-13-16-17, split by the axis
-    add({p6, p7, q13, q12}, {Vec2f(0, 0), Vec2f(0, 0), Vec2f(0, Rf), Vec2f(0, Rf)}, {s6, s7, s7, s6}, true, 1e30f);
-    add({q17, q16, p7, p6}, {Vec2f(0, -Rf), Vec2f(0, -Rf), Vec2f(0, 0), Vec2f(0, 0)}, {s6, s7, s7, s6}, true, 1e30f);
-  }
-  // Sanity: finite, inside a generous box, each quad convex and consistently oriented (or flat).
-  const double box = L + 4 * (rho0 + rho1) + 4 * (kT + kB);
-  for (const SegmentQuad& q : quads) {
-    double signs = 0;
-    for (int i = 0; i < 4; ++i) {
-      const Vec2f& c = q.corner[i];
-      if (!c.allFinite() || std::abs(c.x()) > box + L || std::abs(c.y()) > box) return false;
-      const Vec2f e1 = q.corner[(i + 1) % 4] - c, e2 = q.corner[(i + 2) % 4] - q.corner[(i + 1) % 4];
-      const double cr = double(e1.x()) * e2.y() - double(e1.y()) * e2.x();
-      if (cr * signs < -1e-9 * box * box) return false;
-      if (std::abs(cr) > 1e-12 * box * box) signs = cr;
-    }
-  }
-  return true;
-}
-
-// Inverse of the bilinear map of a quad (corners 00, 10, 11, 01): (alpha, beta) in [0, 1]^2
-// with P = bilinear(alpha, beta); false when p is outside.
-bool inverseBilinear(const SegmentQuad& q, const Vec2f& p, float& alpha, float& beta) {
-  const Vec2f& a = q.corner[0];
-  const Vec2f e = q.corner[1] - a, f = q.corner[3] - a, g = a - q.corner[1] + q.corner[2] - q.corner[3], h = p - a;
-  auto cr = [](const Vec2f& u, const Vec2f& v) { return u.x() * v.y() - u.y() * v.x(); };
-  const float k2 = cr(g, f), k1 = cr(e, f) + cr(h, g), k0 = cr(h, e);
-  const float tol = 1e-4f;
-  auto tryV = [&](float v) {
-    if (!(v >= -tol && v <= 1 + tol)) return false;
-    const Vec2f den = e + g * v;
-    const float dd = den.squaredNorm();
-    if (!(dd > 0)) return false;
-    const float u = (h - f * v).dot(den) / dd;
-    if (!(u >= -tol && u <= 1 + tol)) return false;
-    alpha = std::clamp(u, 0.0f, 1.0f);
-    beta = std::clamp(v, 0.0f, 1.0f);
-    return true;
-  };
-  const float scale = std::abs(k1) + std::abs(k0) + 1e-30f;
-  if (std::abs(k2) < 1e-6f * scale) {  // parallelogram-like: linear in v
-    if (k1 == 0) return false;
-    return tryV(-k0 / k1);
-  }
-  float w = k1 * k1 - 4 * k0 * k2;
-  if (w < 0) return false;
-  w = std::sqrt(w);
-  const float ik2 = 0.5f / k2;
-  return tryV((-k1 - w) * ik2) || tryV((-k1 + w) * ik2);
-}
-
-}  // namespace
-
-float weightTextureT1(float cutoffRadius, float x, float y) { return weightTextures(cutoffRadius)->lookupT1(x, y); }
-float weightTextureT2(float cutoffRadius, float y) { return weightTextures(cutoffRadius)->lookupT2(y); }
-
-PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameContext& frame, PreparedSegment& out) {
+// Culling (degenerate input, back faces, grazing, beyond near/far) and the model-view
+// transform with the local parameterisation (§6.2.2): b axis s = e x n, the normal made
+// perpendicular to e.
+PrimitiveStatus stripFrame(const Segment& seg, const FrameContext& frame, Strip& st) {
   const Camera& cam = frame.cam();
   const RenderOptions& opt = frame.opt();
-  out.index = index;
-  out.bounds = {};
-  out.fallback = false;
-  out.smooth = false;
-  out.pieces.clear();
-  out.diffuse.clear();
-  out.specular.clear();
-  out.nodes.clear();
-  out.quads.clear();
   if (!(seg.radius > 0) || !std::isfinite(seg.radius) || !seg.p0.allFinite() || !seg.p1.allFinite() ||
       !seg.normal.allFinite())
     return PrimitiveStatus::Degenerate;
-  // model-view transform (double: the construction below must not lose the short segments)
   const Vec3d c0 = cam.toCamera(seg.p0).cast<double>(), c1 = cam.toCamera(seg.p1).cast<double>();
   const double L = (c1 - c0).norm();
   if (!(L > 1e-6 * seg.radius) || !std::isfinite(L)) return PrimitiveStatus::Degenerate;
   const Vec3d e = (c1 - c0) / L;
-  // smooth line models: usable endpoint normals (finite, non-zero) shade the segment
-  const bool smooth = frame.endpointNormals && seg.normal0.allFinite() && seg.normal1.allFinite() &&
-                      seg.normal0.squaredNorm() > 0 && seg.normal1.squaredNorm() > 0;
-  // local parameterisation (§6.2.2): b axis s = e x n, the normal made perpendicular to e
-  const Vec3f planeNormal = smooth && !(seg.normal.squaredNorm() > 0) ? Vec3f(seg.normal0 + seg.normal1) : seg.normal;
+  {  // cheap rejection by depth with the largest possible footprint
+    const double reach = double(opt.cutoffRadius) * opt.reconstructionScale * seg.radius * kMaxStretch;
+    const double dmin = std::min(-c0.z(), -c1.z()) - reach, dmax = std::max(-c0.z(), -c1.z()) + reach;
+    if (dmax < cam.nearDepth() || dmin > cam.farDepth()) return PrimitiveStatus::Outside;
+  }
+  st.smooth = frame.endpointNormals && seg.normal0.allFinite() && seg.normal1.allFinite() &&
+              seg.normal0.squaredNorm() > 0 && seg.normal1.squaredNorm() > 0;
+  const Vec3f planeNormal = st.smooth && !(seg.normal.squaredNorm() > 0) ? Vec3f(seg.normal0 + seg.normal1) : seg.normal;
   Vec3d n = (cam.rotation() * planeNormal).cast<double>();
   n -= n.dot(e) * e;
   if (!(n.norm() > 1e-3)) {  // no (usable) normal: the strip through the segment facing the viewer
@@ -423,125 +83,104 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
     n = -n;
     D = -D;
   }
-  {  // grazing everywhere: the largest |cos| is at the point nearest to the eye
-    const double t = std::clamp(-c0.dot(e), 0.0, L);
-    const double dist = (c0 + t * e).norm();
-    if (!(dist > 0) || D / dist < kMinFacing) return PrimitiveStatus::Culled;
-  }
-  const Vec3d s = e.cross(n);
-  const double R = opt.cutoffRadius;
-  const double sigmaR = double(opt.reconstructionScale) * seg.radius;
-  const double h = seg.radius;  // density: a segment of radius r replaces points at spacing r
-  const double Vh = opt.prefilterVariance, f = cam.focalPixels();
-  {  // cheap rejection by depth with the largest possible footprint
-    const double reach = R * sigmaR * kMaxStretch;
-    const double dmin = std::min(-c0.z(), -c1.z()) - reach, dmax = std::max(-c0.z(), -c1.z()) + reach;
-    if (dmax < cam.nearDepth() || dmin > cam.farDepth()) return PrimitiveStatus::Outside;
-  }
-  auto covAt = [&](double a) { return resamplingCovariance(c0 + a * e, e, s, sigmaR, Vh, f); };
+  // grazing everywhere: the largest |cos| is at the point nearest to the eye
+  const double t = std::clamp(-c0.dot(e), 0.0, L);
+  const double dist = (c0 + t * e).norm();
+  if (!(dist > 0) || D / dist < kMinFacing) return PrimitiveStatus::Culled;
+  st.c0 = c0;
+  st.e = e;
+  st.n = n;
+  st.s = e.cross(n);
+  st.L = L;
+  return PrimitiveStatus::Drawn;
+}
 
-  // ScreenSpace sub-segments (also the Approx fallback).
-  const Mat2d M0 = covAt(0), M1 = covAt(L), Mmid = covAt(0.5 * L);
-  int K = 1;
-  {
-    const double scale = std::min(M0.norm(), M1.norm());
-    const double change = std::max((M1 - M0).norm(), 4 * (Mmid - 0.5 * (M0 + M1)).norm());
-    K = int(std::clamp(std::ceil(change / (kPieceTolerance * scale)), 1.0, double(kMaxSegmentPieces)));
+// --- prepare, stage 2: resampling covariance and footprint (§5.1.2) -----------------------
+
+struct Footprint {
+  Mat2d M0, M1;                       ///< covariance at p0 and p1
+  SegmentPiece first;                 ///< the first (K = 1: only) ScreenSpace sub-segment
+  int K = 1;                          ///< sub-segments
+  double aMin = 0, aMax = 0, bMax = 0;  ///< footprint box in plane coordinates
+};
+
+// The covariance at both ends and the middle decides the number of sub-segments K (where M
+// changes by more than kPieceTolerance); K > 1 keeps its pieces in out.extra.
+void footprint(const Strip& st, double radius, const FrameContext& frame, Footprint& fp, PreparedSegment& out) {
+  const RenderOptions& opt = frame.opt();
+  const double R = opt.cutoffRadius, sigmaR = double(opt.reconstructionScale) * radius, h = radius;
+  const double Vh = opt.prefilterVariance, f = frame.cam().focalPixels(), L = st.L;
+  auto covAt = [&](double a) { return segment::resamplingCovariance(st.c0 + a * st.e, st.e, st.s, sigmaR, Vh, f); };
+  fp.M0 = covAt(0);
+  fp.M1 = covAt(L);
+  const Mat2d Mmid = covAt(0.5 * L);
+  const double scale = std::min(fp.M0.norm(), fp.M1.norm());
+  const double change = std::max((fp.M1 - fp.M0).norm(), 4 * (Mmid - 0.5 * (fp.M0 + fp.M1)).norm());
+  const int K = int(std::clamp(std::ceil(change / (kPieceTolerance * scale)), 1.0, double(kMaxSegmentPieces)));
+  fp.K = K;
+  fp.aMin = 0, fp.aMax = L, fp.bMax = 0;
+  auto extend = [&](const SegmentPiece& p, const Mat2d& M) {
+    fp.aMin = std::min(fp.aMin, double(p.a0) - double(p.reach));
+    fp.aMax = std::max(fp.aMax, double(p.a1) + double(p.reach));
+    fp.bMax = std::max(fp.bMax, R * std::sqrt(M(1, 1)));
+  };
+  if (K == 1) {
+    fp.first = segment::makePiece(0, L, Mmid, fp.M0, fp.M1, h, R);
+    extend(fp.first, Mmid);
+    return;
   }
-  double aMin = 0, aMax = L, bMax = 0;
-  {
-    std::vector<Mat2d> station(K + 1);
-    station[0] = M0;
-    station[K] = M1;
-    for (int k = 1; k < K; ++k) station[k] = (2 * k == K) ? Mmid : covAt(L * k / K);
-    out.pieces.resize(K);
-    out.pieceInvLength = float(K / L);
-    out.pieceMaxReach = 0;
-    for (int k = 0; k < K; ++k) {
-      const double a0 = L * k / K, a1 = L * (k + 1) / K;
-      const Mat2d M = K == 1 ? Mmid : covAt(0.5 * (a0 + a1));
-      const Mat2d Mi = inverse2(M);
-      SegmentPiece& p = out.pieces[k];
-      p.a0 = float(a0);
-      p.a1 = float(a1);
-      p.m00 = float(Mi(0, 0));
-      p.m01 = float(Mi(0, 1));
-      p.m11 = float(Mi(1, 1));
-      p.scale0 = float(1 / (h * std::sqrt(station[k].determinant())));
-      p.scale1 = float(1 / (h * std::sqrt(station[k + 1].determinant())));
-      p.reach = float(R * std::sqrt(M(0, 0)));
-      p.skew = float(Mi(0, 1) / Mi(0, 0));
-      p.across = float(Mi(1, 1) - Mi(0, 1) * Mi(0, 1) / Mi(0, 0));
-      p.invM00 = float(1 / Mi(0, 0));
-      p.k = float(std::sqrt(0.5 * Mi(0, 0)));
-      p.erfScale = float(0.886226925 / std::sqrt(0.5 * Mi(0, 0)));
-      const double slope = (double(p.scale1) - p.scale0) / (a1 - a0);
-      p.slope = std::abs(slope) * (a1 - a0) > 1e-4 * p.scale0 ? float(slope) : 0.0f;
-      out.pieceMaxReach = std::max(out.pieceMaxReach, p.reach);
-      aMin = std::min(aMin, a0 - double(p.reach));
-      aMax = std::max(aMax, a1 + double(p.reach));
-      bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
-    }
+  SegmentExtra& x = extraOf(out);
+  x.pieces.resize(K);
+  x.pieceInvLength = float(K / L);
+  x.pieceMaxReach = 0;
+  Mat2d lo = fp.M0;
+  for (int k = 0; k < K; ++k) {
+    const double a0 = L * k / K, a1 = L * (k + 1) / K;
+    const Mat2d hi = k + 1 == K ? fp.M1 : 2 * (k + 1) == K ? Mmid : covAt(a1);
+    const Mat2d M = covAt(0.5 * (a0 + a1));
+    x.pieces[k] = segment::makePiece(a0, a1, M, lo, hi, h, R);
+    x.pieceMaxReach = std::max(x.pieceMaxReach, x.pieces[k].reach);
+    extend(x.pieces[k], M);
+    lo = hi;
   }
-  SegmentMethod method = opt.segmentMethod;
-  if (method == SegmentMethod::Reference) {
-    const double step0 = sigmaR / kNodesPerSigma;
-    const int N = int(std::clamp(std::ceil(L / step0), 1.0, double(kMaxNodes)));
-    const double step = L / N;
-    out.nodes.resize(N);
-    double maxEig = 0;
-    for (int k = 0; k < N; ++k) {
-      const Mat2d M = covAt((k + 0.5) * step);
-      const Mat2d Mi = inverse2(M);
-      SegmentNode& nd = out.nodes[k];
-      nd.m00 = float(Mi(0, 0));
-      nd.m01 = float(Mi(0, 1));
-      nd.m11 = float(Mi(1, 1));
-      nd.scale = float(step / (h * std::sqrt(M.determinant())));
-      maxEig = std::max(maxEig, 0.5 * (M.trace() + std::sqrt(std::pow(M(0, 0) - M(1, 1), 2) + 4 * M(0, 1) * M(0, 1))));
-      aMin = std::min(aMin, (k + 0.5) * step - R * std::sqrt(M(0, 0)));
-      aMax = std::max(aMax, (k + 0.5) * step + R * std::sqrt(M(0, 0)));
-      bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
-    }
-    out.nodeStep = float(step);
-    out.nodeReach = float(R * std::sqrt(maxEig));
-  } else if (method == SegmentMethod::Approx) {
-    ApproxInput in;
-    in.M0 = M0;
-    in.M1 = M1;
-    in.A0 = R * R * M0;
-    in.A1 = R * R * M1;
-    in.L = L;
-    in.R = R;
-    in.h = h;
-    bool longCase = true;
-    if (buildApprox(in, out.quads, longCase)) {
-      out.longCase = longCase;
-      out.textures = weightTextures(float(R));
-      double qa0 = 0, qa1 = L, qb = 0;
-      for (const SegmentQuad& q : out.quads)
-        for (const Vec2f& c : q.corner) {
-          qa0 = std::min(qa0, double(c.x()));
-          qa1 = std::max(qa1, double(c.x()));
-          qb = std::max(qb, double(std::abs(c.y())));
-        }
-      aMin = qa0;
-      aMax = qa1;
-      bMax = qb;
-    } else {
-      out.quads.clear();
+  fp.first = x.pieces[0];
+}
+
+// --- prepare, stage 3: the method's own data ----------------------------------------------
+
+// Reference nodes or Approx quadrilaterals (which replace the footprint box); an Approx
+// construction that fails falls back to ScreenSpace (counted).
+SegmentMethod methodData(const Strip& st, double radius, const FrameContext& frame, Footprint& fp, PreparedSegment& out) {
+  const RenderOptions& opt = frame.opt();
+  const double R = opt.cutoffRadius, sigmaR = double(opt.reconstructionScale) * radius;
+  switch (opt.segmentMethod) {
+    case SegmentMethod::ScreenSpace: return SegmentMethod::ScreenSpace;
+    case SegmentMethod::Reference:
+      segment::referenceNodes(st.L, sigmaR, radius, R, st.c0, st.e, st.s, opt.prefilterVariance, frame.cam().focalPixels(),
+                              extraOf(out), fp.aMin, fp.aMax, fp.bMax);
+      return SegmentMethod::Reference;
+    case SegmentMethod::Approx:
+      if (segment::buildApprox(fp.M0, fp.M1, st.L, R, radius, extraOf(out), fp.aMin, fp.aMax, fp.bMax))
+        return SegmentMethod::Approx;
       out.fallback = true;
-      method = SegmentMethod::ScreenSpace;
-    }
+      return SegmentMethod::ScreenSpace;
   }
-  out.method = method;
+  return SegmentMethod::ScreenSpace;
+}
 
-  // Screen bounds of the footprint box (a in [aMin, aMax], b in [-bMax, bMax]) and frustum clipping.
-  const Vec3d box[4] = {c0 + aMin * e - bMax * s, c0 + aMax * e - bMax * s, c0 + aMax * e + bMax * s,
-                        c0 + aMin * e + bMax * s};
+// --- prepare, stage 4: screen bounds -------------------------------------------------------
+
+// Frustum test of the footprint box (a in [aMin, aMax], b in [-bMax, bMax]), clipping against
+// the near/far planes, pixel bounds and the projected box for the row spans.
+PrimitiveStatus screenBounds(const Strip& st, const Footprint& fp, const FrameContext& frame, PreparedSegment& out,
+                             bool& depthClipped) {
+  const Camera& cam = frame.cam();
+  const Vec3d& c0 = st.c0;
+  const Vec3d box[4] = {c0 + fp.aMin * st.e - fp.bMax * st.s, c0 + fp.aMax * st.e - fp.bMax * st.s,
+                        c0 + fp.aMax * st.e + fp.bMax * st.s, c0 + fp.aMin * st.e + fp.bMax * st.s};
   Vec3f boxf[4];
   for (int i = 0; i < 4; ++i) boxf[i] = box[i].cast<float>();
-  for (const Vec4f& pl : cam.frustumPlanes()) {
+  for (const Vec4f& pl : frame.frustum) {
     bool allOut = true;
     for (const Vec3f& q : boxf)
       if (pl.head<3>().dot(q) + pl.w() >= 0) {
@@ -550,313 +189,321 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
       }
     if (allOut) return PrimitiveStatus::Outside;
   }
-  float x0, y0, x1, y1;
-  bool depthClipped = false;
-  if (!detail::clippedScreenBounds(cam, boxf, 4, x0, y0, x1, y1, depthClipped)) return PrimitiveStatus::Outside;
+  float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  depthClipped = false;
+  bool inDepth = true;
+  for (const Vec3f& q : boxf) inDepth &= -q.z() >= cam.nearDepth() && -q.z() <= cam.farDepth();
+  if (inDepth) {  // the common case: the projected corners bound the box (and give the row spans)
+    for (int i = 0; i < 4; ++i) {
+      out.screenQuad[i] = cam.project(boxf[i]).head<2>();
+      x0 = std::min(x0, out.screenQuad[i].x()), x1 = std::max(x1, out.screenQuad[i].x());
+      y0 = std::min(y0, out.screenQuad[i].y()), y1 = std::max(y1, out.screenQuad[i].y());
+    }
+  } else if (!detail::clippedScreenBounds(cam, boxf, 4, x0, y0, x1, y1, depthClipped)) {
+    return PrimitiveStatus::Outside;
+  }
   const PixelRect view{0, 0, cam.width(), cam.height()};
   auto pix = [](float v) { return int(std::floor(std::clamp(v, -1e8f, 1e8f) - 0.5f)) + 1; };
   const PixelRect bb{pix(x0), pix(y0), pix(x1), pix(y1)};
   out.bounds = bb.intersect(view);
   if (out.bounds.empty()) return PrimitiveStatus::Outside;
+  out.useSpans = inDepth;
+  for (int i = 0; i < 4 && inDepth; ++i) out.useSpans &= out.screenQuad[i].allFinite();
   const bool sideClipped = out.bounds.x0 != bb.x0 || out.bounds.y0 != bb.y0 || out.bounds.x1 != bb.x1 ||
                            out.bounds.y1 != bb.y1;
-
-  out.origin = c0.cast<float>();
-  out.along = e.cast<float>();
-  out.across = s.cast<float>();
-  out.normal = n.cast<float>();
-  out.smooth = smooth;
-  if (smooth) {  // endpoint shading normals, on the side of the (possibly flipped) plane normal
-    Vec3f m0 = (cam.rotation() * seg.normal0).normalized(), m1 = (cam.rotation() * seg.normal1).normalized();
-    if (out.normal.dot(m0 + m1) < 0) {
-      m0 = -m0;
-      m1 = -m1;
-    }
-    out.normal0 = m0;
-    out.normal1 = m1;
-  }
-  out.length = float(L);
-  out.aMin = float(aMin);
-  out.aMax = float(aMax);
-  out.bMax = float(bMax);
-  out.clipped = depthClipped;
-  out.useSpans = !depthClipped;
-  if (out.useSpans)
-    for (int i = 0; i < 4; ++i) {
-      out.screenQuad[i] = cam.project(boxf[i]).head<2>();
-      out.useSpans &= out.screenQuad[i].allFinite();
-    }
-  // Z^3 threshold: depth half-extent of the endpoint cutoff ellipses plus the radius (§6.2.3.2)
-  const Vec2dd g(e.z(), s.z());
-  out.zThreshold0 = frame.zThreshold(float(R * std::sqrt(g.dot(M0 * g)) + seg.radius));
-  out.zThreshold1 = frame.zThreshold(float(R * std::sqrt(g.dot(M1 * g)) + seg.radius));
-  const Color col = frame.primitiveColor(seg.color);
-  out.albedo = col.head<3>();
-  out.alpha = std::clamp(col.w(), 0.0f, 1.0f);
-  out.textured = frame.texture != nullptr;
-  out.uv0 = seg.uv0;
-  out.uv1 = seg.uv1;
-  if (!opt.perPixelLighting) {  // Gouraud along the segment at S + 1 stations (§6.2.2)
-    int S = K;
-    if (smooth) {  // one station per 0.1 rad the interpolated normal turns
-      const float turn = std::acos(std::clamp(out.normal0.dot(out.normal1), -1.0f, 1.0f));
-      S = std::clamp(int(std::ceil(turn / 0.1f)), K, kMaxSegmentPieces);
-    }
-    out.diffuse.resize(S + 1);
-    out.specular.resize(S + 1);
-    for (int k = 0; k <= S; ++k) {
-      const float u = float(k) / float(S);
-      const Vec3f nf = smooth ? out.shadingNormal(u) : out.normal;
-      const Vec3f p = (c0 + (L * k / S) * e).cast<float>();
-      out.specular[k] = frame.shade(Vec3f::Zero(), nf, p);
-      out.diffuse[k] = frame.shade(Vec3f::Ones(), nf, p) - out.specular[k];
-    }
-  }
   return depthClipped || sideClipped ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
 }
 
+// --- prepare, stage 5: per-pixel constants ------------------------------------------------
+
+// Ray through pixel (px, py) at depth 1: r = ((px - cx)/f, -(py - cy)/f, -1); the plane
+// n.(P - o) = 0 is hit at depth t = (n.o)/(n.r), a = t (e.r) - e.o, b = t (s.r) - s.o.
+void rasterConstants(const Strip& st, const Footprint& fp, double radius, const FrameContext& frame, bool depthClipped,
+                     detail::SegmentRaster& k) {
+  const Camera& cam = frame.cam();
+  const Vec3f o = st.c0.cast<float>(), e = st.e.cast<float>(), s = st.s.cast<float>(), n = st.n.cast<float>();
+  const float no = n.dot(o);
+  auto scaled = [](float c, detail::Affine2 g) { return detail::Affine2{c * g.dx, c * g.dy, c * g.c}; };
+  k.N = detail::rayDot(cam, n);
+  k.A = scaled(no, detail::rayDot(cam, e));
+  k.B = scaled(no, detail::rayDot(cam, s));
+  k.depthNum = no;
+  k.a0 = e.dot(o);
+  k.b0 = s.dot(o);
+  k.length = float(st.L);
+  k.R2 = frame.cutoffQ;
+  k.aMin = float(fp.aMin), k.aMax = float(fp.aMax), k.bMax = float(fp.bMax);
+  const SegmentPiece& p = fp.first;
+  k.skew = p.skew, k.across = p.across, k.invM00 = p.invM00, k.k = p.k, k.erfScale = p.erfScale;
+  k.scale0 = p.scale0, k.slope = p.slope;
+  // Z^3 threshold: depth half-extent of the endpoint cutoff ellipses plus the radius (§6.2.3.2)
+  const double R = frame.opt().cutoffRadius;
+  const Vec2dd g(st.e.z(), st.s.z());
+  k.zThreshold0 = frame.zThreshold(float(R * std::sqrt(g.dot(fp.M0 * g)) + radius));
+  k.zThreshold1 = frame.zThreshold(float(R * std::sqrt(g.dot(fp.M1 * g)) + radius));
+  k.nearD = cam.nearDepth(), k.farD = cam.farDepth();
+  k.clipDepth = depthClipped;
+}
+
+// --- prepare, stage 6: shading --------------------------------------------------------------
+
+// Gouraud colours along the segment (§6.2.2), or the albedo when lighting is deferred;
+// smooth line models interpolate the endpoint normals. The common cases keep the colour
+// linear in u (two stations) and need no per-fragment lighting.
+void shading(const Segment& seg, const Strip& st, int K, const FrameContext& frame, PreparedSegment& out) {
+  const Camera& cam = frame.cam();
+  const RenderOptions& opt = frame.opt();
+  const Vec3f n = st.n.cast<float>();
+  out.smooth = st.smooth;
+  if (st.smooth) {  // endpoint shading normals, on the side of the (possibly flipped) plane normal
+    Vec3f m0 = (cam.rotation() * seg.normal0).normalized(), m1 = (cam.rotation() * seg.normal1).normalized();
+    if (n.dot(m0 + m1) < 0) {
+      m0 = -m0;
+      m1 = -m1;
+    }
+    out.n0 = m0;
+    out.dn = m1 - m0;
+  }
+  auto normalAt = [&](float u) -> Vec3f {
+    if (!st.smooth) return n;
+    const Vec3f m = out.n0 + u * out.dn;
+    const float len = m.norm();
+    return len > 0 ? Vec3f(m / len) : n;
+  };
+  const Color col = frame.primitiveColor(seg.color);
+  const Vec3f albedo = col.head<3>();
+  const Vec3f n0 = normalAt(0);
+  float* a = out.attr;
+  a[Z3Tile::kR] = albedo.x(), a[Z3Tile::kG] = albedo.y(), a[Z3Tile::kB] = albedo.z();
+  a[Z3Tile::kA] = std::clamp(col.w(), 0.0f, 1.0f);
+  a[Z3Tile::kW] = 1.0f;
+  a[Z3Tile::kNx] = n0.x(), a[Z3Tile::kNy] = n0.y(), a[Z3Tile::kNz] = n0.z();
+  out.dc = Vec3f::Zero();
+  const bool textured = frame.texture != nullptr;
+  int S = 0;  // stations - 1 (Gouraud)
+  if (!opt.perPixelLighting) {
+    S = K;
+    const float cosTurn = st.smooth ? normalAt(0).dot(normalAt(1)) : 1.0f;
+    if (cosTurn < std::cos(kStationTurn)) {  // one station per kStationTurn the shading normal turns
+      const float turn = std::acos(std::clamp(cosTurn, -1.0f, 1.0f));
+      S = std::clamp(int(std::ceil(turn / kStationTurn)), K, kMaxSegmentPieces);
+    }
+  }
+  const Vec3f c0 = st.c0.cast<float>();
+  auto pointAt = [&](int k) { return (st.c0 + (st.L * k / S) * st.e).cast<float>(); };
+  if (!textured && S <= 1) {
+    out.shade = st.smooth ? SegmentShade::Smooth : S == 0 ? SegmentShade::Constant : SegmentShade::Linear;
+    if (S == 1) {
+      const Vec3f k0 = frame.shade(albedo, n0, c0), k1 = frame.shade(albedo, normalAt(1), pointAt(1));
+      a[Z3Tile::kR] = k0.x(), a[Z3Tile::kG] = k0.y(), a[Z3Tile::kB] = k0.z();
+      out.dc = k1 - k0;
+    }
+    return;
+  }
+  out.shade = SegmentShade::Stations;
+  SegmentExtra& x = extraOf(out);
+  x.textured = textured;
+  x.uv0 = seg.uv0;
+  x.uv1 = seg.uv1;
+  x.diffuse.resize(S > 0 ? S + 1 : 0);
+  x.specular.resize(S > 0 ? S + 1 : 0);
+  for (int k = 0; S > 0 && k <= S; ++k) {
+    const Vec3f nf = normalAt(float(k) / float(S));
+    const Vec3f p = pointAt(k);
+    x.specular[k] = frame.shade(Vec3f::Zero(), nf, p);
+    x.diffuse[k] = frame.shade(Vec3f::Ones(), nf, p) - x.specular[k];
+  }
+}
+
+}  // namespace
+
+PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameContext& frame, PreparedSegment& out) {
+  out.index = index;
+  out.bounds = {};
+  out.fallback = false;
+  out.smooth = false;
+  out.extra.reset();
+  Strip st;
+  const PrimitiveStatus culled = stripFrame(seg, frame, st);
+  if (culled != PrimitiveStatus::Drawn) return culled;
+  Footprint fp;
+  footprint(st, seg.radius, frame, fp, out);
+  out.method = methodData(st, seg.radius, frame, fp, out);
+  bool depthClipped = false;
+  const PrimitiveStatus status = screenBounds(st, fp, frame, out, depthClipped);
+  if (status != PrimitiveStatus::Drawn && status != PrimitiveStatus::Clipped) {
+    out.bounds = {};
+    return status;
+  }
+  rasterConstants(st, fp, seg.radius, frame, depthClipped, out.raster);
+  shading(seg, st, fp.K, frame, out);
+  return status;
+}
+
+// --- per-pixel weights (scalar path) ----------------------------------------------------------
+
 namespace {
 
-// erf from a table (4096 intervals over [0, 4], linear: error < 1e-6; erf(4) = 1 - 1.5e-8).
-struct ErfTable {
-  static constexpr int n = 4096;
-  static constexpr float scale = n / 4.0f;
-  float v[n + 2];
-  ErfTable() {
-    for (int i = 0; i <= n + 1; ++i) v[i] = float(std::erf(double(i) / scale));
-  }
-};
-// Built at static initialisation (no guard check per lookup); only read while rendering.
-const ErfTable kErfTable;
-inline float fastErf(float x) {
-  const ErfTable& T = kErfTable;
-  const float ax = std::min(std::abs(x), 4.0f) * ErfTable::scale;
-  const int i = int(ax);
-  const float r = T.v[i] + (ax - float(i)) * (T.v[i + 1] - T.v[i]);
-  return x < 0 ? -r : r;
+// The only sub-segment of a one-piece ScreenSpace segment, from the per-pixel constants.
+SegmentPiece onlyPiece(const detail::SegmentRaster& k) {
+  SegmentPiece p;
+  p.a0 = 0, p.a1 = k.length;
+  p.reach = INFINITY;  // the footprint box is tested before
+  p.skew = k.skew, p.across = k.across, p.invM00 = k.invM00, p.k = k.k, p.erfScale = k.erfScale;
+  p.scale0 = k.scale0, p.slope = k.slope;
+  return p;
 }
 
-using detail::gaussHalf;
-
-// ScreenSpace: the cut-off Gaussian integrated along each sub-segment in closed form. With
-// x = a - a0 - tau along and b across, q(tau) = m00 (x - tau)^2 + 2 m01 (x - tau) b + m11 b^2
-// = m00 (tau - tau*)^2 + qmin; each kernel counts where q <= R^2, i.e. |tau - tau*| <= delta.
-float screenSpaceWeight(const PreparedSegment& sp, float a, float b, float R2) {
-  float w = 0;
-  // Only the pieces whose reach can contain a (with a piece of margin each side against
-  // rounding): the others are skipped by the test below anyway, so the sum is unchanged.
-  const int K = int(sp.pieces.size());
-  int k0 = 0, k1 = K;
-  if (K > 1) {
-    const float lo = std::floor((a - sp.pieceMaxReach) * sp.pieceInvLength);
-    const float hi = std::floor((a + sp.pieceMaxReach) * sp.pieceInvLength);
-    k0 = int(std::clamp(lo - 1.0f, 0.0f, float(K)));
-    k1 = int(std::clamp(hi + 2.0f, 0.0f, float(K)));
-  }
-  for (int k = k0; k < k1; ++k) {
-    const SegmentPiece& p = sp.pieces[k];
-    if (a < p.a0 - p.reach || a > p.a1 + p.reach) continue;
-    const float len = p.a1 - p.a0;
-    const float x = a - p.a0;
-    const float tauStar = x + p.skew * b;
-    const float qmin = b * b * p.across;
-    if (!(qmin < R2)) continue;
-    const float delta = std::sqrt((R2 - qmin) * p.invM00);
-    const float t0 = std::max(0.0f, tauStar - delta), t1 = std::min(len, tauStar + delta);
-    if (!(t1 > t0)) continue;
-    const float u0 = p.k * (t0 - tauStar), u1 = p.k * (t1 - tauStar);
-    // integral of exp(-m00 (tau - tau*)^2 / 2) (= sqrt(pi)/2 / k (erf(u1) - erf(u0))) and of
-    // (tau - tau*) times it
-    // exp(-qmin/2) exp(-u^2) = exp(-q/2) with q = qmin + 2 u^2 in [0, R^2]: table lookups
-    const float i0 = p.erfScale * (fastErf(u1) - fastErf(u0));
-    float sum = (p.scale0 + p.slope * tauStar) * i0 * gaussHalf(qmin);
-    if (p.slope != 0) sum += p.slope * p.invM00 * (gaussHalf(qmin + 2 * u0 * u0) - gaussHalf(qmin + 2 * u1 * u1));
-    w += sum;
-  }
-  return w;
-}
-
-float referenceWeight(const PreparedSegment& sp, float a, float b, float R2) {
-  const int N = int(sp.nodes.size());
-  const float step = sp.nodeStep;
-  const int k0 = std::max(0, int(std::floor((a - sp.nodeReach) / step - 0.5f)));
-  const int k1 = std::min(N - 1, int(std::ceil((a + sp.nodeReach) / step - 0.5f)));
-  double w = 0;
-  for (int k = k0; k <= k1; ++k) {
-    const SegmentNode& nd = sp.nodes[k];
-    const float x = a - (float(k) + 0.5f) * step;
-    const float q = nd.m00 * x * x + 2 * nd.m01 * x * b + nd.m11 * b * b;
-    if (q <= R2) w += double(std::exp(-0.5f * q) * nd.scale);
-  }
-  return float(w);
-}
-
-float approxWeight(const PreparedSegment& sp, float a, float b) {
-  const Vec2f p(a, b);
-  for (const SegmentQuad& q : sp.quads) {
-    if (a < q.lo.x() || a > q.hi.x() || b < q.lo.y() || b > q.hi.y()) continue;
-    float al, be;
-    if (!inverseBilinear(q, p, al, be)) continue;
-    auto bil = [&](auto v0, auto v1, auto v2, auto v3) {
-      return (1 - be) * ((1 - al) * v0 + al * v1) + be * ((1 - al) * v3 + al * v2);
-    };
-    const Vec2f t = bil(q.tex[0], q.tex[1], q.tex[2], q.tex[3]);
-    const float scale = bil(q.scale[0], q.scale[1], q.scale[2], q.scale[3]);
-    const WeightTextures& T = *sp.textures;
-    const float tw = q.middle ? T.lookupT2(t.y()) : T.lookupT1(t.x(), t.y()) - T.lookupT1(t.x() - q.tail, t.y());
-    return std::max(0.0f, tw) * scale;
-  }
-  return 0;
-}
-
-float weightAt(const PreparedSegment& sp, float a, float b, float R2) {
-  if (std::abs(b) > sp.bMax || a < sp.aMin || a > sp.aMax) return 0;
+float weightAt(const PreparedSegment& sp, float a, float b) {
+  const detail::SegmentRaster& k = sp.raster;
+  if (std::abs(b) > k.bMax || a < k.aMin || a > k.aMax) return 0;
   switch (sp.method) {
-    case SegmentMethod::ScreenSpace: return screenSpaceWeight(sp, a, b, R2);
-    case SegmentMethod::Reference: return referenceWeight(sp, a, b, R2);
-    case SegmentMethod::Approx: return approxWeight(sp, a, b);
+    case SegmentMethod::ScreenSpace: {
+      if (sp.pieceCount() == 1) {
+        const SegmentPiece p = onlyPiece(k);
+        return segment::screenSpaceWeight(&p, 1, 0, 0, a, b, k.R2);
+      }
+      const SegmentExtra& x = *sp.extra;
+      return segment::screenSpaceWeight(x.pieces.data(), int(x.pieces.size()), x.pieceInvLength, x.pieceMaxReach, a,
+                                        b, k.R2);
+    }
+    case SegmentMethod::Reference: return segment::referenceWeight(*sp.extra, a, b, k.R2);
+    case SegmentMethod::Approx: return segment::approxWeight(*sp.extra, a, b);
   }
   return 0;
 }
 
 }  // namespace
 
-float segmentWeightAt(const PreparedSegment& sp, const FrameContext& frame, const Vec2f& pixel) {
-  if (sp.length <= 0) return 0;
-  const Vec3f ray = frame.cam().rayThrough(pixel.x(), pixel.y());
-  const float nr = sp.normal.dot(ray);
+float segmentWeightAt(const PreparedSegment& sp, const FrameContext&, const Vec2f& pixel) {
+  const detail::SegmentRaster& k = sp.raster;
+  if (!(k.length > 0)) return 0;
+  const float nr = k.N.at(pixel.x(), pixel.y());
   if (!(nr < 0)) return 0;
-  const float t = sp.normal.dot(sp.origin) / nr;
-  const Vec3f P = t * ray - sp.origin;
-  const float R = frame.opt().cutoffRadius;
-  return weightAt(sp, sp.along.dot(P), sp.across.dot(P), R * R);
+  const float inr = 1.0f / nr;
+  return weightAt(sp, k.A.at(pixel.x(), pixel.y()) * inr - k.a0, k.B.at(pixel.x(), pixel.y()) * inr - k.b0);
 }
+
+// --- rasterise -------------------------------------------------------------------------------
 
 namespace {
 
-// Pixel centres of row y (py = y + 0.5) inside the projected footprint quad, within r: [xb, xe).
-// False when the row misses it.
-bool rowSpan(const PreparedSegment& sp, const PixelRect& r, float py, int& xb, int& xe) {
-  xb = r.x0, xe = r.x1;
-  if (!sp.useSpans) return true;
-  float lo = INFINITY, hi = -INFINITY;
-  for (int i = 0; i < 4; ++i) {
-    const Vec2f& p = sp.screenQuad[i];
-    const Vec2f& q = sp.screenQuad[(i + 1) % 4];
-    if ((p.y() <= py) == (q.y() <= py)) continue;
-    const float xi = p.x() + (py - p.y()) / (q.y() - p.y()) * (q.x() - p.x());
-    lo = std::min(lo, xi);
-    hi = std::max(hi, xi);
+// The rows' spans of the projected footprint box (a convex quad): pixel centres of row y
+// (py = y + 0.5) inside it, widened by kSpanSlack pixel against rounding (a centre farther out
+// lies outside the footprint box, where the weight is zero).
+struct QuadSpans {
+  float ylo[4], yhi[4], xa[4], ya[4], slope[4];
+  int edges = 0;
+  bool full = false;  ///< no quad: whole rows
+  explicit QuadSpans(const PreparedSegment& sp, const PixelRect& r) {
+    // small rectangles: whole rows cost less than the spans' set-up (the weights are zero
+    // outside the footprint box anyway)
+    full = !sp.useSpans || r.width() * r.height() <= kFullRowsArea;
+    for (int i = 0; i < 4 && !full; ++i) {
+      const Vec2f& p = sp.screenQuad[i];
+      const Vec2f& q = sp.screenQuad[(i + 1) % 4];
+      if (p.y() == q.y()) continue;
+      ylo[edges] = std::min(p.y(), q.y()), yhi[edges] = std::max(p.y(), q.y());
+      xa[edges] = p.x(), ya[edges] = p.y();
+      slope[edges] = (q.x() - p.x()) / (q.y() - p.y());
+      ++edges;
+    }
   }
-  if (!(hi >= lo)) return false;
-  // centres x + 0.5 in [lo, hi], widened by kSpanSlack pixel against rounding: a centre farther
-  // out lies outside the footprint box, where the weight is zero
-  xb = std::max(r.x0, int(std::ceil(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
-  xe = std::min(r.x1, int(std::floor(std::min(hi, 1e8f) - 0.5f + kSpanSlack)) + 1);
-  return xe > xb;
-}
+  // [xb, xe) within r; false when the row misses the quad
+  bool row(const PixelRect& r, float py, int& xb, int& xe) const {
+    xb = r.x0, xe = r.x1;
+    if (full) return true;
+    float lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < edges; ++i) {
+      if (!(ylo[i] <= py && py < yhi[i])) continue;
+      const float x = xa[i] + (py - ya[i]) * slope[i];
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+    if (!(hi >= lo)) return false;
+    xb = std::max(r.x0, int(std::ceil(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
+    xe = std::min(r.x1, int(std::floor(std::min(hi, 1e8f) - 0.5f + kSpanSlack)) + 1);
+    return xe > xb;
+  }
+};
 
-// The blended attributes of a segment fragment at along-parameter u (Z3Tile::Attr): the Gouraud
-// colour between the lighting stations (or the albedo when lighting is deferred to the
-// resolve), alpha, 1, normal.
-struct SegmentShading {
+// The blended attributes of a segment fragment at along-parameter u (Z3Tile::Attr).
+struct FragmentAttributes {
   const PreparedSegment& sp;
   const FrameContext& frame;
-  // untextured, one normal, two stations (the common case): the colour is linear in u
-  bool linear = false;
-  Vec3f c0 = Vec3f::Zero(), dc = Vec3f::Zero();
-  SegmentShading(const PreparedSegment& s, const FrameContext& f) : sp(s), frame(f) {
-    if (!sp.textured && !sp.smooth && sp.diffuse.size() == 2) {
-      linear = true;
-      c0 = sp.albedo.cwiseProduct(sp.diffuse[0]) + sp.specular[0];
-      dc = sp.albedo.cwiseProduct(sp.diffuse[1]) + sp.specular[1] - c0;
+  float attr[Z3Tile::kAttrs];
+  FragmentAttributes(const PreparedSegment& s, const FrameContext& f) : sp(s), frame(f) {
+    std::copy(sp.attr, sp.attr + Z3Tile::kAttrs, attr);
+  }
+  void at(float u) {
+    switch (sp.shade) {
+      case SegmentShade::Constant: return;
+      case SegmentShade::Linear: return linearColour(u);
+      case SegmentShade::Smooth: {
+        linearColour(u);
+        const float nx = sp.n0.x() + u * sp.dn.x(), ny = sp.n0.y() + u * sp.dn.y(), nz = sp.n0.z() + u * sp.dn.z();
+        const float len2 = nx * nx + ny * ny + nz * nz;
+        if (len2 > 0) {
+          const float inv = 1.0f / std::sqrt(len2);
+          attr[Z3Tile::kNx] = nx * inv, attr[Z3Tile::kNy] = ny * inv, attr[Z3Tile::kNz] = nz * inv;
+        }
+        return;
+      }
+      case SegmentShade::Stations: return stations(u);
     }
   }
-  void at(float u, float* attr) const {
-    if (linear) {
-      attr[Z3Tile::kR] = c0.x() + u * dc.x(), attr[Z3Tile::kG] = c0.y() + u * dc.y(), attr[Z3Tile::kB] = c0.z() + u * dc.z();
-      return;  // the other attributes are constant (constantExceptColour())
-    }
-    Vec3f c = sp.albedo;
-    if (sp.textured) {  // §5.2.4: interpolated between the endpoints, constant beyond
-      const Vec2f uv = sp.uv0 + u * (sp.uv1 - sp.uv0);
+  void linearColour(float u) {
+    attr[Z3Tile::kR] = sp.attr[Z3Tile::kR] + u * sp.dc.x();
+    attr[Z3Tile::kG] = sp.attr[Z3Tile::kG] + u * sp.dc.y();
+    attr[Z3Tile::kB] = sp.attr[Z3Tile::kB] + u * sp.dc.z();
+  }
+  // several lighting stations or a texture (§5.2.4: uv interpolated between the endpoints)
+  void stations(float u) {
+    const SegmentExtra& x = *sp.extra;
+    Vec3f c(sp.attr[Z3Tile::kR], sp.attr[Z3Tile::kG], sp.attr[Z3Tile::kB]);
+    if (x.textured) {
+      const Vec2f uv = x.uv0 + u * (x.uv1 - x.uv0);
       c = frame.texture->sampleBilinear(uv.x(), uv.y()).head<3>();
     }
-    if (!sp.diffuse.empty()) {
-      const int stations = int(sp.diffuse.size());
-      const float fs = u * float(stations - 1);
-      const int k = std::min(int(fs), stations - 2);
+    if (!x.diffuse.empty()) {
+      const int n = int(x.diffuse.size());
+      const float fs = u * float(n - 1);
+      const int k = std::min(int(fs), n - 2);
       const float v = fs - float(k);
-      const Vec3f dif = (1 - v) * sp.diffuse[k] + v * sp.diffuse[k + 1];
-      const Vec3f spec = (1 - v) * sp.specular[k] + v * sp.specular[k + 1];
+      const Vec3f dif = (1 - v) * x.diffuse[k] + v * x.diffuse[k + 1];
+      const Vec3f spec = (1 - v) * x.specular[k] + v * x.specular[k + 1];
       c = c.cwiseProduct(dif) + spec;
     }
-    const Vec3f n = sp.smooth ? sp.shadingNormal(u) : sp.normal;
     attr[Z3Tile::kR] = c.x(), attr[Z3Tile::kG] = c.y(), attr[Z3Tile::kB] = c.z();
-    attr[Z3Tile::kA] = sp.alpha;
-    attr[Z3Tile::kW] = 1.0f;
-    attr[Z3Tile::kNx] = n.x(), attr[Z3Tile::kNy] = n.y(), attr[Z3Tile::kNz] = n.z();
+    if (sp.smooth) {
+      const Vec3f m = sp.n0 + u * sp.dn;
+      const float len = m.norm();
+      if (len > 0) attr[Z3Tile::kNx] = m.x() / len, attr[Z3Tile::kNy] = m.y() / len, attr[Z3Tile::kNz] = m.z() / len;
+    }
   }
-  /// Fills every attribute (call once per segment before at()).
-  void init(float* attr) const {
-    attr[Z3Tile::kA] = sp.alpha;
-    attr[Z3Tile::kW] = 1.0f;
-    attr[Z3Tile::kNx] = sp.normal.x(), attr[Z3Tile::kNy] = sp.normal.y(), attr[Z3Tile::kNz] = sp.normal.z();
-    at(0, attr);
-  }
-  /// Same attributes for every fragment: deferred lighting of an untextured, one-normal segment.
-  bool constant() const { return !sp.textured && !sp.smooth && sp.diffuse.empty(); }
 };
 
 // ScreenSpace segments of one sub-segment (nearly all of them): the closed form evaluated in
-// SIMD over each row's span (detail/splat_rows.h).
-void rasterizeSingleSpan(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
-  const FrameContext& frame = ctx.frame;
-  const Camera& cam = frame.cam();
-  const SegmentPiece& piece = sp.pieces[0];
-  detail::SegmentRaster k;
-  const float no = sp.normal.dot(sp.origin);
-  auto scaled = [](float s, detail::Affine2 f) { return detail::Affine2{s * f.dx, s * f.dy, s * f.c}; };
-  k.N = detail::rayDot(cam, sp.normal);
-  k.A = scaled(no, detail::rayDot(cam, sp.along));
-  k.B = scaled(no, detail::rayDot(cam, sp.across));
-  k.depthNum = no;
-  k.a0 = sp.along.dot(sp.origin);
-  k.b0 = sp.across.dot(sp.origin);
-  k.length = sp.length;
-  k.R2 = frame.cutoffQ;
-  k.aMin = sp.aMin, k.aMax = sp.aMax, k.bMax = sp.bMax;
-  k.skew = piece.skew, k.across = piece.across, k.invM00 = piece.invM00, k.k = piece.k, k.erfScale = piece.erfScale;
-  k.scale0 = piece.scale0, k.slope = piece.slope;
-  k.zThreshold0 = sp.zThreshold0, k.zThreshold1 = sp.zThreshold1;
-  k.nearD = cam.nearDepth(), k.farD = cam.farDepth();
-  k.clipDepth = sp.clipped;
-  const SegmentShading shading(sp, frame);
-  float attr[Z3Tile::kAttrs];
-  shading.init(attr);
+// SIMD over the rows' spans, gathered into blocks of at most kBlock pixels (detail/splat_rows.h).
+void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
+  FragmentAttributes shade(sp, ctx.frame);
+  const QuadSpans quad(sp, r);
   detail::FragmentBlock fb;
   detail::RowSpan spans[detail::kBlock];
   int spanCount = 0, pixels = 0;
   uint64_t inserted = 0;
   auto flush = [&] {
-    const int m = detail::segmentFragments(k, spans, spanCount, fb);
+    const int m = detail::segmentFragments(sp.raster, spans, spanCount, fb);
     for (int i = 0; i < m; ++i) {
-      const float u = fb.p[i];
-      if (shading.linear) {
-        attr[Z3Tile::kR] = shading.c0.x() + u * shading.dc.x();
-        attr[Z3Tile::kG] = shading.c0.y() + u * shading.dc.y();
-        attr[Z3Tile::kB] = shading.c0.z() + u * shading.dc.z();
-      } else if (!shading.constant()) {
-        shading.at(u, attr);
-      }
-      ctx.tile.insert(int(fb.x[i]), int(fb.y[i]), fb.depth[i], fb.q[i], fb.weight[i], attr);
+      shade.at(fb.p[i]);
+      ctx.tile.insert(int(fb.x[i]), int(fb.y[i]), fb.depth[i], fb.q[i], fb.weight[i], shade.attr);
     }
     inserted += uint64_t(m);
     spanCount = pixels = 0;
   };
-  for (int y = r.y0; y < r.y1; ++y) {  // rows' spans gathered into blocks of at most kBlock pixels
+  for (int y = r.y0; y < r.y1; ++y) {
     int xb, xe;
-    if (!rowSpan(sp, r, float(y) + 0.5f, xb, xe)) continue;
+    if (!quad.row(r, float(y) + 0.5f, xb, xe)) continue;
     for (int x0 = xb; x0 < xe; x0 += detail::kBlock) {
       const int x1 = std::min(xe, x0 + detail::kBlock);
       if (pixels + (x1 - x0) > detail::kBlock) flush();
@@ -868,52 +515,42 @@ void rasterizeSingleSpan(const PreparedSegment& sp, const SplatContext& ctx, con
   ctx.tile.addFragments(inserted);
 }
 
+// Everything else (several sub-segments, Approx, Reference): per pixel, scalar.
+void rasterizeScalar(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
+  const detail::SegmentRaster& k = sp.raster;
+  FragmentAttributes shade(sp, ctx.frame);
+  const QuadSpans quad(sp, r);
+  uint64_t inserted = 0;
+  for (int y = r.y0; y < r.y1; ++y) {
+    const float py = float(y) + 0.5f;
+    int xb, xe;
+    if (!quad.row(r, py, xb, xe)) continue;
+    for (int x = xb; x < xe; ++x) {
+      const float px = float(x) + 0.5f;
+      const float nr = k.N.at(px, py);
+      if (!(nr < 0)) continue;  // ray parallel to or leaving the facing plane
+      const float t = k.depthNum / nr;
+      if (k.clipDepth && (t < k.nearD || t > k.farD)) continue;
+      const float inr = 1.0f / nr;
+      const float a = k.A.at(px, py) * inr - k.a0, b = k.B.at(px, py) * inr - k.b0;
+      const float w = weightAt(sp, a, b);
+      if (!(w > 0)) continue;
+      const float u = std::clamp(a / k.length, 0.0f, 1.0f);
+      shade.at(u);
+      ctx.tile.insert(x, y, t, k.zThreshold0 + u * (k.zThreshold1 - k.zThreshold0), w, shade.attr);
+      ++inserted;
+    }
+  }
+  ctx.tile.addFragments(inserted);
+}
+
 }  // namespace
 
 void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);
   if (r.empty()) return;
-  if (sp.method == SegmentMethod::ScreenSpace && sp.pieces.size() == 1) return rasterizeSingleSpan(sp, ctx, r);
-  const FrameContext& frame = ctx.frame;
-  const Camera& cam = frame.cam();
-  const float R = frame.opt().cutoffRadius;
-  const float R2 = R * R;
-  const float nearD = cam.nearDepth(), farD = cam.farDepth();
-  // Ray through pixel (px, py) at depth 1: r = ((px - cx)/f, -(py - cy)/f, -1); the plane
-  // n.(P - o) = 0 is hit at depth t = (n.o)/(n.r), a = t (e.r) - e.o, b = t (s.r) - s.o.
-  const float no = sp.normal.dot(sp.origin), eo = sp.along.dot(sp.origin), so = sp.across.dot(sp.origin);
-  const detail::Affine2 N = detail::rayDot(cam, sp.normal), E = detail::rayDot(cam, sp.along),
-                        S = detail::rayDot(cam, sp.across);
-  const SegmentShading shading(sp, frame);
-  float attr[Z3Tile::kAttrs];
-  shading.init(attr);
-  const float L = sp.length;
-  const bool screenSpace = sp.method == SegmentMethod::ScreenSpace;
-  uint64_t inserted = 0;
-  for (int y = r.y0; y < r.y1; ++y) {
-    const float py = float(y) + 0.5f;
-    int xb, xe;
-    if (!rowSpan(sp, r, py, xb, xe)) continue;
-    for (int x = xb; x < xe; ++x) {
-      const float px = float(x) + 0.5f;
-      const float nr = N.at(px, py);
-      if (!(nr < 0)) continue;  // ray parallel to or leaving the facing plane
-      const float t = no / nr;
-      const float b = t * S.at(px, py) - so;
-      if (std::abs(b) > sp.bMax) continue;
-      const float a = t * E.at(px, py) - eo;
-      if (a < sp.aMin || a > sp.aMax) continue;
-      if (sp.clipped && (t < nearD || t > farD)) continue;
-      // (the footprint box test of weightAt is already done above)
-      const float w = screenSpace ? screenSpaceWeight(sp, a, b, R2) : weightAt(sp, a, b, R2);
-      if (!(w > 0)) continue;
-      const float u = std::clamp(a / L, 0.0f, 1.0f);
-      shading.at(u, attr);
-      ctx.tile.insert(x, y, t, sp.zThreshold0 + u * (sp.zThreshold1 - sp.zThreshold0), w, attr);
-      ++inserted;
-    }
-  }
-  ctx.tile.addFragments(inserted);
+  if (sp.method == SegmentMethod::ScreenSpace && sp.pieceCount() == 1) return rasterizeRows(sp, ctx, r);
+  rasterizeScalar(sp, ctx, r);
 }
 
 }  // namespace linesurf

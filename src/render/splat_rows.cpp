@@ -98,8 +98,30 @@ HWY_INLINE VF erfFromExp(DF d, VF x, VF expMinusX2) {
   return hn::CopySign(r, x);
 }
 
+// Pixel centres of the spans, packed: lanes are filled across rows, so a segment a few pixels
+// wide costs as many vectors as its pixels fill, not one per row.
+HWY_INLINE int expandSpans(DF d, const RowSpan* spans, int count, float* px, float* py) {
+  const int L = int(hn::Lanes(d));
+  const VF iota = hn::Iota(d, 0.5f);
+  int n = 0;
+  for (int r = 0; r < count; ++r) {
+    const RowSpan& s = spans[r];
+    const VF y = hn::Set(d, float(s.y) + 0.5f);
+    const int w = s.x1 - s.x0;
+    for (int i = 0; i < w; i += L) {  // the arrays are padded by kMaxLanes; the next span overwrites the excess
+      hn::StoreU(hn::Add(iota, hn::Set(d, float(s.x0 + i))), d, px + n + i);
+      hn::StoreU(y, d, py + n + i);
+    }
+    n += w;
+  }
+  return n;
+}
+
 int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount, FragmentBlock& out) {
   const DF d;
+  const int L = int(hn::Lanes(d));
+  alignas(64) float pxs[kBlock + kMaxLanes], pys[kBlock + kMaxLanes];
+  const int n = expandSpans(d, spans, spanCount, pxs, pys);
   const VF one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
   const VF a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0);
   const VF len = hn::Set(d, S.length), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f), R2 = hn::Set(d, S.R2);
@@ -108,19 +130,20 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
   const VF kk = hn::Set(d, S.k), erfScale = hn::Set(d, S.erfScale), scale0 = hn::Set(d, S.scale0),
            slope = hn::Set(d, S.slope);
   const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
-  const VF lane = hn::Iota(d, 0.0f);
+  const VF depthNum = hn::Set(d, S.depthNum), nearD = hn::Set(d, S.nearD), farD = hn::Set(d, S.farD);
+  const VF lane = hn::Iota(d, 0.0f), count = hn::Set(d, float(n));
   int m = 0;
-  for (int r = 0; r < spanCount; ++r) {
-  const RowSpan& span = spans[r];
-  const BlockWalker walk(span.x1 - span.x0, span.x0, span.y);
-  const int n = span.x1 - span.x0;
-  const VF count = hn::Set(d, float(n));
-  for (int i = 0; i < n; i += int(hn::Lanes(d))) {
-    const PlaneHit h(walk, i, S.N, S.depthNum, S.clipDepth, S.nearD, S.farD);
-    const VF a = hn::MulSub(affine(d, S.A, h.px, h.py), h.iN, a0), b = hn::MulSub(affine(d, S.B, h.px, h.py), h.iN, b0);
-    auto inside = hn::And(h.front, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
-    inside = hn::And(inside, hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
-    // the integral along the sub-segment in closed form (segment_splat.cpp, screenSpaceWeight)
+  for (int i = 0; i < n; i += L) {
+    const VF px = hn::Load(d, pxs + i), py = hn::Load(d, pys + i);
+    // the ray through the pixel meets the strip's plane (in front of the eye) at depth z
+    const VF nr = affine(d, S.N, px, py);
+    const VF iN = hn::Div(one, nr);
+    const VF z = hn::Mul(depthNum, iN);
+    auto inside = hn::And(hn::Lt(nr, zero), hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
+    if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
+    const VF a = hn::MulSub(affine(d, S.A, px, py), iN, a0), b = hn::MulSub(affine(d, S.B, px, py), iN, b0);
+    inside = hn::And(inside, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
+    // the integral along the sub-segment in closed form (segment_methods.cpp, screenSpaceWeight)
     const VF tauStar = hn::MulAdd(skew, b, a);
     const VF qmin = hn::Mul(hn::Mul(b, b), across);
     inside = hn::And(inside, hn::Lt(qmin, R2));
@@ -136,8 +159,7 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
     w = hn::MulAdd(hn::Mul(hn::Mul(slope, invM00), g), hn::Sub(e0, e1), w);
     const VF u = hn::Min(one, hn::Max(zero, hn::Mul(a, invLen)));
     inside = hn::And(inside, hn::Gt(w, zero));
-    m += pack(d, inside, h.px, h.py, w, h.z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
-  }
+    m += pack(d, inside, px, py, w, z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
   }
   return m;
 }

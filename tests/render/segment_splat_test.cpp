@@ -1,6 +1,6 @@
 // Line-segment splats (thesis §5): points vs segments on the same surface, the three filter
 // evaluations against each other, the Approx construction's cases, degenerate segments.
-#include "linesurf/render/segment_splat.h"
+#include "render/segment_splat.h"
 
 #include <gtest/gtest.h>
 
@@ -176,8 +176,8 @@ WeightImage weightImage(const Segment& s, const Camera& cam, SegmentMethod m) {
   WeightImage out;
   out.status = prepareSegment(s, 0, frame, ps);
   out.fallback = ps.fallback;
-  out.longCase = ps.longCase;
-  out.quads = ps.quads.size();
+  out.longCase = ps.extra && ps.extra->longCase;
+  out.quads = ps.extra ? ps.extra->quads.size() : 0;
   out.w.assign(size_t(cam.width()) * cam.height(), 0.0f);
   if (out.status != PrimitiveStatus::Drawn && out.status != PrimitiveStatus::Clipped) return out;
   for (int y = ps.bounds.y0; y < ps.bounds.y1; ++y)
@@ -264,13 +264,15 @@ TEST(SegmentSplat, ApproxLongAndShortCases) {
   PreparedSegment ps;
   ASSERT_EQ(prepareWith(unitSegment(1.0f, 0.05f), cam, SegmentMethod::Approx, ps), PrimitiveStatus::Drawn);
   EXPECT_FALSE(ps.fallback);
-  EXPECT_TRUE(ps.longCase);
-  EXPECT_EQ(ps.quads.size(), 10u);
+  ASSERT_TRUE(ps.extra);
+  EXPECT_TRUE(ps.extra->longCase);
+  EXPECT_EQ(ps.extra->quads.size(), 10u);
   // shorter than the cutoff diameter: the endpoint ellipses overlap
   ASSERT_EQ(prepareWith(unitSegment(0.05f, 0.05f), cam, SegmentMethod::Approx, ps), PrimitiveStatus::Drawn);
   EXPECT_FALSE(ps.fallback);
-  EXPECT_FALSE(ps.longCase);
-  EXPECT_EQ(ps.quads.size(), 8u);
+  ASSERT_TRUE(ps.extra);
+  EXPECT_FALSE(ps.extra->longCase);
+  EXPECT_EQ(ps.extra->quads.size(), 8u);
   // No seam between portions: along the axis the weight has no jump larger than its slope allows.
   ASSERT_EQ(prepareWith(unitSegment(1.0f, 0.05f), cam, SegmentMethod::Approx, ps), PrimitiveStatus::Drawn);
   RenderOptions o = optionsFor(SegmentMethod::Approx);
@@ -366,8 +368,9 @@ TEST(SegmentSplat, RandomViewsGiveSaneSplats) {
     if (sa != PrimitiveStatus::Drawn && sa != PrimitiveStatus::Clipped) continue;
     ++drawn;
     fallbacks += ap.fallback;
-    for (const SegmentQuad& q : ap.quads)
-      for (const Vec2f& c : q.corner) ASSERT_TRUE(c.allFinite());
+    if (ap.extra)
+      for (const SegmentQuad& q : ap.extra->quads)
+        for (const Vec2f& c : q.corner) ASSERT_TRUE(c.allFinite());
     const RenderOptions o = optionsFor(SegmentMethod::Approx);
     const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
     for (int y = ap.bounds.y0; y < ap.bounds.y1; y += 3)
@@ -524,7 +527,7 @@ TEST(SegmentSplat, ReferenceWithinToleranceOfTheClosedForm) {
   o2.segmentMethod = SegmentMethod::ScreenSpace;
   const FrameContext fs = FrameContext::make(cam, o2, BoundingSphere{Vec3f::Zero(), 1});
   ASSERT_EQ(prepareSegment(s, 0, fs, ss), PrimitiveStatus::Drawn);
-  EXPECT_EQ(ss.pieces.size(), 1u);
+  EXPECT_EQ(ss.pieceCount(), 1);
   for (int y = ref.bounds.y0; y < ref.bounds.y1; ++y)
     for (int x = ref.bounds.x0; x < ref.bounds.x1; ++x) {
       const Vec2f p(x + 0.5f, y + 0.5f);

@@ -38,7 +38,7 @@ int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int 
                    FragmentBlock& out);
 
 /// Per-pixel constants of one ScreenSpace segment splat of a single sub-segment (§5, the
-/// closed form of segment_splat.cpp): the ray through (px, py) meets the strip's plane at depth
+/// closed form of segment_methods.cpp): the ray through (px, py) meets the strip's plane at depth
 /// depthNum / N with plane coordinates a = A / N - a0 (along), b = B / N - b0 (across).
 struct SegmentRaster {
   Affine2 N, A, B;

@@ -1,0 +1,132 @@
+#pragma once
+/// Object-space EWA segment splats, thesis §5: the pipeline's two stages for line segments.
+/// The method (the filter, its three evaluations, shading, the contract) is described in the
+/// public header linesurf/render/segment_splat.h; this header is internal to the pipeline
+/// (renderer.cpp) and its tests. The evaluations' own state lives in segment_methods.h.
+///
+/// prepare (one stage per function in segment_splat.cpp):
+///  1. stripFrame: culling, model-view transform, the strip's axes (along, across, normal);
+///  2. footprint: the resampling covariance along the segment (§5.1.2) in sub-segments, and
+///     the footprint box in plane coordinates;
+///  3. the method's own data (Reference nodes, Approx quadrilaterals; SegmentExtra);
+///  4. screenBounds: frustum test, near/far clipping, pixel bounds, the projected box;
+///  5. the per-pixel constants of the SIMD rows (detail::SegmentRaster);
+///  6. shading: Gouraud colours, smooth normals.
+/// The common case (ScreenSpace, one sub-segment, untextured, colour linear along the segment)
+/// allocates nothing and is rasterised by the SIMD rows; everything else keeps its state in
+/// PreparedSegment::extra.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "detail/splat_rows.h"
+#include "linesurf/core/model.h"
+#include "linesurf/render/segment_splat.h"
+#include "linesurf/render/splat_context.h"
+
+namespace linesurf {
+
+/// One sub-segment of the ScreenSpace method: plane coordinates (a along the segment from p0,
+/// b across) with the resampling covariance held constant.
+struct SegmentPiece {
+  float a0 = 0, a1 = 0;              ///< along-range [a0, a1] of the sub-segment
+  float m00 = 1, m01 = 0, m11 = 1;   ///< M^-1 in (a, b)
+  float scale0 = 0, scale1 = 0;      ///< weight scale 1 / (h sqrt(det M)) at a0 and a1
+  float reach = 0;                   ///< R sqrt(M_aa): how far along a kernel reaches
+  // derived once in prepare (the per-pixel closed form needs no division)
+  float skew = 0;                    ///< m01 / m00
+  float across = 1;                  ///< m11 - m01^2 / m00 = 1 / M_bb
+  float invM00 = 1;                  ///< 1 / m00
+  float k = 1;                       ///< sqrt(m00 / 2)
+  float erfScale = 1;                ///< sqrt(pi) / 2 / k
+  float slope = 0;                   ///< (scale1 - scale0) / (a1 - a0), 0 when negligible
+};
+
+/// One node of the Reference quadrature.
+struct SegmentNode {
+  float m00 = 1, m01 = 0, m11 = 1;  ///< M(t)^-1 in (a, b)
+  float scale = 0;                  ///< dt / (h sqrt(det M(t)))
+};
+
+/// One weight-texture-mapped quadrilateral of the Approx method (§5.2.3.2).
+struct SegmentQuad {
+  Vec2f corner[4];  ///< plane coordinates (a, b); bilinear order 00, 10, 11, 01 (a cycle)
+  Vec2f tex[4];     ///< weight-texture coordinates (x inward from the endpoint, y across)
+  float scale[4];   ///< weight scaling factor at the corners (Figure 19)
+  bool middle = false;   ///< T2 (middle portion) instead of T1 (endpoint portion)
+  float tail = 1e30f;    ///< texture length of the segment: T1(x) - T1(x - tail) (short case)
+  Vec2f lo = Vec2f::Zero(), hi = Vec2f::Zero();  ///< bounding box of the corners
+};
+
+namespace segment {
+struct WeightTextures;  // §5.2.3.2 tables, segment_methods.cpp
+}
+
+/// What the common case does not need, allocated only when a segment needs it.
+struct SegmentExtra {
+  /// ScreenSpace with K > 1 sub-segments, evenly spaced (piece k covers [k, k+1] /
+  /// pieceInvLength); a pixel at a only meets the pieces within pieceMaxReach (the largest reach).
+  std::vector<SegmentPiece> pieces;
+  float pieceInvLength = 0, pieceMaxReach = 0;
+  /// Reference: nodes at spacing nodeStep starting at nodeStep / 2.
+  std::vector<SegmentNode> nodes;
+  float nodeStep = 0, nodeReach = 0;
+  /// Approx: 10 quads (long case) or 8 (short).
+  std::vector<SegmentQuad> quads;
+  bool longCase = true;
+  const segment::WeightTextures* textures = nullptr;
+  /// Shading at stations evenly spaced over [0, length] (Gouraud, §6.2.2): colour = albedo *
+  /// diffuse + specular, albedo from the texture (§5.2.4: uv interpolated between the
+  /// endpoints) when textured.
+  std::vector<Vec3f> diffuse, specular;
+  bool textured = false;
+  Vec2f uv0 = Vec2f::Zero(), uv1 = Vec2f::Zero();
+};
+
+/// How a segment's fragments get their blended attributes (Z3Tile::Attr) from the
+/// along-axis parameter u in [0, 1].
+enum class SegmentShade : uint8_t {
+  Constant,  ///< PreparedSegment::attr for every fragment (deferred lighting, one normal)
+  Linear,    ///< colour attr + u dc (Gouraud between the end stations), one normal
+  Smooth,    ///< colour attr + u dc, normal normalize(n0 + u dn) (smooth line models)
+  Stations,  ///< several stations or a texture: SegmentExtra, per fragment
+};
+
+struct PreparedSegment {
+  PixelRect bounds;      ///< screen bounding box (clamped to the viewport); bins the segment
+  uint32_t index = 0;    ///< index in model.segments
+  SegmentMethod method = SegmentMethod::ScreenSpace;  ///< evaluation used (after fallback)
+  bool fallback = false; ///< Approx construction failed; drawn with ScreenSpace instead
+  bool useSpans = false; ///< screenQuad holds the projected footprint box (not depth-clipped)
+  bool smooth = false;   ///< shading normals interpolated between the endpoints
+  SegmentShade shade = SegmentShade::Constant;
+  /// The strip's plane, footprint box, first sub-segment and z thresholds as per-pixel
+  /// constants (what the SIMD rows evaluate; the scalar paths intersect the plane with it too).
+  detail::SegmentRaster raster;
+  /// The footprint box projected to the screen (pixels): rasterisation visits only each row's
+  /// span inside it.
+  Vec2f screenQuad[4];
+  /// Attributes at u = 0 (colour, alpha, 1, normal); the colour's change to u = 1 (Linear,
+  /// Smooth) and the smooth normal n0 + u dn (unit at both ends, facing the viewer).
+  float attr[Z3Tile::kAttrs] = {};
+  Vec3f dc = Vec3f::Zero(), n0 = Vec3f::Zero(), dn = Vec3f::Zero();
+  std::unique_ptr<SegmentExtra> extra;  ///< null in the common case
+
+  /// Number of ScreenSpace sub-segments.
+  int pieceCount() const { return extra && !extra->pieces.empty() ? int(extra->pieces.size()) : 1; }
+  float length() const { return raster.length; }
+};
+
+/// Prepare stage for one segment (see linesurf/render/segment_splat.h and splat_context.h).
+PrimitiveStatus prepareSegment(const Segment& segment, uint32_t index, const FrameContext& frame,
+                               PreparedSegment& out);
+
+/// Rasterise stage for one segment on one tile.
+void rasterizeSegment(const PreparedSegment& segment, const SplatContext& ctx);
+
+/// The segment's resampling-filter weight at screen position `pixel` (pixel units; centres at
+/// i + 0.5), as rasterizeSegment's scalar path gives it (0 outside the footprint or behind the
+/// eye). For tests and error measurements (docs/segment-splatting.md).
+float segmentWeightAt(const PreparedSegment& segment, const FrameContext& frame, const Vec2f& pixel);
+
+}  // namespace linesurf
