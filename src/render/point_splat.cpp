@@ -268,24 +268,12 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
 void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);
   if (r.empty()) return;
-  float attr[Z3Tile::kAttrs];
-  std::copy(sp.attr, sp.attr + Z3Tile::kAttrs, attr);
-  detail::FragmentBlock fb;
-  const int W = r.width(), total = W * r.height();
-  uint64_t inserted = 0;
-  for (int k0 = 0; k0 < total; k0 += detail::kBlock) {
-    const int m = detail::pointFragments(sp.raster, r.x0, r.y0, W, k0, std::min(detail::kBlock, total - k0), sp.gouraud, fb);
-    for (int i = 0; i < m; ++i) {
-      if (sp.gouraud) {  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
-        const float s = fb.p[i], t = fb.q[i];
-        const Vec3f c = sp.C0 + s * sp.Cs + t * sp.Ct + (s * t) * sp.Cst;
-        attr[0] = c.x(), attr[1] = c.y(), attr[2] = c.z();
-      }
-      ctx.tile.insert(int(fb.x[i]), int(fb.y[i]), fb.depth[i], sp.zThreshold, fb.weight[i], attr);
-    }
-    inserted += uint64_t(m);
-  }
-  ctx.tile.addFragments(inserted);
+  detail::PointShade shade;
+  shade.attr = sp.attr;
+  shade.zThreshold = sp.zThreshold;
+  shade.gouraud = sp.gouraud;
+  shade.C0 = sp.C0.data(), shade.Cs = sp.Cs.data(), shade.Ct = sp.Ct.data(), shade.Cst = sp.Cst.data();
+  ctx.tile.addFragments(detail::pointRowsZ3(sp.raster, shade, r, ctx.tile));
 }
 
 }  // namespace linesurf

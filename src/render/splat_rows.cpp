@@ -164,6 +164,103 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
   return m;
 }
 
+// One point splat straight into the Z^3 tile, row by row (detail/splat_rows.h). The weight and
+// depth are those of PointFragments (the same operations); a row's pixels are contiguous in the
+// tile's planes, so the fast path (open a layer on an empty pixel, merge into a single layer the
+// fragment lies within) is a masked load-add-store per blended sum.
+template <class D>
+HWY_INLINE uint64_t PointRowsT(D d, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+  using V = hn::Vec<D>;
+  const hn::RebindToSigned<D> di;
+  const int L = int(hn::Lanes(d));
+  const V cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
+  const V zero = hn::Zero(d), oneF = hn::Set(d, 1.0f), centre = hn::Iota(d, 0.5f);
+  const V Ndx = hn::Set(d, P.N.dx), Ndy = hn::Set(d, P.N.dy), N0 = hn::Set(d, P.N.c);
+  const V Sdx = hn::Set(d, P.S.dx), Sdy = hn::Set(d, P.S.dy), S0 = hn::Set(d, P.S.c);
+  const V Tdx = hn::Set(d, P.T.dx), Tdy = hn::Set(d, P.T.dy), T0 = hn::Set(d, P.T.c);
+  const V depthNum = hn::Set(d, P.depthNum), nearD = hn::Set(d, P.nearD), farD = hn::Set(d, P.farD);
+  const V thr = hn::Set(d, A.zThreshold);
+  V attr[Z3Tile::kAttrs];
+  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(d, A.attr[k]);
+  V c0[3], cs[3], ct[3], cst[3];
+  for (int k = 0; k < 3; ++k) {
+    c0[k] = hn::Set(d, A.gouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(d, A.gouraud ? A.Cs[k] : 0.0f);
+    ct[k] = hn::Set(d, A.gouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(d, A.gouraud ? A.Cst[k] : 0.0f);
+  }
+  const bool opaque = A.attr[Z3Tile::kA] >= 1.0f;
+  float* pl[Z3Tile::kFields];
+  for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
+  int32_t* cnt = z3.counts();
+  const auto iZero = hn::Zero(di), iOne = hn::Set(di, 1);
+  uint64_t inserted = 0, opened = 0;
+  for (int y = r.y0; y < r.y1; ++y) {
+    const V py = hn::Set(d, float(y) + 0.5f);
+    const V nRow = hn::MulAdd(Ndy, py, N0), sRow = hn::MulAdd(Sdy, py, S0), tRow = hn::MulAdd(Tdy, py, T0);
+    const size_t rowBase = z3.index(r.x0, y);
+    for (int x = r.x0; x < r.x1; x += L) {
+      const V px = hn::Add(centre, hn::Set(d, float(x)));
+      const V n = hn::MulAdd(Ndx, px, nRow);
+      const V iN = hn::Div(oneF, n);
+      const V z = hn::Mul(depthNum, iN);
+      auto inside = hn::And(hn::Lt(n, zero), hn::FirstN(d, size_t(r.x1 - x)));
+      if (P.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
+      const V s = hn::Mul(hn::MulAdd(Sdx, px, sRow), iN), t = hn::Mul(hn::MulAdd(Tdx, px, tRow), iN);
+      const V q = hn::MulAdd(s, s, hn::Mul(t, t));
+      inside = hn::And(inside, hn::Le(q, cutoff));
+      if (hn::AllFalse(d, inside)) continue;
+      const V w = hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale);
+      inside = hn::And(inside, hn::Gt(w, zero));
+      inserted += hn::CountTrue(d, inside);
+      const size_t p = rowBase + size_t(x - r.x0);
+      const auto count = hn::LoadU(di, cnt + p);
+      const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, iZero)));
+      const auto single = hn::And(inside, hn::RebindMask(d, hn::Eq(count, iOne)));
+      const V dz = hn::Abs(hn::Sub(z, hn::LoadU(d, pl[Z3Tile::kZ] + p)));
+      const auto merge = hn::And(single, hn::Le(dz, hn::Max(thr, hn::LoadU(d, pl[Z3Tile::kThr] + p))));
+      const auto fast = hn::Or(open, merge);
+      if (!hn::AllFalse(d, fast)) {
+        for (int k = 0; k < Z3Tile::kAttrs; ++k) {
+          V a = attr[k];
+          if (A.gouraud && k < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
+            a = hn::Add(hn::Add(hn::Add(c0[k], hn::Mul(s, cs[k])), hn::Mul(t, ct[k])), hn::Mul(hn::Mul(s, t), cst[k]));
+          const V add = hn::Mul(w, a);
+          const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, pl[k] + p), add));
+          hn::BlendedStore(sum, fast, d, pl[k] + p);
+        }
+        hn::BlendedStore(z, open, d, pl[Z3Tile::kZ] + p);
+        hn::BlendedStore(thr, open, d, pl[Z3Tile::kThr] + p);
+        if (opaque) hn::BlendedStore(oneF, open, d, pl[Z3Tile::kOpaque] + p);
+        else hn::BlendedStore(zero, fast, d, pl[Z3Tile::kOpaque] + p);
+        hn::BlendedStore(iOne, hn::RebindMask(di, open), di, cnt + p);
+        opened += hn::CountTrue(d, open);
+      }
+      const auto rest = hn::AndNot(fast, inside);
+      if (hn::AllFalse(d, rest)) continue;
+      // the other fragments (a new layer in front of or behind others, compression, occlusion)
+      alignas(64) float mk[kMaxLanes], zs[kMaxLanes], ws[kMaxLanes], ss[kMaxLanes], ts[kMaxLanes];
+      hn::StoreU(hn::VecFromMask(d, rest), d, mk);
+      hn::StoreU(z, d, zs), hn::StoreU(w, d, ws), hn::StoreU(s, d, ss), hn::StoreU(t, d, ts);
+      float fa[Z3Tile::kAttrs];
+      for (int k = 0; k < Z3Tile::kAttrs; ++k) fa[k] = A.attr[k];
+      for (int i = 0; i < L; ++i) {
+        if (mk[i] == 0) continue;
+        if (A.gouraud)
+          for (int k = 0; k < 3; ++k) fa[k] = A.C0[k] + ss[i] * A.Cs[k] + ts[i] * A.Ct[k] + (ss[i] * ts[i]) * A.Cst[k];
+        z3.insert(x + i, y, zs[i], A.zThreshold, ws[i], fa);
+      }
+    }
+  }
+  z3.addAllocated(opened);
+  return inserted;
+}
+
+uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+  // narrow splats (most of them on dense models) run on narrower vectors: fewer idle lanes
+  if (r.width() <= 4) return PointRowsT(hn::CappedTag<float, 4>(), P, A, r, z3);
+  if (r.width() <= 8) return PointRowsT(hn::CappedTag<float, 8>(), P, A, r, z3);
+  return PointRowsT(DF(), P, A, r, z3);
+}
+
 int64_t Target() { return HWY_TARGET; }
 
 }  // namespace HWY_NAMESPACE
@@ -175,6 +272,7 @@ namespace linesurf::detail {
 HWY_EXPORT(PointFragments);
 HWY_EXPORT(SegmentFragments);
 HWY_EXPORT(Target);
+HWY_EXPORT(PointRowsZ3);
 
 int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
                    FragmentBlock& out) {
@@ -182,6 +280,9 @@ int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int 
 }
 int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, FragmentBlock& out) {
   return HWY_DYNAMIC_DISPATCH(SegmentFragments)(s, spans, count, out);
+}
+uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelRect& r, Z3Tile& tile) {
+  return HWY_DYNAMIC_DISPATCH(PointRowsZ3)(p, shade, r, tile);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

@@ -13,17 +13,15 @@
 ///     composited into one (normalised colours, "over" operator, W = 1; step c);
 ///  2. resolve: layers normalised (C/W, A/W), lit when shading is deferred (C is then the
 ///     weighted albedo, lit once per layer with the normalised N), composited back to front.
-/// Storage: a fixed number of layers per pixel, one 64-byte record per layer whose first eight
-/// floats are the blended sums, so a merge is one 8-wide multiply-add (no allocation per fragment);
-/// layer-major, so that the front layers of a tile (nearly every access) are dense.
+/// Storage: a fixed number of layers per pixel in structure-of-arrays planes, one plane of
+/// floats per (layer, field), row-major over the tile, so that the SIMD point rows
+/// (detail/splat_rows.h, pointRowsZ3) test and merge a whole row of pixels per instruction (the
+/// fast path: a pixel with no layer or with one layer the fragment falls within); scalar insert()
+/// handles the rest (no allocation per fragment).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "linesurf/core/image.h"
 #include "linesurf/core/math.h"
@@ -88,13 +86,14 @@ class Z3Tile {
   void insert(int x, int y, float depth, float zThreshold, float weight, const float* attr) {
     if (!(weight > 0)) return;
     const size_t p = index(x, y);
-    float* px = block(p);
+    float* px = data_.data() + p;
     const int n = count_[p];
+    const size_t fs = capacity_;  // field stride
     if (n == 0) {  // the pixel's first fragment opens its first layer (step b, inline)
-      for (int k = 0; k < kAttrs; ++k) px[k] = weight * attr[k];
-      px[kZ] = depth;
-      px[kThr] = zThreshold;
-      px[kOpaque] = attr[kA] >= 1.0f ? 1.0f : 0.0f;
+      for (int k = 0; k < kAttrs; ++k) px[k * fs] = weight * attr[k];
+      px[kZ * fs] = depth;
+      px[kThr * fs] = zThreshold;
+      px[kOpaque * fs] = attr[kA] >= 1.0f ? 1.0f : 0.0f;
       count_[p] = 1;
       ++counters_.allocated;
       return;
@@ -103,20 +102,14 @@ class Z3Tile {
     float hitDz = INFINITY;
     for (int i = 0; i < n; ++i) {
       const float* ly = px + i * layerStride_;
-      const float dz = std::abs(depth - ly[kZ]);
-      const float t = zThreshold > ly[kThr] ? zThreshold : ly[kThr];
+      const float dz = std::abs(depth - ly[kZ * fs]);
+      const float t = zThreshold > ly[kThr * fs] ? zThreshold : ly[kThr * fs];
       if (dz <= t && dz < hitDz) { hit = i; hitDz = dz; }
     }
     if (hit < 0) return insertNew(p, depth, zThreshold, weight, attr);
     float* ly = px + hit * layerStride_;
-#if defined(__SSE2__)
-    const __m128 wv = _mm_set1_ps(weight);  // the sums: two 4-wide multiply-adds
-    _mm_storeu_ps(ly, _mm_add_ps(_mm_loadu_ps(ly), _mm_mul_ps(wv, _mm_loadu_ps(attr))));
-    _mm_storeu_ps(ly + 4, _mm_add_ps(_mm_loadu_ps(ly + 4), _mm_mul_ps(wv, _mm_loadu_ps(attr + 4))));
-#else
-    for (int k = 0; k < kAttrs; ++k) ly[k] += weight * attr[k];
-#endif
-    if (attr[kA] < 1.0f) ly[kOpaque] = 0;
+    for (int k = 0; k < kAttrs; ++k) ly[k * fs] += weight * attr[k];
+    if (attr[kA] < 1.0f) ly[kOpaque * fs] = 0;
   }
   void addFragments(uint64_t n) { fragments_ += n; }
   /// The same for one Fragment, counted.
@@ -139,20 +132,22 @@ class Z3Tile {
     const size_t p = index(x, y);
     const int n = count_[p];
     if (n == 0) return out;
-    const float* px = block(p);
+    const float* px = data_.data() + p;
+    const size_t fs = capacity_;
     Vec3f c = Vec3f::Zero();
     float a = 0;
     for (int i = 0; i < n && a < 1.0f; ++i) {
       const float* ly = px + i * layerStride_;
-      const float iw = 1.0f / ly[kW];
-      const float al = std::clamp(ly[kA] * iw, 0.0f, 1.0f);
+      const float iw = 1.0f / ly[kW * fs];
+      const float al = std::clamp(ly[kA * fs] * iw, 0.0f, 1.0f);
       const float t = (1 - a) * al;
-      c += t * shade(Vec3f(ly[kR] * iw, ly[kG] * iw, ly[kB] * iw), Vec3f(ly[kNx], ly[kNy], ly[kNz]), ly[kZ]);
+      c += t * shade(Vec3f(ly[kR * fs] * iw, ly[kG * fs] * iw, ly[kB * fs] * iw),
+                     Vec3f(ly[kNx * fs], ly[kNy * fs], ly[kNz * fs]), ly[kZ * fs]);
       a += t;
     }
     out.color = Color(c.x(), c.y(), c.z(), a);
-    out.depth = px[kZ];
-    const Vec3f nrm(px[kNx], px[kNy], px[kNz]);
+    out.depth = px[kZ * fs];
+    const Vec3f nrm(px[kNx * fs], px[kNy * fs], px[kNz * fs]);
     const float nn = nrm.norm();
     out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
     return out;
@@ -169,21 +164,27 @@ class Z3Tile {
     return c;
   }
 
- private:
-  // Layer record: the kAttrs sums, then depth, threshold and the opaque flag; 16 floats.
-  enum Field { kZ = kAttrs, kThr, kOpaque, kStride = 16 };
+  /// Fields of a layer beyond the blended sums: depth, z threshold, opaque flag (1 or 0).
+  enum Field { kZ = kAttrs, kThr, kOpaque, kFields };
+  /// Storage view for the SIMD rows (detail/splat_rows.h): field f of layer l of pixel index(x, y)
+  /// is plane(l, f)[index(x, y)], and its layer count counts()[index(x, y)]. The planes are padded
+  /// by kPad elements, so a vector load or masked store starting at any pixel of the tile stays
+  /// inside the storage.
+  static constexpr int kPad = 64;
   size_t index(int x, int y) const { return size_t(y - rect_.y0) * size_t(rect_.width()) + size_t(x - rect_.x0); }
-  // Layer-major: the records of layer i of all pixels are contiguous (layerStride_ floats per
-  // layer), so the front layers of neighbouring pixels share cache lines' neighbourhoods and pages.
-  float* block(size_t pixel) { return data_.data() + pixel * kStride; }
-  const float* block(size_t pixel) const { return data_.data() + pixel * kStride; }
+  float* plane(int layer, int field) { return data_.data() + size_t(layer) * layerStride_ + size_t(field) * capacity_; }
+  int32_t* counts() { return count_.data(); }
+  /// Counts layers opened by the SIMD rows (step b on an empty pixel).
+  void addAllocated(uint64_t n) { counters_.allocated += n; }
+
+ private:
   void compress(float* px, int& n);
   void insertNew(size_t pixel, float depth, float zThreshold, float weight, const float* attr);  // steps b and c
   PixelRect rect_;
   int layers_;
-  size_t capacity_ = 0;     ///< pixels per layer the storage holds
-  size_t layerStride_ = 0;  ///< kStride * capacity_
-  std::vector<uint8_t> count_;
+  size_t capacity_ = 0;     ///< elements per plane (pixels + kPad): the stride between fields
+  size_t layerStride_ = 0;  ///< kFields * capacity_: the stride between layers
+  std::vector<int32_t> count_;
   std::vector<float> data_;
   Z3Counters counters_;  ///< allocated, occluded, compressed (fragments and merged: counters())
   uint64_t fragments_ = 0, direct_ = 0;

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "splat_math.h"
+#include "linesurf/render/z3_buffer.h"
 
 namespace linesurf::detail {
 
@@ -36,6 +37,24 @@ struct FragmentBlock {
 /// are filled only when withPlaneCoords.
 int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
                    FragmentBlock& out);
+
+/// The blended attributes of one point splat's fragments (PreparedPoint): attr[Z3Tile::kAttrs],
+/// with the colour replaced per fragment by the bilinear Gouraud colour C0 + Cs s + Ct t + Cst s t
+/// (3 floats each) when gouraud.
+struct PointShade {
+  const float* attr = nullptr;
+  float zThreshold = 0;
+  bool gouraud = false;
+  const float *C0 = nullptr, *Cs = nullptr, *Ct = nullptr, *Cst = nullptr;
+};
+
+/// Rasterises one point splat over the pixels of `r` (inside tile.rect()) straight into the Z^3
+/// tile, row by row: weights, depths and colours of a row's pixels in SIMD, and the Z^3 fast path
+/// in SIMD too (a pixel without a layer opens one; a pixel with one layer the fragment lies within
+/// the z threshold of merges), the other fragments through Z3Tile::insert. The same layers as
+/// inserting the fragments of pointFragments one by one (up to float rounding); returns how many
+/// fragments (weight > 0) it inserted.
+uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelRect& r, Z3Tile& tile);
 
 /// Per-pixel constants of one ScreenSpace segment splat of a single sub-segment (§5, the
 /// closed form of segment_methods.cpp): the ray through (px, py) meets the strip's plane at depth
