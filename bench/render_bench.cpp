@@ -1,6 +1,8 @@
 // Splatting throughput of the §6.2 pipeline on the shared point models (igea, armadillo, dragon
 // vertices) at 512^2 and 1024^2: time per frame, input splats per second, and the split between
-// prepare (transform, cull, warp, clip, light), binning and rasterisation + Z^3 + resolve.
+// prepare (transform, cull, warp, clip, light), binning and rasterisation + Z^3 + resolve, and
+// the CPU time per input point of prepare and binning (prep_ns/pt, bin_ns/pt: thread CPU time
+// summed over the workers, RenderStats::prepareThreadSeconds).
 // Normals and radii come from the §6.1 geometry stage once per model (not timed).
 // Arguments: size, threads. Run: build/linesurf_bench --benchmark_filter=Render  (set LINESURF_SHARED_DATA if needed)
 #include <benchmark/benchmark.h>
@@ -61,7 +63,7 @@ void renderBench(benchmark::State& state, const std::string& file) {
   Renderer renderer(*m);
   const Camera cam = Camera::orbit(renderer.sphere(), 30, 20, 0, size, size);
   RenderStats last;
-  double prep = 0, bin = 0, raster = 0;
+  double prep = 0, bin = 0, raster = 0, prepCpu = 0, binCpu = 0;
   for (auto _ : state) {
     RenderResult r = renderer.render(cam);
     benchmark::DoNotOptimize(r.color.pixels.data());
@@ -69,6 +71,8 @@ void renderBench(benchmark::State& state, const std::string& file) {
     prep += r.stats.prepareSeconds;
     bin += r.stats.binSeconds;
     raster += r.stats.rasterSeconds;
+    prepCpu += r.stats.prepareThreadSeconds;
+    binCpu += r.stats.binThreadSeconds;
   }
   const double it = double(state.iterations());
   state.counters["Msplats/s"] =
@@ -79,6 +83,10 @@ void renderBench(benchmark::State& state, const std::string& file) {
   state.counters["bin_ms"] = 1e3 * bin / it;
   state.counters["raster_ms"] = 1e3 * raster / it;
   state.counters["fragments"] = double(last.fragments);
+  // CPU time per input point summed over the threads (robust on a shared machine)
+  const double points = double(m->points.size()) * it;
+  state.counters["prep_ns/pt"] = 1e9 * prepCpu / points;
+  state.counters["bin_ns/pt"] = 1e9 * binCpu / points;
   state.SetLabel(std::string("simd=") + renderSimdTarget());
 }
 

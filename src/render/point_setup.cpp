@@ -144,7 +144,12 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
       const VF b1x = hn::Mul(hn::Mul(hn::NegMulAdd(r, ux, vx), il11), R), b1y = hn::Mul(hn::Mul(hn::NegMulAdd(r, uy, vy), il11), R),
                b1z = hn::Mul(hn::Mul(hn::NegMulAdd(r, uz, vz), il11), R);
       const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
-      for (int k = 0; k < 5; ++k) {
+      // the corners only matter for Gouraud splats, wider or taller than kFlatShadeSpan pixels;
+      // bounds of extent 2 e <= kFlatShadeSpan - 1 hold at most kFlatShadeSpan pixel centres
+      const VF flatExtent = S(0.5f * float(PreparedPoint::kFlatShadeSpan - 1));
+      const auto flat = hn::And(hn::Le(ex, flatExtent), hn::Le(ey, flatExtent));
+      const int corners = hn::AllTrue(d, hn::Or(flat, hn::Not(hn::FirstN(d, size_t(n - i))))) ? 1 : 5;
+      for (int k = 0; k < corners; ++k) {
         VF spec = zero;
         if (F.specular > 0) {
           const VF ss = S(sgn[k][0]), tt = S(sgn[k][1]);

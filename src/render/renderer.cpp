@@ -3,6 +3,7 @@
 #include "linesurf/render/renderer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <ctime>
 #include <memory>
 #include <mutex>
@@ -34,6 +35,7 @@ struct Renderer::Buffers {
   std::vector<PreparedSegment> segs;
   std::vector<PrimitiveStatus> segStatus;
   std::vector<uint32_t> chunkVisible;
+  std::vector<double> chunkSeconds;   ///< thread CPU time per chunk (prepare, then binning)
   std::vector<PointSetupCounts> chunkCounts;
   std::vector<uint32_t> counts;       ///< per chunk and tile: bins
   std::vector<size_t> tileStart, offset;
@@ -114,6 +116,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   buf.counts.assign(chunks * tiles, 0);
   buf.chunkVisible.assign(pointChunks, 0);
   buf.chunkCounts.assign(pointChunks, PointSetupCounts{});
+  buf.chunkSeconds.assign(chunks, 0.0);
   PreparedPoint* const pts = buf.pts.data();
   PreparedSegment* const segs = buf.segs.data();
   TileSpan* const spans = buf.pointTiles.data();
@@ -126,6 +129,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   };
   const detail::PointSetupFrame setup = pointSetupFrame(frame);
   parallelFor(0, pointChunks, [&](size_t c) {
+    const double t0 = threadCpuSeconds();
     uint32_t* cnt = buf.counts.data() + c * tiles;
     const size_t base = c * chunkPoints;
     size_t k = base;
@@ -136,9 +140,15 @@ RenderResult Renderer::render(const Camera& cam) const {
       k += size_t(n);
     }
     buf.chunkVisible[c] = uint32_t(k - base);
+    buf.chunkSeconds[c] = threadCpuSeconds() - t0;
   }, 1);
   PrimitiveStatus* const segStatus = buf.segStatus.data();
-  parallelFor(0, ns, [&](size_t i) { segStatus[i] = prepareSegment(model_.segments[i], uint32_t(i), frame, segs[i]); }, 256);
+  std::atomic<int64_t> segmentNs{0};
+  parallelForRange(0, ns, [&](size_t i0, size_t i1) {
+    const double t0 = threadCpuSeconds();
+    for (size_t i = i0; i < i1; ++i) segStatus[i] = prepareSegment(model_.segments[i], uint32_t(i), frame, segs[i]);
+    segmentNs += int64_t(1e9 * (threadCpuSeconds() - t0));
+  }, 256);
   for (const PointSetupCounts& c : buf.chunkCounts) {
     st.pointsDrawn += c.drawn + c.clipped;
     st.pointsClipped += c.clipped;
@@ -155,6 +165,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     for (size_t i = c * segChunkSize, e = std::min(ns, i + segChunkSize); i < e; ++i)
       if (visible(segStatus[i])) countSpan(cnt, tileSpan(segs[i].bounds));
   }, 1);
+  st.prepareThreadSeconds = 1e-9 * double(segmentNs.load());
+  for (double s : buf.chunkSeconds) st.prepareThreadSeconds += s;
   st.prepareSeconds = t.seconds();
   reportProgress(opt.progress, "render", 0.1);
 
@@ -180,6 +192,7 @@ RenderResult Renderer::render(const Camera& cam) const {
       for (int tx = s.x0; tx <= s.x1; ++tx) refs[off[size_t(ty) * size_t(tilesX) + size_t(tx)]++] = ref;
   };
   parallelFor(0, chunks, [&](size_t c) {
+    const double t0 = threadCpuSeconds();
     size_t* off = buf.offset.data() + c * tiles;
     if (c < pointChunks) {
       for (size_t j = c * chunkPoints, e = j + buf.chunkVisible[c]; j < e; ++j) fillSpan(off, spans[j], uint32_t(j));
@@ -188,7 +201,9 @@ RenderResult Renderer::render(const Camera& cam) const {
       for (size_t i = c0, e = std::min(ns, c0 + segChunkSize); i < e; ++i)
         if (visible(segStatus[i])) fillSpan(off, tileSpan(segs[i].bounds), uint32_t(pointSlots + i));
     }
+    buf.chunkSeconds[c] = threadCpuSeconds() - t0;
   }, 1);
+  for (double s : buf.chunkSeconds) st.binThreadSeconds += s;
   st.tileBins = run;
   st.binSeconds = t.seconds();
 

@@ -30,6 +30,9 @@ struct RenderStats {
   /// resolving pixels, each summed over the worker threads (for per-fragment costs: robust
   /// against other processes on a shared machine).
   double fragmentThreadSeconds = 0, resolveThreadSeconds = 0;
+  /// CPU time of the prepare and binning stages, summed over the worker threads (per-point
+  /// set-up costs, robust against other processes as above).
+  double prepareThreadSeconds = 0, binThreadSeconds = 0;
 };
 
 struct RenderResult {
