@@ -85,19 +85,80 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     }
     const VF mean = hn::Mul(S(0.5f), hn::Add(a, c)), diff = hn::Mul(S(0.5f), hn::Sub(a, c));
     const VF maxS = hn::Mul(S(kMaxStretch), sigma);
-    slow = hn::Or(slow, hn::Not(hn::Le(hn::Add(mean, hn::Sqrt(hn::MulAdd(diff, diff, hn::Mul(b, b)))), hn::Mul(maxS, maxS))));
+    const VF eig = hn::Sqrt(hn::MulAdd(diff, diff, hn::Mul(b, b)));  // eigenvalues mean +- eig
+    // stretched past kMaxStretch: the thesis's construction (the exact path of preparePoint)
+    const auto stretched = hn::Not(hn::Le(hn::Add(mean, eig), hn::Mul(maxS, maxS)));
+    const VF R = S(F.cutoff);
+    // closed form (common case): V^-1 = L L^T; its own limits in cfSlow
     const VF detV = hn::MulSub(a, c, hn::Mul(b, b));
-    slow = hn::Or(slow, hn::Not(hn::Gt(detV, zero)));
+    auto cfSlow = hn::Not(hn::Gt(detV, zero));
     const VF idet = hn::Div(one, detV);
     const VF l00 = hn::Sqrt(hn::Mul(c, idet)), l10 = hn::Div(hn::Neg(hn::Mul(b, idet)), l00);
     const VF l11 = hn::Sqrt(hn::Max(zero, hn::NegMulAdd(l10, l10, hn::Mul(a, idet))));
-    slow = hn::Or(slow, hn::Not(hn::Gt(l11, zero)));
-    const VF a0x = hn::MulAdd(l00, ux, hn::Mul(l10, vx)), a0y = hn::MulAdd(l00, uy, hn::Mul(l10, vy)),
-             a0z = hn::MulAdd(l00, uz, hn::Mul(l10, vz));
-    const VF a1x = hn::Mul(l11, vx), a1y = hn::Mul(l11, vy), a1z = hn::Mul(l11, vz);
-    const VF wscale = hn::Div(one, hn::Sqrt(detV));
-    const VF ext = hn::Mul(S(F.cutoff), hn::Sqrt(hn::Max(zero, hn::MulAdd(a, hn::Mul(uz, uz), hn::MulAdd(hn::Mul(two, b), hn::Mul(uz, vz), hn::Mul(c, hn::Mul(vz, vz)))))));
-    slow = hn::Or(slow, hn::Not(hn::And(hn::Ge(hn::Sub(dd, ext), S(F.nearD)), hn::Le(hn::Add(dd, ext), S(F.farD)))));
+    cfSlow = hn::Or(cfSlow, hn::Not(hn::Gt(l11, zero)));
+    VF a0x = hn::MulAdd(l00, ux, hn::Mul(l10, vx)), a0y = hn::MulAdd(l00, uy, hn::Mul(l10, vy)),
+       a0z = hn::MulAdd(l00, uz, hn::Mul(l10, vz));
+    VF a1x = hn::Mul(l11, vx), a1y = hn::Mul(l11, vy), a1z = hn::Mul(l11, vz);
+    VF wscale = hn::Div(one, hn::Sqrt(detV));
+    VF ext = hn::Mul(R, hn::Sqrt(hn::Max(zero, hn::MulAdd(a, hn::Mul(uz, uz), hn::MulAdd(hn::Mul(two, b), hn::Mul(uz, vz), hn::Mul(c, hn::Mul(vz, vz)))))));
+    cfSlow = hn::Or(cfSlow, hn::Not(hn::And(hn::Ge(hn::Sub(dd, ext), S(F.nearD)), hn::Le(hn::Add(dd, ext), S(F.farD)))));
+    // R B0, R B1 (B0, B1: plane vectors of unit plane coordinates; Gouraud corners c +- R B0 +- R B1)
+    // closed form: B0 = u / l00, B1 = (v - (l10 / l00) u) / l11
+    VF b0x, b0y, b0z, b1x, b1y, b1z;
+    {
+      const VF il00 = hn::Div(one, l00), il11 = hn::Div(one, l11), r = hn::Mul(l10, il00);
+      b0x = hn::Mul(hn::Mul(ux, il00), R), b0y = hn::Mul(hn::Mul(uy, il00), R), b0z = hn::Mul(hn::Mul(uz, il00), R);
+      b1x = hn::Mul(hn::Mul(hn::NegMulAdd(r, ux, vx), il11), R), b1y = hn::Mul(hn::Mul(hn::NegMulAdd(r, uy, vy), il11), R),
+      b1z = hn::Mul(hn::Mul(hn::NegMulAdd(r, uz, vz), il11), R);
+    }
+    // exact path: V = Rot(theta) Lambda^2 Rot(theta)^T with both radii clamped to kMaxStretch
+    // sigma, bounds of the quadrilateral c +- R r0 E0 +- R r1 E1; in SIMD when no corner leaves
+    // [near, far] (else exSlow: preparePoint clips it)
+    const auto exactLanes = hn::AndNot(slow, stretched);
+    VF qx0 = zero, qx1 = zero, qy0 = zero, qy1 = zero;
+    if (!hn::AllFalse(d, exactLanes)) {
+      const VF l0 = hn::Add(mean, eig), l1 = hn::Max(hn::Sub(mean, eig), S(1e-30f));
+      const auto useB = hn::And(hn::Gt(hn::Abs(b), hn::Mul(S(1e-30f), hn::Add(hn::Abs(a), hn::Abs(c)))), hn::Ne(b, zero));
+      const VF gx = hn::Sub(l0, c), ie = hn::Div(one, hn::Sqrt(hn::MulAdd(gx, gx, hn::Mul(b, b))));
+      const auto aGeC = hn::Ge(a, c);
+      const VF e0x = hn::IfThenElse(useB, hn::Mul(gx, ie), hn::IfThenElseZero(aGeC, one));
+      const VF e0y = hn::IfThenElse(useB, hn::Mul(b, ie), hn::IfThenZeroElse(aGeC, one));
+      const VF r0 = hn::Min(hn::Sqrt(l0), maxS), r1 = hn::Min(hn::Sqrt(l1), maxS);
+      const VF E0x = hn::MulAdd(e0x, ux, hn::Mul(e0y, vx)), E0y = hn::MulAdd(e0x, uy, hn::Mul(e0y, vy)),
+               E0z = hn::MulAdd(e0x, uz, hn::Mul(e0y, vz));
+      const VF E1x = hn::MulSub(ny, E0z, hn::Mul(nz, E0y)), E1y = hn::MulSub(nz, E0x, hn::Mul(nx, E0z)),
+               E1z = hn::MulSub(nx, E0y, hn::Mul(ny, E0x));
+      auto exSlow = hn::Not(hn::And(hn::Gt(r0, zero), hn::Gt(r1, zero)));
+      const VF inf = S(INFINITY);
+      exSlow = hn::Or(exSlow, hn::Not(hn::And(hn::Lt(hn::Abs(E0x), inf), hn::And(hn::Lt(hn::Abs(E0y), inf), hn::Lt(hn::Abs(E0z), inf)))));
+      const VF ir0 = hn::Div(one, r0), ir1 = hn::Div(one, r1);
+      const VF Rr0 = hn::Mul(R, r0), Rr1 = hn::Mul(R, r1);
+      const VF hx0 = hn::Mul(Rr0, E0x), hy0 = hn::Mul(Rr0, E0y), hz0 = hn::Mul(Rr0, E0z);  // R r0 E0
+      const VF hx1 = hn::Mul(Rr1, E1x), hy1 = hn::Mul(Rr1, E1y), hz1 = hn::Mul(Rr1, E1z);  // R r1 E1
+      VF xmin = inf, xmax = hn::Neg(inf), ymin = inf, ymax = hn::Neg(inf);
+      for (int k = 0; k < 4; ++k) {
+        const VF ss = S(k & 1 ? 1.0f : -1.0f), tt = S(k & 2 ? 1.0f : -1.0f);
+        const VF qx = hn::MulAdd(tt, hx1, hn::MulAdd(ss, hx0, cx)), qy = hn::MulAdd(tt, hy1, hn::MulAdd(ss, hy0, cy)),
+                 qz = hn::MulAdd(tt, hz1, hn::MulAdd(ss, hz0, cz));
+        const VF qd = hn::Neg(qz);
+        exSlow = hn::Or(exSlow, hn::Not(hn::And(hn::Ge(hn::Sub(qd, S(F.nearD)), zero), hn::Ge(hn::Add(S(F.farD), qz), zero))));
+        const VF iqd = hn::Div(one, qd);
+        const VF sx = hn::MulAdd(hn::Mul(f, qx), iqd, S(F.cx)), sy = hn::NegMulAdd(hn::Mul(f, qy), iqd, S(F.cy));
+        xmin = hn::Min(xmin, sx), xmax = hn::Max(xmax, sx), ymin = hn::Min(ymin, sy), ymax = hn::Max(ymax, sy);
+      }
+      qx0 = xmin, qx1 = xmax, qy0 = ymin, qy1 = ymax;
+      a0x = hn::IfThenElse(stretched, hn::Mul(E0x, ir0), a0x), a0y = hn::IfThenElse(stretched, hn::Mul(E0y, ir0), a0y),
+      a0z = hn::IfThenElse(stretched, hn::Mul(E0z, ir0), a0z);
+      a1x = hn::IfThenElse(stretched, hn::Mul(E1x, ir1), a1x), a1y = hn::IfThenElse(stretched, hn::Mul(E1y, ir1), a1y),
+      a1z = hn::IfThenElse(stretched, hn::Mul(E1z, ir1), a1z);
+      wscale = hn::IfThenElse(stretched, hn::Div(one, hn::Mul(r0, r1)), wscale);
+      ext = hn::IfThenElse(stretched, hn::Mul(R, hn::Sqrt(hn::MulAdd(hn::Mul(r0, r0), hn::Mul(E0z, E0z), hn::Mul(hn::Mul(r1, r1), hn::Mul(E1z, E1z))))), ext);
+      b0x = hn::IfThenElse(stretched, hx0, b0x), b0y = hn::IfThenElse(stretched, hy0, b0y), b0z = hn::IfThenElse(stretched, hz0, b0z);
+      b1x = hn::IfThenElse(stretched, hx1, b1x), b1y = hn::IfThenElse(stretched, hy1, b1y), b1z = hn::IfThenElse(stretched, hz1, b1z);
+      slow = hn::Or(slow, hn::And(stretched, exSlow));
+    } else {
+      slow = hn::Or(slow, stretched);
+    }
     // ray/plane constants: k.r(px, py) = k.x/f px - k.y/f py + (-k.x cx/f + k.y cy/f - k.z)
     const VF invf = S(1.0f / F.f);
     auto rayDx = [&](VF kx) { return hn::Mul(kx, invf); };
@@ -112,7 +173,7 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
              S0 = hn::MulSub(nc, rayC(a0x, a0y, a0z), hn::Mul(a0c, N0));
     const VF Tx = hn::MulSub(nc, rayDx(a1x), hn::Mul(a1c, Nx)), Ty = hn::MulSub(nc, rayDy(a1y), hn::Mul(a1c, Ny)),
              T0 = hn::MulSub(nc, rayC(a1x, a1y, a1z), hn::Mul(a1c, N0));
-    // conic bounds about the projected centre, where S = T = 0 and N = nc / d
+    // closed form: conic bounds about the projected centre, where S = T = 0 and N = nc / d
     const VF id = hn::Div(one, dd);
     const VF pcx = hn::MulAdd(hn::Mul(f, cx), id, S(F.cx)), pcy = hn::NegMulAdd(hn::Mul(f, cy), id, S(F.cy));
     const VF Nc = hn::Mul(nc, id), cq = S(F.cutoffQ);
@@ -122,32 +183,28 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     const VF b0 = hn::Neg(hn::Mul(cq, hn::Mul(Nx, Nc))), b1 = hn::Neg(hn::Mul(cq, hn::Mul(Ny, Nc)));
     const VF m = hn::Neg(hn::Mul(cq, hn::Mul(Nc, Nc)));
     const VF det = hn::MulSub(A00, A11, hn::Mul(A01, A01));
-    slow = hn::Or(slow, hn::Not(hn::And(hn::Gt(A00, zero), hn::Gt(det, zero))));
+    cfSlow = hn::Or(cfSlow, hn::Not(hn::And(hn::Gt(A00, zero), hn::Gt(det, zero))));
     const VF idt = hn::Div(one, det);
     const VF ox = hn::Mul(hn::MulSub(A01, b1, hn::Mul(A11, b0)), idt), oy = hn::Mul(hn::MulSub(A01, b0, hn::Mul(A00, b1)), idt);
     const VF kk = hn::Neg(hn::MulAdd(b0, ox, hn::MulAdd(b1, oy, m)));
-    slow = hn::Or(slow, hn::Not(hn::Gt(kk, zero)));
+    cfSlow = hn::Or(cfSlow, hn::Not(hn::Gt(kk, zero)));
+    slow = hn::Or(slow, hn::AndNot(stretched, cfSlow));
     const VF hx = hn::Sqrt(hn::Mul(hn::Mul(kk, A11), idt)), hy = hn::Sqrt(hn::Mul(hn::Mul(kk, A00), idt));
     const VF slack = hn::MulAdd(S(1e-4f), hn::Add(hx, hy), S(0.01f));
     const VF bx = hn::Add(pcx, ox), by = hn::Add(pcy, oy), ex = hn::Add(hx, slack), ey = hn::Add(hy, slack);
-    hn::StoreU(hn::Sub(bx, ex), d, B.x0 + i), hn::StoreU(hn::Add(bx, ex), d, B.x1 + i);
-    hn::StoreU(hn::Sub(by, ey), d, B.y0 + i), hn::StoreU(hn::Add(by, ey), d, B.y1 + i);
+    const VF x0 = hn::IfThenElse(stretched, qx0, hn::Sub(bx, ex)), x1 = hn::IfThenElse(stretched, qx1, hn::Add(bx, ex));
+    const VF y0 = hn::IfThenElse(stretched, qy0, hn::Sub(by, ey)), y1 = hn::IfThenElse(stretched, qy1, hn::Add(by, ey));
+    hn::StoreU(x0, d, B.x0 + i), hn::StoreU(x1, d, B.x1 + i), hn::StoreU(y0, d, B.y0 + i), hn::StoreU(y1, d, B.y1 + i);
     // Phong factors (FrameContext::shade): n.l is the same over the splat, the specular term is
     // taken at the centre and at the Gouraud corners c +- R B0 +- R B1
     if (F.light) {
       const VF ndl = hn::Max(zero, dot3(nx, ny, nz, S(F.lightDir[0]), S(F.lightDir[1]), S(F.lightDir[2])));
       hn::StoreU(hn::MulAdd(S(F.diffuse), ndl, S(F.ambient)), d, B.diffuseFactor + i);
-      // B0 = u / l00, B1 = (v - (l10 / l00) u) / l11: unit plane coordinates
-      const VF il00 = hn::Div(one, l00), il11 = hn::Div(one, l11), r = hn::Mul(l10, il00);
-      const VF R = S(F.cutoff);
-      const VF b0x = hn::Mul(hn::Mul(ux, il00), R), b0y = hn::Mul(hn::Mul(uy, il00), R), b0z = hn::Mul(hn::Mul(uz, il00), R);
-      const VF b1x = hn::Mul(hn::Mul(hn::NegMulAdd(r, ux, vx), il11), R), b1y = hn::Mul(hn::Mul(hn::NegMulAdd(r, uy, vy), il11), R),
-               b1z = hn::Mul(hn::Mul(hn::NegMulAdd(r, uz, vz), il11), R);
       const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
       // the corners only matter for Gouraud splats, wider or taller than kFlatShadeSpan pixels;
-      // bounds of extent 2 e <= kFlatShadeSpan - 1 hold at most kFlatShadeSpan pixel centres
-      const VF flatExtent = S(0.5f * float(PreparedPoint::kFlatShadeSpan - 1));
-      const auto flat = hn::And(hn::Le(ex, flatExtent), hn::Le(ey, flatExtent));
+      // bounds of extent x1 - x0 <= kFlatShadeSpan - 1 hold at most kFlatShadeSpan pixel centres
+      const VF flatExtent = S(float(PreparedPoint::kFlatShadeSpan - 1));
+      const auto flat = hn::And(hn::Le(hn::Sub(x1, x0), flatExtent), hn::Le(hn::Sub(y1, y0), flatExtent));
       const int corners = hn::AllTrue(d, hn::Or(flat, hn::Not(hn::FirstN(d, size_t(n - i))))) ? 1 : 5;
       for (int k = 0; k < corners; ++k) {
         VF spec = zero;

@@ -4,6 +4,7 @@
 // frame, other views in between, two frames at once) draws what a fresh one draws.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <thread>
 
@@ -84,6 +85,65 @@ TEST(PointSetup, BatchesGiveTheReferenceStatusOfEveryPoint) {
     EXPECT_EQ(batched.degenerate, 4u);
     if (cull) EXPECT_GT(batched.culled, m.points.size() / 3);
     else EXPECT_LT(batched.culled, 20u);  // only edge-on ones
+  }
+}
+
+// The SIMD set-up (closed form, and the thesis's construction for splats stretched past
+// kMaxStretch) computes what preparePoint computes, up to float rounding.
+TEST(PointSetup, SimdLanesMatchTheScalarReference) {
+  for (float radiusScale : {1.0f, 0.03f}) {  // small radii: the prefilter stretches grazing splats
+    HybridModel m = noisySphere();
+    for (Point& p : m.points) p.radius *= radiusScale;
+    RenderOptions o;
+    const Camera cam = Camera::lookAt(Vec3f(0, 0.5f, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 200, 150);
+    FrameContext frame = FrameContext::make(cam, o, boundingSphere(m));
+    const detail::PointSetupFrame setup = pointSetupFrame(frame);
+    std::vector<PreparedPoint> out(detail::kSetupBatch);
+    PointSetupCounts counts;
+    int compared = 0, gouraud = 0, stretched = 0;
+    for (size_t i = 0; i < m.points.size(); i += detail::kSetupBatch) {
+      const int n = int(std::min<size_t>(detail::kSetupBatch, m.points.size() - i));
+      const int k = preparePoints(m.points.data(), uint32_t(i), n, frame, setup, out.data(), counts);
+      for (int j = 0; j < k; ++j) {
+        const PreparedPoint& a = out[j];
+        PreparedPoint r;
+        ASSERT_EQ(preparePoint(m.points[a.index], a.index, frame, r), PrimitiveStatus::Drawn);
+        const Point& p = m.points[a.index];
+        const Vec3f nc = cam.rotation() * p.normal;
+        stretched += std::abs(nc.dot(cam.toCamera(p.position).normalized())) < 0.1f;
+        EXPECT_NEAR(a.bounds.x0, r.bounds.x0, 1);
+        EXPECT_NEAR(a.bounds.x1, r.bounds.x1, 1);
+        EXPECT_NEAR(a.bounds.y0, r.bounds.y0, 1);
+        EXPECT_NEAR(a.bounds.y1, r.bounds.y1, 1);
+        // the splat's weight and depth at its pixels: the plane constants agree relative to their size
+        const detail::PointRaster &x = a.raster, &y = r.raster;
+        for (int px = a.bounds.x0; px < a.bounds.x1; ++px)
+          for (int py = a.bounds.y0; py < a.bounds.y1; ++py) {
+            const float fx = float(px) + 0.5f, fy = float(py) + 0.5f;
+            const float Na = x.N.at(fx, fy), Nr = y.N.at(fx, fy);
+            const float sa = x.S.at(fx, fy) / Na, ta = x.T.at(fx, fy) / Na, sr = y.S.at(fx, fy) / Nr, tr = y.T.at(fx, fy) / Nr;
+            const float qa = sa * sa + ta * ta, qr = sr * sr + tr * tr;
+            if (qr > 0.9f * frame.cutoffQ && qr < 1.1f * frame.cutoffQ) continue;  // the rim may go either way
+            EXPECT_NEAR(std::exp(-0.5f * qa) * x.weightScale, std::exp(-0.5f * qr) * y.weightScale, 2e-3f * y.weightScale);
+            if (qr < frame.cutoffQ) EXPECT_NEAR(x.depthNum / Na, y.depthNum / Nr, 2e-5f * std::abs(y.depthNum / Nr));
+          }
+        EXPECT_NEAR(a.zThreshold, r.zThreshold, 1e-3f * r.zThreshold);
+        EXPECT_EQ(a.gouraud, r.gouraud);
+        gouraud += a.gouraud;
+        for (int c = 0; c < Z3Tile::kAttrs; ++c) EXPECT_NEAR(a.attr[c], r.attr[c], 1e-3f) << c;
+        if (a.gouraud && r.gouraud)
+          for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(a.C0[c], r.C0[c], 1e-3f);
+            EXPECT_NEAR(a.Cs[c], r.Cs[c], 1e-3f);
+            EXPECT_NEAR(a.Ct[c], r.Ct[c], 1e-3f);
+            EXPECT_NEAR(a.Cst[c], r.Cst[c], 1e-3f);
+          }
+        ++compared;
+      }
+    }
+    EXPECT_GT(compared, 2000);
+    EXPECT_GT(stretched, 50);
+    if (radiusScale == 1.0f) EXPECT_GT(gouraud, 100);
   }
 }
 
