@@ -63,7 +63,7 @@ void renderBench(benchmark::State& state, const std::string& file) {
   Renderer renderer(*m);
   const Camera cam = Camera::orbit(renderer.sphere(), 30, 20, 0, size, size);
   RenderStats last;
-  double prep = 0, bin = 0, raster = 0, prepCpu = 0, binCpu = 0;
+  double prep = 0, bin = 0, raster = 0, prepCpu = 0, binCpu = 0, fragCpu = 0, resolveCpu = 0;
   for (auto _ : state) {
     RenderResult r = renderer.render(cam);
     benchmark::DoNotOptimize(r.color.pixels.data());
@@ -73,6 +73,8 @@ void renderBench(benchmark::State& state, const std::string& file) {
     raster += r.stats.rasterSeconds;
     prepCpu += r.stats.prepareThreadSeconds;
     binCpu += r.stats.binThreadSeconds;
+    fragCpu += r.stats.fragmentThreadSeconds;
+    resolveCpu += r.stats.resolveThreadSeconds;
   }
   const double it = double(state.iterations());
   state.counters["Msplats/s"] =
@@ -82,6 +84,9 @@ void renderBench(benchmark::State& state, const std::string& file) {
   state.counters["prepare_ms"] = 1e3 * prep / it;
   state.counters["bin_ms"] = 1e3 * bin / it;
   state.counters["raster_ms"] = 1e3 * raster / it;
+  // stage 3 in CPU seconds of the worker threads (robust on a loaded machine): fragments, resolve
+  state.counters["frag_cpu_ms"] = 1e3 * fragCpu / it;
+  state.counters["resolve_cpu_ms"] = 1e3 * resolveCpu / it;
   state.counters["fragments"] = double(last.fragments);
   // CPU time per input point summed over the threads (robust on a shared machine)
   const double points = double(m->points.size()) * it;

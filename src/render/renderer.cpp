@@ -224,6 +224,7 @@ RenderResult Renderer::render(const Camera& cam) const {
       buffer = std::make_unique<Z3Tile>(rect, opt.layers);
     else buffer->reset(rect);
     Z3Tile& z3 = *buffer;
+    z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     for (size_t k = tileStart[tile]; k < tileStart[tile + 1]; ++k) {

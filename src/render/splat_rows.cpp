@@ -164,101 +164,139 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
   return m;
 }
 
-// One point splat straight into the Z^3 tile, row by row (detail/splat_rows.h). The weight and
-// depth are those of PointFragments (the same operations); a row's pixels are contiguous in the
-// tile's planes, so the fast path (open a layer on an empty pixel, merge into a single layer the
-// fragment lies within) is a masked load-add-store per blended sum.
-template <class D>
-HWY_INLINE uint64_t PointRowsT(D d, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
-  using V = hn::Vec<D>;
-  const hn::RebindToSigned<D> di;
-  const int L = int(hn::Lanes(d));
-  const V cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
-  const V zero = hn::Zero(d), oneF = hn::Set(d, 1.0f), centre = hn::Iota(d, 0.5f);
-  const V Ndx = hn::Set(d, P.N.dx), Ndy = hn::Set(d, P.N.dy), N0 = hn::Set(d, P.N.c);
-  const V Sdx = hn::Set(d, P.S.dx), Sdy = hn::Set(d, P.S.dy), S0 = hn::Set(d, P.S.c);
-  const V Tdx = hn::Set(d, P.T.dx), Tdy = hn::Set(d, P.T.dy), T0 = hn::Set(d, P.T.c);
-  const V depthNum = hn::Set(d, P.depthNum), nearD = hn::Set(d, P.nearD), farD = hn::Set(d, P.farD);
-  const V thr = hn::Set(d, A.zThreshold);
-  V attr[Z3Tile::kAttrs];
-  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(d, A.attr[k]);
-  V c0[3], cs[3], ct[3], cst[3];
+// One point splat straight into the Z^3 tile (detail/splat_rows.h), in chunks of rows, two passes
+// per chunk, both branch-free in the common case:
+//  1. weights and depths (the same operations as PointFragments) of the chunk's pixels into a
+//     small buffer whose rows are Wp >= width lanes apart (Wp = 4, 8, 16 or a multiple of 16),
+//     full vectors holding several rows of a narrow splat, and 0 weight outside the splat;
+//  2. per row, the Z^3 fast path on the tile's planes (a row's pixels are contiguous there):
+//     open a layer on an empty pixel, merge into the single layer the fragment lies within, or
+//     drop a fragment behind a single opaque layer, as masked loads and stores; the rest (a new
+//     layer next to others, compression) through Z3Tile::insert.
+inline constexpr int kRowChunk = 1024;  // pixels (Wp x rows) per chunk
+
+template <class DZ>
+HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+  const DF d;
+  const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
+  const int W = r.width(), H = r.height();
+  const VF cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
+  const VF zero = hn::Zero(d), oneF = hn::Set(d, 1.0f);
+  const VF Ndx = hn::Set(d, P.N.dx), Ndy = hn::Set(d, P.N.dy), N0 = hn::Set(d, P.N.c);
+  const VF Sdx = hn::Set(d, P.S.dx), Sdy = hn::Set(d, P.S.dy), S0 = hn::Set(d, P.S.c);
+  const VF Tdx = hn::Set(d, P.T.dx), Tdy = hn::Set(d, P.T.dy), T0 = hn::Set(d, P.T.c);
+  const VF depthNum = hn::Set(d, P.depthNum), nearD = hn::Set(d, P.nearD), farD = hn::Set(d, P.farD);
+  // lane offsets within a vector: several rows of Wp lanes when Wp < L, else a run of one row
+  const int rowsPerVec = Wp < L ? L / Wp : 1;
+  const hn::RebindToSigned<DF> di;
+  const auto iota = hn::Iota(di, 0);
+  const VF colLane = hn::ConvertTo(d, Wp < L ? hn::And(iota, hn::Set(di, Wp - 1)) : iota);
+  const VF rowLane = Wp < L ? hn::Floor(hn::Mul(hn::ConvertTo(d, iota), hn::Set(d, 1.0f / float(Wp)))) : zero;
+  HWY_ALIGN float bw[kRowChunk + kMaxLanes], bz[kRowChunk + kMaxLanes], bs[kRowChunk + kMaxLanes], bt[kRowChunk + kMaxLanes];
+  // Z^3 pass constants
+  using VZ = hn::Vec<DZ>;
+  const hn::RebindToSigned<DZ> diz;
+  const VZ zeroZ = hn::Zero(dz), oneZ = hn::Set(dz, 1.0f), thr = hn::Set(dz, A.zThreshold);
+  const bool normals = z3.blendNormals();
+  const int nAttr = normals ? Z3Tile::kAttrs : Z3Tile::kW + 1;
+  VZ attr[Z3Tile::kAttrs], c0[3], cs[3], ct[3], cst[3];
+  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, A.attr[k]);
   for (int k = 0; k < 3; ++k) {
-    c0[k] = hn::Set(d, A.gouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(d, A.gouraud ? A.Cs[k] : 0.0f);
-    ct[k] = hn::Set(d, A.gouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(d, A.gouraud ? A.Cst[k] : 0.0f);
+    c0[k] = hn::Set(dz, A.gouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(dz, A.gouraud ? A.Cs[k] : 0.0f);
+    ct[k] = hn::Set(dz, A.gouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(dz, A.gouraud ? A.Cst[k] : 0.0f);
   }
   const bool opaque = A.attr[Z3Tile::kA] >= 1.0f;
   float* pl[Z3Tile::kFields];
   for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
   int32_t* cnt = z3.counts();
-  const auto iZero = hn::Zero(di), iOne = hn::Set(di, 1);
-  uint64_t inserted = 0, opened = 0;
-  for (int y = r.y0; y < r.y1; ++y) {
-    const V py = hn::Set(d, float(y) + 0.5f);
-    const V nRow = hn::MulAdd(Ndy, py, N0), sRow = hn::MulAdd(Sdy, py, S0), tRow = hn::MulAdd(Tdy, py, T0);
-    const size_t rowBase = z3.index(r.x0, y);
-    for (int x = r.x0; x < r.x1; x += L) {
-      const V px = hn::Add(centre, hn::Set(d, float(x)));
-      const V n = hn::MulAdd(Ndx, px, nRow);
-      const V iN = hn::Div(oneF, n);
-      const V z = hn::Mul(depthNum, iN);
-      auto inside = hn::And(hn::Lt(n, zero), hn::FirstN(d, size_t(r.x1 - x)));
+  const auto iZero = hn::Zero(diz), iOne = hn::Set(diz, 1);
+  uint64_t inserted = 0, opened = 0, occluded = 0;
+  const int chunkRows = std::max(rowsPerVec, (kRowChunk / Wp) / rowsPerVec * rowsPerVec);
+  const VF Wv = hn::Set(d, float(W));
+  for (int cy = 0; cy < H; cy += chunkRows) {
+    const int rows = std::min(chunkRows, H - cy);
+    // 1. weights and depths
+    for (int k = 0; k < rows * Wp; k += L) {
+      const int row = k / Wp, col = k - row * Wp;  // of the vector's first lane
+      const VF cx = hn::Add(colLane, hn::Set(d, float(col))), ry = hn::Add(rowLane, hn::Set(d, float(cy + row)));
+      const VF px = hn::Add(cx, hn::Set(d, float(r.x0) + 0.5f)), py = hn::Add(ry, hn::Set(d, float(r.y0) + 0.5f));
+      const VF n = hn::MulAdd(Ndx, px, hn::MulAdd(Ndy, py, N0));
+      const VF iN = hn::Div(oneF, n);
+      const VF z = hn::Mul(depthNum, iN);
+      auto inside = hn::And(hn::Lt(n, zero), hn::And(hn::Lt(cx, Wv), hn::Lt(ry, hn::Set(d, float(H)))));
       if (P.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
-      const V s = hn::Mul(hn::MulAdd(Sdx, px, sRow), iN), t = hn::Mul(hn::MulAdd(Tdx, px, tRow), iN);
-      const V q = hn::MulAdd(s, s, hn::Mul(t, t));
+      const VF s = hn::Mul(hn::MulAdd(Sdx, px, hn::MulAdd(Sdy, py, S0)), iN);
+      const VF t = hn::Mul(hn::MulAdd(Tdx, px, hn::MulAdd(Tdy, py, T0)), iN);
+      const VF q = hn::MulAdd(s, s, hn::Mul(t, t));
       inside = hn::And(inside, hn::Le(q, cutoff));
-      if (hn::AllFalse(d, inside)) continue;
-      const V w = hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale);
-      inside = hn::And(inside, hn::Gt(w, zero));
-      inserted += hn::CountTrue(d, inside);
-      const size_t p = rowBase + size_t(x - r.x0);
-      const auto count = hn::LoadU(di, cnt + p);
-      const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, iZero)));
-      const auto single = hn::And(inside, hn::RebindMask(d, hn::Eq(count, iOne)));
-      const V dz = hn::Abs(hn::Sub(z, hn::LoadU(d, pl[Z3Tile::kZ] + p)));
-      const auto merge = hn::And(single, hn::Le(dz, hn::Max(thr, hn::LoadU(d, pl[Z3Tile::kThr] + p))));
-      const auto fast = hn::Or(open, merge);
-      if (!hn::AllFalse(d, fast)) {
-        for (int k = 0; k < Z3Tile::kAttrs; ++k) {
-          V a = attr[k];
-          if (A.gouraud && k < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
-            a = hn::Add(hn::Add(hn::Add(c0[k], hn::Mul(s, cs[k])), hn::Mul(t, ct[k])), hn::Mul(hn::Mul(s, t), cst[k]));
-          const V add = hn::Mul(w, a);
-          const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, pl[k] + p), add));
-          hn::BlendedStore(sum, fast, d, pl[k] + p);
+      hn::Store(hn::IfThenElseZero(inside, hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale)), d, bw + k);
+      hn::Store(z, d, bz + k);
+      if (A.gouraud) hn::Store(s, d, bs + k), hn::Store(t, d, bt + k);
+    }
+    // 2. into the Z^3 tile
+    for (int row = 0; row < rows; ++row) {
+      const int y = r.y0 + cy + row;
+      const size_t rowBase = z3.index(r.x0, y);
+      for (int c = 0; c < W; c += LZ) {
+        const int k = row * Wp + c;
+        const VZ w = hn::LoadU(dz, bw + k), z = hn::LoadU(dz, bz + k);
+        const auto inside = hn::Gt(w, zeroZ);
+        const size_t p = rowBase + size_t(c);
+        const auto count = hn::LoadU(diz, cnt + p);
+        const auto open = hn::And(inside, hn::RebindMask(dz, hn::Eq(count, iZero)));
+        const auto single = hn::And(inside, hn::RebindMask(dz, hn::Eq(count, iOne)));
+        const VZ z0 = hn::LoadU(dz, pl[Z3Tile::kZ] + p);
+        const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(dz, pl[Z3Tile::kThr] + p)));
+        const auto merge = hn::And(single, within);
+        const auto fast = hn::Or(open, merge);
+        // behind a single opaque layer (and not within its threshold): occluded
+        const auto behind = hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(dz, pl[Z3Tile::kOpaque] + p), zeroZ))));
+        VZ s = zeroZ, t = zeroZ;
+        if (A.gouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
+        for (int a = 0; a < nAttr; ++a) {
+          VZ v = attr[a];
+          if (A.gouraud && a < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
+            v = hn::Add(hn::Add(hn::Add(c0[a], hn::Mul(s, cs[a])), hn::Mul(t, ct[a])), hn::Mul(hn::Mul(s, t), cst[a]));
+          const VZ add = hn::Mul(w, v);
+          const VZ sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(dz, pl[a] + p), add));
+          hn::BlendedStore(sum, fast, dz, pl[a] + p);
         }
-        hn::BlendedStore(z, open, d, pl[Z3Tile::kZ] + p);
-        hn::BlendedStore(thr, open, d, pl[Z3Tile::kThr] + p);
-        if (opaque) hn::BlendedStore(oneF, open, d, pl[Z3Tile::kOpaque] + p);
-        else hn::BlendedStore(zero, fast, d, pl[Z3Tile::kOpaque] + p);
-        hn::BlendedStore(iOne, hn::RebindMask(di, open), di, cnt + p);
-        opened += hn::CountTrue(d, open);
-      }
-      const auto rest = hn::AndNot(fast, inside);
-      if (hn::AllFalse(d, rest)) continue;
-      // the other fragments (a new layer in front of or behind others, compression, occlusion)
-      alignas(64) float mk[kMaxLanes], zs[kMaxLanes], ws[kMaxLanes], ss[kMaxLanes], ts[kMaxLanes];
-      hn::StoreU(hn::VecFromMask(d, rest), d, mk);
-      hn::StoreU(z, d, zs), hn::StoreU(w, d, ws), hn::StoreU(s, d, ss), hn::StoreU(t, d, ts);
-      float fa[Z3Tile::kAttrs];
-      for (int k = 0; k < Z3Tile::kAttrs; ++k) fa[k] = A.attr[k];
-      for (int i = 0; i < L; ++i) {
-        if (mk[i] == 0) continue;
-        if (A.gouraud)
-          for (int k = 0; k < 3; ++k) fa[k] = A.C0[k] + ss[i] * A.Cs[k] + ts[i] * A.Ct[k] + (ss[i] * ts[i]) * A.Cst[k];
-        z3.insert(x + i, y, zs[i], A.zThreshold, ws[i], fa);
+        hn::BlendedStore(z, open, dz, pl[Z3Tile::kZ] + p);
+        hn::BlendedStore(thr, open, dz, pl[Z3Tile::kThr] + p);
+        if (opaque) hn::BlendedStore(oneZ, open, dz, pl[Z3Tile::kOpaque] + p);
+        else hn::BlendedStore(zeroZ, fast, dz, pl[Z3Tile::kOpaque] + p);
+        hn::BlendedStore(iOne, hn::RebindMask(diz, open), diz, cnt + p);
+        inserted += hn::CountTrue(dz, inside);
+        opened += hn::CountTrue(dz, open);
+        occluded += hn::CountTrue(dz, behind);
+        const auto rest = hn::AndNot(hn::Or(fast, behind), inside);
+        if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
+        // the other fragments (a new layer in front of or behind others, compression, occlusion)
+        HWY_ALIGN float mk[kMaxLanes];
+        hn::StoreU(hn::VecFromMask(dz, rest), dz, mk);
+        float fa[Z3Tile::kAttrs];
+        for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
+        for (int i = 0; i < LZ; ++i) {
+          if (mk[i] == 0) continue;
+          if (A.gouraud) {
+            const float si = bs[k + i], ti = bt[k + i];
+            for (int a = 0; a < 3; ++a) fa[a] = A.C0[a] + si * A.Cs[a] + ti * A.Ct[a] + (si * ti) * A.Cst[a];
+          }
+          z3.insert(r.x0 + c + i, y, bz[k + i], A.zThreshold, bw[k + i], fa);
+        }
       }
     }
   }
-  z3.addAllocated(opened);
+  z3.addFastCounts(opened, occluded);
   return inserted;
 }
 
 uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
-  // narrow splats (most of them on dense models) run on narrower vectors: fewer idle lanes
-  if (r.width() <= 4) return PointRowsT(hn::CappedTag<float, 4>(), P, A, r, z3);
-  if (r.width() <= 8) return PointRowsT(hn::CappedTag<float, 8>(), P, A, r, z3);
-  return PointRowsT(DF(), P, A, r, z3);
+  // rows Wp lanes apart in the weight buffer; the Z^3 pass runs on vectors of at most Wp lanes
+  const int W = r.width();
+  if (W <= 4) return PointRowsT(hn::CappedTag<float, 4>(), 4, P, A, r, z3);
+  if (W <= 8) return PointRowsT(hn::CappedTag<float, 8>(), 8, P, A, r, z3);
+  return PointRowsT(hn::CappedTag<float, 16>(), (W + 15) / 16 * 16, P, A, r, z3);
 }
 
 int64_t Target() { return HWY_TARGET; }

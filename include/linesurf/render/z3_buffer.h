@@ -174,8 +174,17 @@ class Z3Tile {
   size_t index(int x, int y) const { return size_t(y - rect_.y0) * size_t(rect_.width()) + size_t(x - rect_.x0); }
   float* plane(int layer, int field) { return data_.data() + size_t(layer) * layerStride_ + size_t(field) * capacity_; }
   int32_t* counts() { return count_.data(); }
-  /// Counts layers opened by the SIMD rows (step b on an empty pixel).
-  void addAllocated(uint64_t n) { counters_.allocated += n; }
+  /// Counts what the SIMD rows did themselves: layers opened on empty pixels (step b) and
+  /// fragments dropped behind a single opaque layer.
+  void addFastCounts(uint64_t allocated, uint64_t occluded) {
+    counters_.allocated += allocated;
+    counters_.occluded += occluded;
+  }
+  /// Whether the SIMD rows blend the normal sums (true by default). The renderer turns it off
+  /// when nothing reads them (no deferred lighting, no normal buffer): the normal of a layer
+  /// (ResolvedPixel::normal, the shade argument) is then unspecified.
+  bool blendNormals() const { return blendNormals_; }
+  void setBlendNormals(bool on) { blendNormals_ = on; }
 
  private:
   void compress(float* px, int& n);
@@ -188,6 +197,7 @@ class Z3Tile {
   std::vector<float> data_;
   Z3Counters counters_;  ///< allocated, occluded, compressed (fragments and merged: counters())
   uint64_t fragments_ = 0, direct_ = 0;
+  bool blendNormals_ = true;
 };
 
 }  // namespace linesurf
