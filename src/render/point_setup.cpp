@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include "detail/splat_math.h"
 #include "detail/splat_rows.h"
@@ -313,22 +314,23 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
   for (int j = 0; j < m; ++j) {
     const uint32_t index = first + uint32_t(b.lane[j]);
     const Point& point = points[index];
-    PreparedPoint& o = out[k];
     if (b.status[j] == 1.0f) {
       ++counts.culled;
       continue;
     }
     PrimitiveStatus status;
     if (b.status[j] != 0.0f) {  // the exact path
-      status = preparePoint(point, index, frame, o);
+      status = preparePoint(point, index, frame, *new (out + k) PreparedPoint);
     } else {
       bool cut = false;
-      o.index = index;
-      o.bounds = detail::pixelBounds(cam, b.x0[j], b.y0[j], b.x1[j], b.y1[j], cut);
-      if (o.bounds.empty()) {
+      const PixelRect bounds = detail::pixelBounds(cam, b.x0[j], b.y0[j], b.x1[j], b.y1[j], cut);
+      if (bounds.empty()) {
         ++counts.outside;
         continue;
       }
+      PreparedPoint& o = *new (out + k) PreparedPoint;
+      o.index = index;
+      o.bounds = bounds;
       o.raster.N = {b.Nx[j], b.Ny[j], b.N0[j]};
       o.raster.S = {b.Sx[j], b.Sy[j], b.S0[j]};
       o.raster.T = {b.Tx[j], b.Ty[j], b.T0[j]};

@@ -24,9 +24,11 @@ struct PointSetupCounts {
 /// The per-frame constants of preparePoints.
 detail::PointSetupFrame pointSetupFrame(const FrameContext& frame);
 
-/// Prepares points [first, first + count) of `points` (count <= detail::kSetupBatch): writes the
-/// visible ones (Drawn or Clipped) to out[0 .. k) in index order and returns k; adds every point's
-/// status to `counts`. Same results as preparePoint for each point up to float rounding.
+/// Prepares points [first, first + count) of `points` (count <= detail::kSetupBatch): constructs
+/// the visible ones (Drawn or Clipped) in out[0 .. k) (storage for `count` PreparedPoints, not
+/// necessarily constructed: untouched slots stay untouched) in index order and returns k; adds
+/// every point's status to `counts`. Same results as preparePoint for each point up to float
+/// rounding.
 int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
                   const detail::PointSetupFrame& setup, PreparedPoint* out, PointSetupCounts& counts);
 
