@@ -24,7 +24,10 @@ namespace hn = hwy::HWY_NAMESPACE;
 void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
   using DF = hn::ScalableTag<float>;
   using VF = hn::Vec<DF>;
+  using DI = hn::RebindToSigned<DF>;
+  using VI = hn::Vec<DI>;
   const DF d;
+  const DI di;
   const int L = int(hn::Lanes(d));
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
   auto S = [&](float v) { return hn::Set(d, v); };
@@ -195,7 +198,17 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     const VF bx = hn::Add(pcx, ox), by = hn::Add(pcy, oy), ex = hn::Add(hx, slack), ey = hn::Add(hy, slack);
     const VF x0 = hn::IfThenElse(stretched, qx0, hn::Sub(bx, ex)), x1 = hn::IfThenElse(stretched, qx1, hn::Add(bx, ex));
     const VF y0 = hn::IfThenElse(stretched, qy0, hn::Sub(by, ey)), y1 = hn::IfThenElse(stretched, qy1, hn::Add(by, ey));
-    hn::StoreU(x0, d, B.x0 + i), hn::StoreU(x1, d, B.x1 + i), hn::StoreU(y0, d, B.y0 + i), hn::StoreU(y1, d, B.y1 + i);
+    // pixel bounds as detail::pixelBounds computes them (in float: the same integers while the
+    // bounds lie within 2^22 pixels of the view; beyond, both are cut to the view)
+    const VF lim = S(1e7f), half = S(0.5f);
+    auto lo = [&](VF v) { return hn::ConvertTo(di, hn::Ceil(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))); };
+    auto hi = [&](VF v) { return hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))), hn::Set(di, 1)); };
+    const VI bx0 = lo(x0), by0 = lo(y0), bx1 = hi(x1), by1 = hi(y1);
+    const VI ix0 = hn::Max(bx0, hn::Zero(di)), iy0 = hn::Max(by0, hn::Zero(di));
+    const VI ix1 = hn::Min(bx1, hn::Set(di, F.width)), iy1 = hn::Min(by1, hn::Set(di, F.height));
+    hn::StoreU(ix0, di, B.x0 + i), hn::StoreU(ix1, di, B.x1 + i), hn::StoreU(iy0, di, B.y0 + i), hn::StoreU(iy1, di, B.y1 + i);
+    const auto cut = hn::RebindMask(d, hn::Not(hn::And(hn::And(hn::Eq(ix0, bx0), hn::Eq(iy0, by0)), hn::And(hn::Eq(ix1, bx1), hn::Eq(iy1, by1)))));
+    const auto empty = hn::RebindMask(d, hn::Not(hn::And(hn::Gt(ix1, ix0), hn::Gt(iy1, iy0))));
     // Phong factors (FrameContext::shade): n.l is the same over the splat, the specular term is
     // taken at the centre and at the Gouraud corners c +- R B0 +- R B1
     if (F.light) {
@@ -204,9 +217,10 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
       const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
       // the corners only matter for Gouraud splats, wider or taller than kFlatShadeSpan pixels;
       // bounds of extent x1 - x0 <= kFlatShadeSpan - 1 hold at most kFlatShadeSpan pixel centres
-      const VF flatExtent = S(float(PreparedPoint::kFlatShadeSpan - 1));
-      const auto flat = hn::And(hn::Le(hn::Sub(x1, x0), flatExtent), hn::Le(hn::Sub(y1, y0), flatExtent));
-      const int corners = hn::AllTrue(d, hn::Or(flat, hn::Not(hn::FirstN(d, size_t(n - i))))) ? 1 : 5;
+      const VI span = hn::Set(di, PreparedPoint::kFlatShadeSpan);
+      const auto flat = hn::RebindMask(d, hn::Not(hn::Or(hn::Gt(hn::Sub(ix1, ix0), span), hn::Gt(hn::Sub(iy1, iy0), span))));
+      const auto needed = hn::AndNot(hn::Or(hn::Or(flat, culled), hn::Or(slow, empty)), hn::FirstN(d, size_t(n - i)));
+      const int corners = hn::AllFalse(d, needed) ? 1 : 5;
       for (int k = 0; k < corners; ++k) {
         VF spec = zero;
         if (F.specular > 0) {
@@ -226,7 +240,8 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
         hn::StoreU(spec, d, B.specular[k] + i);
       }
     }
-    hn::StoreU(hn::IfThenElse(bad, S(2.0f), hn::IfThenElse(culled, one, hn::IfThenElseZero(slow, S(2.0f)))), d, B.status + i);
+    const VF status = hn::IfThenElse(empty, S(4.0f), hn::IfThenElseZero(cut, S(3.0f)));
+    hn::StoreU(hn::IfThenElse(bad, S(2.0f), hn::IfThenElse(culled, one, hn::IfThenElse(slow, S(2.0f), status))), d, B.status + i);
     hn::StoreU(Nx, d, B.Nx + i), hn::StoreU(Ny, d, B.Ny + i), hn::StoreU(N0, d, B.N0 + i);
     hn::StoreU(Sx, d, B.Sx + i), hn::StoreU(Sy, d, B.Sy + i), hn::StoreU(S0, d, B.S0 + i);
     hn::StoreU(Tx, d, B.Tx + i), hn::StoreU(Ty, d, B.Ty + i), hn::StoreU(T0, d, B.T0 + i);
@@ -265,6 +280,7 @@ detail::PointSetupFrame pointSetupFrame(const FrameContext& frame) {
   f.f = cam.focalPixels();
   f.cx = cam.principalPoint().x(), f.cy = cam.principalPoint().y();
   f.nearD = cam.nearDepth(), f.farD = cam.farDepth();
+  f.width = cam.width(), f.height = cam.height();
   f.prefilter = opt.prefilterVariance;
   f.reconstructionScale = opt.reconstructionScale;
   f.cutoff = opt.cutoffRadius;
@@ -319,18 +335,16 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
       continue;
     }
     PrimitiveStatus status;
-    if (b.status[j] != 0.0f) {  // the exact path
+    if (b.status[j] == 2.0f) {  // the exact path
       status = preparePoint(point, index, frame, *new (out + k) PreparedPoint);
+    } else if (b.status[j] == 4.0f) {
+      ++counts.outside;
+      continue;
     } else {
-      bool cut = false;
-      const PixelRect bounds = detail::pixelBounds(cam, b.x0[j], b.y0[j], b.x1[j], b.y1[j], cut);
-      if (bounds.empty()) {
-        ++counts.outside;
-        continue;
-      }
+      const bool cut = b.status[j] == 3.0f;
       PreparedPoint& o = *new (out + k) PreparedPoint;
       o.index = index;
-      o.bounds = bounds;
+      o.bounds = PixelRect{b.x0[j], b.y0[j], b.x1[j], b.y1[j]};
       o.raster.N = {b.Nx[j], b.Ny[j], b.N0[j]};
       o.raster.S = {b.Sx[j], b.Sy[j], b.S0[j]};
       o.raster.T = {b.Tx[j], b.Ty[j], b.T0[j]};

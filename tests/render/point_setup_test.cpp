@@ -83,8 +83,11 @@ TEST(PointSetup, BatchesGiveTheReferenceStatusOfEveryPoint) {
     EXPECT_EQ(batched.outside, reference.outside);
     EXPECT_EQ(batched.degenerate, reference.degenerate);
     EXPECT_EQ(batched.degenerate, 4u);
-    if (cull) EXPECT_GT(batched.culled, m.points.size() / 3);
-    else EXPECT_LT(batched.culled, 20u);  // only edge-on ones
+    if (cull) {
+      EXPECT_GT(batched.culled, m.points.size() / 3);
+    } else {
+      EXPECT_LT(batched.culled, 20u);  // only edge-on ones
+    }
   }
 }
 
@@ -125,7 +128,9 @@ TEST(PointSetup, SimdLanesMatchTheScalarReference) {
             const float qa = sa * sa + ta * ta, qr = sr * sr + tr * tr;
             if (qr > 0.9f * frame.cutoffQ && qr < 1.1f * frame.cutoffQ) continue;  // the rim may go either way
             EXPECT_NEAR(std::exp(-0.5f * qa) * x.weightScale, std::exp(-0.5f * qr) * y.weightScale, 2e-3f * y.weightScale);
-            if (qr < frame.cutoffQ) EXPECT_NEAR(x.depthNum / Na, y.depthNum / Nr, 2e-5f * std::abs(y.depthNum / Nr));
+            if (qr < frame.cutoffQ) {
+              EXPECT_NEAR(x.depthNum / Na, y.depthNum / Nr, 2e-5f * std::abs(y.depthNum / Nr));
+            }
           }
         EXPECT_NEAR(a.zThreshold, r.zThreshold, 1e-3f * r.zThreshold);
         EXPECT_EQ(a.gouraud, r.gouraud);
@@ -143,7 +148,9 @@ TEST(PointSetup, SimdLanesMatchTheScalarReference) {
     }
     EXPECT_GT(compared, 2000);
     EXPECT_GT(stretched, 50);
-    if (radiusScale == 1.0f) EXPECT_GT(gouraud, 100);
+    if (radiusScale == 1.0f) {
+      EXPECT_GT(gouraud, 100);
+    }
   }
 }
 

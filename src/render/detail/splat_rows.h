@@ -92,6 +92,7 @@ struct PointSetupFrame {
   float rot[9] = {}, trans[3] = {};  ///< world -> camera (row-major rotation)
   float eye[3] = {};                 ///< the eye in world space (the early back-face test)
   float f = 1, cx = 0, cy = 0, nearD = 0, farD = 0;
+  int width = 0, height = 0;         ///< the viewport, pixels
   float prefilter = 0, reconstructionScale = 0, cutoff = 0, cutoffQ = 0;
   bool backfaceCulling = true;
   bool light = false;                ///< compute the Phong factors (flat shading)
@@ -105,12 +106,14 @@ struct PointSetupBatch {
   // input
   alignas(64) float px[kSetupBatch], py[kSetupBatch], pz[kSetupBatch], nx[kSetupBatch], ny[kSetupBatch],
       nz[kSetupBatch], radius[kSetupBatch];
-  // output: 0 = set up here; 1 = culled (back-facing); 2 = needs the exact scalar path
+  // output: 0 = set up here; 1 = culled (back-facing); 2 = needs the exact scalar path; 3 = set
+  // up here, bounds cut by the viewport (Clipped); 4 = outside the viewport
   alignas(64) float status[kSetupBatch];
   alignas(64) float Nx[kSetupBatch], Ny[kSetupBatch], N0[kSetupBatch], Sx[kSetupBatch], Sy[kSetupBatch],
       S0[kSetupBatch], Tx[kSetupBatch], Ty[kSetupBatch], T0[kSetupBatch];
   alignas(64) float depthNum[kSetupBatch], weightScale[kSetupBatch], depthExtent[kSetupBatch];
-  alignas(64) float x0[kSetupBatch], y0[kSetupBatch], x1[kSetupBatch], y1[kSetupBatch];  ///< conic bounds
+  /// pixel bounds (pixelBounds: centres inside the splat's screen bounds, within the viewport)
+  alignas(64) int32_t x0[kSetupBatch], y0[kSetupBatch], x1[kSetupBatch], y1[kSetupBatch];
   alignas(64) float onx[kSetupBatch], ony[kSetupBatch], onz[kSetupBatch];  ///< unit normal facing the viewer
   /// Phong (FrameContext::shade without the albedo): ambient + diffuse n.l, and the specular term
   /// at the centre and at the Gouraud corners (s, t) = (-R,-R), (R,-R), (-R,R), (R,R).
