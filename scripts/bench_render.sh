@@ -5,7 +5,9 @@
 # and linesurf_bench (the project's default generic x86-64 build, SIMD by runtime dispatch),
 # then runs them alternately ROUNDS times on igea, armadillo and the dragon's vertices at 512^2
 # and 1024^2 on 2 threads, keeps each row's best round, and writes the table between the
-# BENCH_RENDER markers of docs/benchmarks.md (or prints it with --print).
+# BENCH_RENDER markers of docs/benchmarks.md (or prints it with --print). Per stage: linesurf's
+# prepare / bin / raster wall ms and its prepare + bin thread CPU time per input point (prep_ns/pt,
+# bin_ns/pt), the yardstick's set-up + binning ms.
 #
 #   scripts/bench_render.sh [--print] [--rounds N]
 #   env: BUILD (default build), LINESURF_SHARED_DATA (default ../shared/data)
@@ -13,7 +15,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 DATA=${LINESURF_SHARED_DATA:-$(cd .. && pwd)/shared/data}
-ROUNDS=2
+ROUNDS=3
 PRINT=0
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -63,7 +65,8 @@ for path in glob.glob(f"{out}/yard_*_*.md"):
         c = [x.strip() for x in line.strip().strip("|").split("|")]
         if len(c) < 11 or c[0] not in names or not c[3][:1] in "12": continue
         key = (names[c[0]], int(c[1]), int(c[3][:1]))
-        row = {"variant": c[2], "ms": float(c[4]), "msplats": float(c[5]), "mfrag": float(c[6]), "visible": int(c[8])}
+        row = {"variant": c[2], "ms": float(c[4]), "msplats": float(c[5]), "mfrag": float(c[6]), "visible": int(c[8]),
+               "setup": float(c[9]) if c[9].replace(".", "", 1).isdigit() else float("nan")}
         if key not in yard or row["ms"] < yard[key]["ms"]: yard[key] = row
 ours, rates, target = {}, {}, "?"
 for path in glob.glob(f"{out}/ours_*.json"):
@@ -81,8 +84,8 @@ lines = []
 lines.append(f"Measured {datetime.datetime.utcnow():%Y-%m-%d %H:%M} UTC by `scripts/bench_render.sh` (best of {rounds} alternating rounds; load average at the end {load}).")
 lines.append(f"CPU features: {features}. linesurf: default generic x86-64 build, SIMD target chosen at run time: **{target}**. Yardstick: `-march=native`, fastest variant per thread count (same view conventions of its own: compare splats/s, not pixels).")
 lines.append("")
-lines.append("| model | res | threads | linesurf ms/frame | yardstick ms/frame (variant) | linesurf M splats/s | yardstick M splats/s | ratio (linesurf / yardstick splats/s) | linesurf prepare / bin / raster+resolve ms | fragments | linesurf ns/fragment (frame) | yardstick ns/evaluated px |")
-lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+lines.append("| model | res | threads | linesurf ms/frame | yardstick ms/frame (variant) | linesurf M splats/s | yardstick M splats/s | ratio (linesurf / yardstick splats/s) | linesurf prepare / bin / raster+resolve ms | yardstick set-up + bin ms (its thread 0, wall) | linesurf prepare + bin CPU ns/point (summed over threads) | fragments | linesurf ns/fragment (frame) | yardstick ns/evaluated px |")
+lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for model in ["igea", "armadillo", "dragon vertices"]:
     for res, T in ((512, 2), (1024, 2), (512, 1), (1024, 1)):
         o = ours.get((ours_key[model], res, T)); y = yard.get((model, res, T))
@@ -91,6 +94,7 @@ for model in ["igea", "armadillo", "dragon vertices"]:
         frag = o.get("fragments", 0)
         lines.append(f"| {model} | {res}² | {T} | {ms:.2f} | {ms_y:.2f} ({y['variant']}) | {o['Msplats/s']:.1f} | {y['msplats']:.1f} | "
                      f"**{o['Msplats/s'] / y['msplats']:.2f}x** | {o['prepare_ms']:.2f} / {o['bin_ms']:.2f} / {o['raster_ms']:.2f} | "
+                     f"{y['setup']:.2f} | {o.get('prep_ns/pt', float('nan')):.1f} + {o.get('bin_ns/pt', float('nan')):.1f} | "
                      f"{frag / 1e6:.2f} M | {1e6 * ms / max(frag, 1):.2f} | {1e3 / y['mfrag']:.2f} |")
 if "points" in rates and "segments" in rates:
     p, s = rates["points"], rates["segments"]
