@@ -304,8 +304,9 @@ bool clearlyBackFacing(const detail::PointSetupFrame& F, const Point& p) {
   const float w = p.normal.x() * dx + p.normal.y() * dy + p.normal.z() * dz;
   const float nn2 = p.normal.squaredNorm(), d2 = dx * dx + dy * dy + dz * dz;
   const float scale2 = d2 + p.position.squaredNorm() + (F.eye[0] * F.eye[0] + F.eye[1] * F.eye[1] + F.eye[2] * F.eye[2]);
-  return w > 0 && w * w > 3e-8f * nn2 * scale2 && w * w < INFINITY && nn2 < INFINITY && scale2 < INFINITY &&
-         p.radius > 0 && p.radius < INFINITY;
+  // bitwise, not short-circuit: no branch to mispredict on a coin-flip test
+  return (w > 0) & (w * w > 3e-8f * nn2 * scale2) & (w * w < INFINITY) & (nn2 < INFINITY) & (scale2 < INFINITY) &
+         (p.radius > 0) & (p.radius < INFINITY);
 }
 
 }  // namespace
@@ -322,7 +323,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     b.px[m] = p.position.x(), b.py[m] = p.position.y(), b.pz[m] = p.position.z();
     b.nx[m] = p.normal.x(), b.ny[m] = p.normal.y(), b.nz[m] = p.normal.z();
     b.radius[m] = p.radius;
-    m += !(setup.backfaceCulling && clearlyBackFacing(setup, p));
+    m += !(setup.backfaceCulling & clearlyBackFacing(setup, p));
   }
   counts.culled += uint32_t(count - m);
   detail::pointSetup(setup, b, m);
@@ -374,8 +375,10 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
           o.Cst = (inv2R * inv2R * (s00 - s10 - s01 + s11)) * lc;
         }
       }
-      const float attr[Z3Tile::kAttrs] = {c.x(), c.y(), c.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, b.onx[j], b.ony[j], b.onz[j]};
-      std::copy(attr, attr + Z3Tile::kAttrs, o.attr);
+      // element by element: a local array copied out costs a store-forwarding stall per point
+      static_assert(Z3Tile::kAttrs == 8);
+      o.attr[0] = c.x(), o.attr[1] = c.y(), o.attr[2] = c.z(), o.attr[3] = std::clamp(col.w(), 0.0f, 1.0f);
+      o.attr[4] = 1.0f, o.attr[5] = b.onx[j], o.attr[6] = b.ony[j], o.attr[7] = b.onz[j];
       status = cut ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
     }
     switch (status) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cstdlib>
 #include <ctime>
 #include <memory>
@@ -155,7 +156,12 @@ RenderResult Renderer::render(const Camera& cam) const {
   PreparedPoint* const pts = buf.pts.data();
   PreparedSegment* const segs = buf.segs.data();
   TileSpan* const spans = buf.pointTiles.data();
+  // bounds are clamped to the view (non-negative): a shift for power-of-two tiles (the default)
+  const int tileShift = (T & (T - 1)) == 0 ? std::countr_zero(unsigned(T)) : -1;
   auto tileSpan = [&](const PixelRect& b) {
+    if (tileShift >= 0)
+      return TileSpan{uint16_t(b.x0 >> tileShift), uint16_t(b.y0 >> tileShift), uint16_t((b.x1 - 1) >> tileShift),
+                      uint16_t((b.y1 - 1) >> tileShift)};
     return TileSpan{uint16_t(b.x0 / T), uint16_t(b.y0 / T), uint16_t((b.x1 - 1) / T), uint16_t((b.y1 - 1) / T)};
   };
   auto countSpan = [&](uint32_t* cnt, const TileSpan& s) {
