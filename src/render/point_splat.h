@@ -21,8 +21,8 @@
 /// rasterise: for every pixel centre in the bounds the viewing ray is intersected with the
 /// tangent plane (perspective-exact, equivalent to the thesis's perspective-correct weight
 /// texture coordinates); the plane coordinates give the weight exp(-q/2) / sqrt(det V), q <=
-/// cutoff^2, and the depth. Blocks of pixels are evaluated in SIMD (detail/splat_rows.h), then
-/// inserted into the Z^3 tile.
+/// cutoff^2, and the depth. Rows of pixels are evaluated in SIMD and go straight into the Z^3
+/// tile with its fast path in SIMD too (detail/splat_rows.h, pointRowsZ3).
 #include <cstdint>
 
 #include "detail/splat_rows.h"
