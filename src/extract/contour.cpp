@@ -416,6 +416,14 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
               Vec3d vn = interp.vertexNormal(f, w);
               if (vn != Vec3d::Zero()) p.normal = vn.cast<float>();
             }
+            if (smooth) {  // the shading normal the segment would have here (see below)
+              Vec3d vn = interp.vertexNormal(f, w);
+              if (l > 0) {
+                const Vec3d dir = (p1 - p0).cast<double>() / l;
+                vn -= vn.dot(dir) * dir;
+              }
+              if (vn.norm() > 1e-6 && vn.dot(fn.cast<double>()) > 0) p.normal = vn.normalized().cast<float>();
+            }
             p.color = interp.color(f, w);
             p.radius = radius;
             if (options.recordFaces) stats.pointFaces[pi] = uint32_t(f);
@@ -428,11 +436,11 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
         s.p1 = p1;
         s.normal = fn;
         double wm[3] = {0.5 * (w0[0] + w1[0]), 0.5 * (w0[1] + w1[1]), 0.5 * (w0[2] + w1[2])};
-        if (useVertexNormals) {
+        if (useVertexNormals || smooth) {
           Vec3d vn = interp.vertexNormal(f, wm);
           Vec3d dir = (p1 - p0).cast<double>().normalized();
           vn -= vn.dot(dir) * dir;  // a segment's normal is perpendicular to it
-          if (vn.norm() > 1e-6) s.normal = vn.normalized().cast<float>();
+          if (vn.norm() > 1e-6 && (!smooth || vn.dot(fn.cast<double>()) > 0)) s.normal = vn.normalized().cast<float>();
         }
         if (smooth) {  // interpolated vertex normals at the endpoints, perpendicular to the segment
           const Vec3d dir = (p1 - p0).cast<double>().normalized();

@@ -310,9 +310,29 @@ TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
     for (size_t j = 1; j < n; ++j)
       EXPECT_LE((pts.points[i + j].position - pts.points[i + j - 1].position).norm(), segSt.spacing * (1 + 1e-5));
     for (size_t j = 0; j < n; ++j) {
-      EXPECT_EQ(pts.points[i + j].normal, s.normal);
+      // smooth model: the point's normal is the segment's interpolated normal there (unit,
+      // perpendicular to the segment, the endpoint normals at the ends; radial on the sphere)
+      const Vec3f& pn = pts.points[i + j].normal;
+      EXPECT_NEAR(pn.norm(), 1.0f, 1e-5f);
+      EXPECT_LT(std::abs(pn.dot((s.p1 - s.p0).normalized())), 1e-4f);
+      EXPECT_GT(pn.dot(pts.points[i + j].position.normalized()), 0.98f);
       EXPECT_FLOAT_EQ(pts.points[i + j].radius, s.radius);
     }
+    EXPECT_LT((pts.points[i].normal - s.normal0).norm(), 1e-5f);
+    EXPECT_LT((pts.points[i + n - 1].normal - s.normal1).norm(), 1e-5f);
+    i += n;
+  }
+  // the thesis's one-normal model: every point carries its segment's (the triangle's) normal
+  ContourOptions flat = withFaces();
+  flat.endpointNormals = false;
+  const HybridModel flatSegs = extractContour(mesh, flat);
+  flat.allPoints = true;
+  const HybridModel flatPts = extractContour(mesh, flat);
+  ASSERT_EQ(flatPts.points.size(), pts.points.size());
+  i = 0;
+  for (const Segment& s : flatSegs.segments) {
+    size_t n = size_t(std::ceil(s.length() / segSt.spacing)) + 1;
+    for (size_t j = 0; j < n; ++j) EXPECT_EQ(flatPts.points[i + j].normal, s.normal);
     i += n;
   }
 }
@@ -416,8 +436,9 @@ TEST(Contour, VertexColoursAndNormalsAreInterpolated) {
     EXPECT_LT(std::abs(s.normal.dot((s.p1 - s.p0).normalized())), 1e-4f);
     EXPECT_GT(s.normal.z(), 0.9f);
   }
-  // Without the option, the face normal (+z) is used.
+  // Without the option and without endpoint normals (the thesis's model), the face normal (+z).
   o.vertexNormals = false;
+  o.endpointNormals = false;
   for (const Segment& s : extractContour(mesh, o).segments) EXPECT_EQ(s.normal, Vec3f(0, 0, 1));
 }
 

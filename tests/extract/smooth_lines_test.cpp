@@ -43,19 +43,26 @@ TEST(SmoothLines, ContourEndpointNormalsFromAreaWeightedVertexNormals) {
   // perpendicular to the segment it stays within ~11 degrees on a 320-face icosphere, and on
   // average it is twice as close to the radial direction as the face normal (measured)
   expectRadialEndpointNormals(lines, 0.98f);
-  double endMean = 0, faceMean = 0;
-  for (const Segment& s : lines.segments) {
-    endMean += 0.5 * (s.normal0.dot(s.p0.normalized()) + s.normal1.dot(s.p1.normalized()));
-    faceMean += 0.5 * (s.normal.dot(s.p0.normalized()) + s.normal.dot(s.p1.normalized()));
-  }
-  endMean /= double(lines.segments.size());
-  faceMean /= double(lines.segments.size());
-  EXPECT_GT(1 - faceMean, 1.5 * (1 - endMean)) << endMean << " " << faceMean;
   ContourOptions flat;
   flat.endpointNormals = false;
   const HybridModel thesis = extractContour(mesh, flat);
   EXPECT_FALSE(thesis.attributes.endpointNormals);
-  EXPECT_EQ(thesis.segments.size(), lines.segments.size());
+  ASSERT_EQ(thesis.segments.size(), lines.segments.size());
+  double endMean = 0, faceMean = 0;
+  for (size_t i = 0; i < lines.segments.size(); ++i) {
+    const Segment& s = lines.segments[i];
+    const Segment& t = thesis.segments[i];  // same cut, the triangle's normal
+    endMean += 0.5 * (s.normal0.dot(s.p0.normalized()) + s.normal1.dot(s.p1.normalized()));
+    faceMean += 0.5 * (t.normal.dot(t.p0.normalized()) + t.normal.dot(t.p1.normalized()));
+    // the smooth segment's strip plane follows the vertex normals too: interpolated at the
+    // midpoint, perpendicular to the segment, on the triangle's side
+    EXPECT_LT(std::abs(s.normal.dot((s.p1 - s.p0).normalized())), 1e-4f);
+    EXPECT_GT(s.normal.dot(t.normal), 0.0f);
+    EXPECT_GT(s.normal.dot((0.5f * (s.p0 + s.p1)).normalized()), 0.98f);
+  }
+  endMean /= double(lines.segments.size());
+  faceMean /= double(lines.segments.size());
+  EXPECT_GT(1 - faceMean, 1.5 * (1 - endMean)) << endMean << " " << faceMean;
 }
 
 TEST(SmoothLines, PlyRoundTripKeepsEndpointNormals) {
