@@ -356,14 +356,19 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
       writePng(o.outDir / rel, renderImage(painted, cams.front(), o.render).color, false);
       c.result->structureImage = rel;
     }
-  // Interactive viewer pages (linesurf view) beside the images, linked from the report's rows.
+  // Interactive viewer pages (linesurf view) beside the images, linked from the report's rows;
+  // a model over the viewer's primitive budget gets no page (and no link), not a failure.
   if (images && o.imageViews > 0) {
     ViewerPageOptions vo;
     vo.render = o.render;
+    auto fits = [&](const HybridModel& m) { return m.points.size() + m.segments.size() <= vo.maxPrimitives; };
     vo.name = model.name + " (points)";
-    model.referenceViewer = model.name + "/points.html";
-    writeViewerPage(o.outDir / model.referenceViewer, reference, vo);
+    if (fits(reference)) {
+      model.referenceViewer = model.name + "/points.html";
+      writeViewerPage(o.outDir / model.referenceViewer, reference, vo);
+    }
     for (Candidate& c : candidates) {
+      if (!fits(*c.model)) continue;
       vo.name = model.name + " (" + experimentMethodName(c.result->method) + ")";
       c.result->viewerPage = model.name + "/" + experimentMethodName(c.result->method) + "/viewer.html";
       writeViewerPage(o.outDir / c.result->viewerPage, *c.model, vo);
