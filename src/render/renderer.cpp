@@ -275,9 +275,19 @@ RenderResult Renderer::render(const Camera& cam) const {
     }
     const double t1 = threadCpuSeconds();
     tileSeconds[tile].first = t1 - t0;
-    for (int y = rect.y0; y < rect.y1; ++y)
+    // pixels with one layer (nearly all) in SIMD rows, unless lighting is deferred or another
+    // buffer is written; the rest pixel by pixel
+    const bool simdResolve = !opt.perPixelLighting && !res.depth && !res.alpha && !res.normal;
+    const float bgRGBA[4] = {bg.x(), bg.y(), bg.z(), bg.w()};
+    const int32_t* layerCounts = z3.counts();
+    for (int y = rect.y0; y < rect.y1; ++y) {
+      const int done = simdResolve ? detail::resolveSingleLayerRow(z3, y, rect.x0, rect.width(), bgRGBA,
+                                                                   res.color.at(rect.x0, y).data())
+                                   : 0;
+      const int32_t* rowCounts = layerCounts + z3.index(rect.x0, y);
       for (int x = rect.x0; x < rect.x1; ++x) {
-        if (z3.layerCount(x, y) == 0) continue;
+        const int layers = rowCounts[x - rect.x0];
+        if (layers == 0 || (layers == 1 && x - rect.x0 < done)) continue;
         // per-pixel lighting is deferred: each layer lit once, with its blended normal, at this
         // pixel's ray and the layer's depth; otherwise the fragments carry Gouraud colours
         const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);
@@ -299,6 +309,7 @@ RenderResult Renderer::render(const Camera& cam) const {
         if (res.normal)
           res.normal->at(x, y) = Color(0.5f * (px.normal.x() + 1), 0.5f * (px.normal.y() + 1), 0.5f * (px.normal.z() + 1), 1);
       }
+    }
     tileCounters[tile] = z3.counters();
     tileSeconds[tile].second = threadCpuSeconds() - t1;
   };

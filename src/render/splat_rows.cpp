@@ -299,6 +299,48 @@ uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect&
   return PointRowsT(hn::CappedTag<float, 16>(), (W + 15) / 16 * 16, P, A, r, z3);
 }
 
+// One row of the resolve, pixels with one layer (detail/splat_rows.h): the formula of
+// Z3Tile::resolve for n = 1 (keep the two alike), then the renderer's compositing over the
+// background. Loads and stores of whole vectors only, so no other tile's pixels are touched.
+int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, float* out) {
+  const DF d;
+  const hn::RebindToSigned<DF> di;
+  const int L = int(hn::Lanes(d));
+  const size_t p0 = z3.index(x0, y);
+  const int32_t* cnt = z3.counts() + p0;
+  const float *R = z3.plane(0, Z3Tile::kR) + p0, *G = z3.plane(0, Z3Tile::kG) + p0, *B = z3.plane(0, Z3Tile::kB) + p0;
+  const float *A = z3.plane(0, Z3Tile::kA) + p0, *Wt = z3.plane(0, Z3Tile::kW) + p0;
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  const VF bgR = hn::Set(d, bg[0]), bgG = hn::Set(d, bg[1]), bgB = hn::Set(d, bg[2]), bgW = hn::Set(d, bg[3]);
+  const int whole = n / L * L;
+  for (int i = 0; i < whole; i += L) {
+    const auto single = hn::RebindMask(d, hn::Eq(hn::LoadU(di, cnt + i), hn::Set(di, 1)));
+    if (hn::AllFalse(d, single)) continue;
+    const VF iw = hn::Div(one, hn::LoadU(d, Wt + i));
+    const VF a = hn::Min(hn::Max(hn::Mul(hn::LoadU(d, A + i), iw), zero), one);
+    VF r = hn::Mul(a, hn::Mul(hn::LoadU(d, R + i), iw));
+    VF g = hn::Mul(a, hn::Mul(hn::LoadU(d, G + i), iw));
+    VF b = hn::Mul(a, hn::Mul(hn::LoadU(d, B + i), iw));
+    const VF rest = hn::Mul(hn::Sub(one, a), bgW);
+    r = hn::Add(r, hn::Mul(rest, bgR)), g = hn::Add(g, hn::Mul(rest, bgG)), b = hn::Add(b, hn::Mul(rest, bgB));
+    const VF w = hn::Add(a, rest);
+    if (bg[3] > 0) {  // straight colour for PNG
+      const auto part = hn::And(hn::Gt(w, zero), hn::Lt(w, one));
+      if (!hn::AllFalse(d, part))
+        r = hn::IfThenElse(part, hn::Div(r, w), r), g = hn::IfThenElse(part, hn::Div(g, w), g), b = hn::IfThenElse(part, hn::Div(b, w), b);
+    } else {
+      const auto covered = hn::Gt(a, zero);
+      r = hn::IfThenElse(covered, hn::Div(r, a), r), g = hn::IfThenElse(covered, hn::Div(g, a), g), b = hn::IfThenElse(covered, hn::Div(b, a), b);
+    }
+    // keep the other pixels as they are (whole vectors of this row only)
+    VF r0, g0, b0, w0;
+    hn::LoadInterleaved4(d, out + 4 * i, r0, g0, b0, w0);
+    hn::StoreInterleaved4(hn::IfThenElse(single, r, r0), hn::IfThenElse(single, g, g0), hn::IfThenElse(single, b, b0),
+                          hn::IfThenElse(single, w, w0), d, out + 4 * i);
+  }
+  return whole;
+}
+
 int64_t Target() { return HWY_TARGET; }
 
 }  // namespace HWY_NAMESPACE
@@ -311,6 +353,7 @@ HWY_EXPORT(PointFragments);
 HWY_EXPORT(SegmentFragments);
 HWY_EXPORT(Target);
 HWY_EXPORT(PointRowsZ3);
+HWY_EXPORT(ResolveSingleLayerRow);
 
 int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
                    FragmentBlock& out) {
@@ -321,6 +364,9 @@ int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, Fr
 }
 uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelRect& r, Z3Tile& tile) {
   return HWY_DYNAMIC_DISPATCH(PointRowsZ3)(p, shade, r, tile);
+}
+int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out) {
+  return HWY_DYNAMIC_DISPATCH(ResolveSingleLayerRow)(tile, y, x0, n, bg, out);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

@@ -212,6 +212,32 @@ TEST(EwaPoint, ImageIdenticalForOneAndManyThreads) {
   EXPECT_GT(many.stats.pointsCulled, 5000u);  // the back half
 }
 
+// The resolve of one-layer pixels in SIMD rows (taken unless lighting is deferred or another
+// buffer is written) gives the colours of the pixel-by-pixel resolve: opaque sphere and
+// translucent planes (one, two and more layers), backgrounds opaque, transparent and half, tiles
+// whose width is not a multiple of the vector (the pixels past the last whole vector: scalar).
+TEST(EwaPoint, SimdResolveMatchesThePixelResolve) {
+  HybridModel m = shapes::sphere(1, 20000);
+  HybridModel glass = shapes::plane(3, 3, 71, 71);
+  for (Point& q : glass.points) q.position.z() += 1.2f, q.color = Color(0.2f, 0.6f, 0.9f, 0.4f);
+  m.points.insert(m.points.end(), glass.points.begin(), glass.points.end());
+  const Camera cam = Camera::lookAt(Vec3f(0.3f, 0.2f, 5), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 100, 70);
+  for (const Color& bg : {Color(1, 1, 1, 1), Color(0, 0, 0, 0), Color(0.2f, 0.4f, 0.6f, 0.5f)})
+    for (int tile : {16, 24, 64}) {
+      RenderOptions o;
+      o.background = bg;
+      o.tileSize = tile;
+      const RenderResult simd = renderImage(m, cam, o);
+      o.alphaBuffer = true;  // another buffer: every pixel through Z3Tile::resolve
+      const RenderResult pixel = renderImage(m, cam, o);
+      EXPECT_LT(maxAbsDiff(simd.color, pixel.color), 1e-6) << tile;
+      EXPECT_GT(simd.stats.allocated, simd.stats.fragments / 100);  // layers in front of layers
+      int covered = 0;
+      for (const Color& c : pixel.alpha->pixels) covered += c.w() > 0;
+      EXPECT_GT(covered, 3000) << tile;
+    }
+}
+
 TEST(EwaPoint, DegenerateAndOutsidePrimitivesAreCounted) {
   HybridModel m = shapes::plane(1, 1, 10, 10);
   m.points[0].radius = 0;

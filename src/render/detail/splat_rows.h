@@ -56,6 +56,13 @@ struct PointShade {
 /// fragments (weight > 0) it inserted.
 uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelRect& r, Z3Tile& tile);
 
+/// The resolve of one row of a Z^3 tile without deferred shading (renderer stage 3), in SIMD:
+/// of the pixels x0 .. x0 + n - 1 of row y, the first `returned` ones (whole vectors) that hold
+/// exactly one layer get Z3Tile::resolve's colour composited over the background bg (r, g, b, a)
+/// the way the renderer does, written to out (straight RGBA, 4 floats per pixel from x0); the
+/// others (empty, several layers, and the pixels from `returned` on) are left to the caller.
+int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out);
+
 /// Per-pixel constants of one ScreenSpace segment splat of a single sub-segment (§5, the
 /// closed form of segment_methods.cpp): the ray through (px, py) meets the strip's plane at depth
 /// depthNum / N with plane coordinates a = A / N - a0 (along), b = B / N - b0 (across).
