@@ -326,6 +326,10 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     m += !(setup.backfaceCulling & clearlyBackFacing(setup, p));
   }
   counts.culled += uint32_t(count - m);
+  for (int j = m; j < std::min(detail::kSetupBatch, (m + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes); ++j) {
+    // the last vector's spare lanes: defined values (radius 0 marks them degenerate), not stale ones
+    b.px[j] = b.py[j] = b.pz[j] = b.nx[j] = b.ny[j] = b.nz[j] = b.radius[j] = 0;
+  }
   detail::pointSetup(setup, b, m);
   int k = 0;
   for (int j = 0; j < m; ++j) {

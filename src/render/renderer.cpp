@@ -12,6 +12,7 @@
 #include <new>
 #include <type_traits>
 
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/splat_rows.h"
@@ -136,6 +137,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   Buffers& buf = lock.owns_lock() ? *buffers_ : *(own = std::make_unique<Buffers>());
   const int T = opt.tileSize;
   const int tilesX = (cam.width() + T - 1) / T, tilesY = (cam.height() + T - 1) / T;
+  if (tilesX > 65536 || tilesY > 65536) throwBadOption("tileSize", "too small for this image (at most 65536 tiles a side)");
   const size_t tiles = size_t(tilesX) * size_t(tilesY);
   // the per-chunk tile counts stay small: larger chunks for small tiles
   const size_t chunkBatches = std::max<size_t>(32, (tiles / 256) * 32);
