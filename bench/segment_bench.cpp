@@ -211,6 +211,7 @@ void BM_ContourPrepare(benchmark::State& state) {
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   std::vector<PreparedPoint> pts(m->points.size());
+  std::vector<PointGouraud> gouraud(m->points.size());
   std::vector<PreparedSegment> segs(m->segments.size());
   std::vector<PrimitiveStatus> status(std::max(pts.size(), segs.size()));
   size_t v = 0;
@@ -222,7 +223,7 @@ void BM_ContourPrepare(benchmark::State& state) {
       PointSetupCounts counts;
       for (size_t i = 0; i < pts.size(); i += detail::kSetupBatch)
         preparePoints(m->points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, pts.size() - i)), frame,
-                      setup, pts.data() + i, counts);
+                      setup, pts.data() + i, gouraud.data() + i, counts);
     }
     for (size_t i = 0; i < segs.size(); ++i) status[i] = prepareSegment(m->segments[i], uint32_t(i), frame, segs[i]);
     benchmark::DoNotOptimize(status.data());

@@ -312,7 +312,8 @@ bool clearlyBackFacing(const detail::PointSetupFrame& F, const Point& p) {
 }  // namespace
 
 int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
-                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointSetupCounts& counts) {
+                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointGouraud* gouraud,
+                  PointSetupCounts& counts) {
   const Camera& cam = frame.cam();
   const RenderOptions& opt = frame.opt();
   detail::PointSetupBatch b;
@@ -341,7 +342,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     }
     PrimitiveStatus status;
     if (b.status[j] == 2.0f) {  // the exact path
-      status = preparePoint(point, index, frame, *new (out + k) PreparedPoint);
+      status = preparePoint(point, index, frame, *new (out + k) PreparedPoint, *new (gouraud + k) PointGouraud);
     } else if (b.status[j] == 4.0f) {
       ++counts.outside;
       continue;
@@ -362,7 +363,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
       o.zThreshold = frame.zThreshold(b.depthExtent[j] + point.radius);
       const Color col = frame.primitiveColor(point.color);
       Vec3f c = col.head<3>();
-      o.gouraud = false;
+      o.gouraud = nullptr;
       if (!opt.perPixelLighting) {  // Phong, as preparePoint's light() does: flat at the centre or Gouraud
         const Vec3f& lc = opt.light.color;
         const Vec3f base = c * b.diffuseFactor[j];
@@ -372,11 +373,12 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
         } else {
           const float s00 = b.specular[1][j], s10 = b.specular[2][j], s01 = b.specular[3][j], s11 = b.specular[4][j];
           const float inv2R = 0.5f / opt.cutoffRadius;
-          o.gouraud = true;
-          o.C0 = (base + Vec3f::Constant(0.25f * (s00 + s10 + s01 + s11))).cwiseProduct(lc);
-          o.Cs = (0.5f * inv2R * (s10 - s00 + s11 - s01)) * lc;
-          o.Ct = (0.5f * inv2R * (s01 - s00 + s11 - s10)) * lc;
-          o.Cst = (inv2R * inv2R * (s00 - s10 - s01 + s11)) * lc;
+          PointGouraud& g = *new (gouraud + k) PointGouraud;
+          o.gouraud = &g;
+          g.C0 = (base + Vec3f::Constant(0.25f * (s00 + s10 + s01 + s11))).cwiseProduct(lc);
+          g.Cs = (0.5f * inv2R * (s10 - s00 + s11 - s01)) * lc;
+          g.Ct = (0.5f * inv2R * (s01 - s00 + s11 - s10)) * lc;
+          g.Cst = (inv2R * inv2R * (s00 - s10 - s01 + s11)) * lc;
         }
       }
       // element by element: a local array copied out costs a store-forwarding stall per point

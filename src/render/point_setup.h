@@ -28,8 +28,9 @@ detail::PointSetupFrame pointSetupFrame(const FrameContext& frame);
 /// the visible ones (Drawn or Clipped) in out[0 .. k) (storage for `count` PreparedPoints, not
 /// necessarily constructed: untouched slots stay untouched) in index order and returns k; adds
 /// every point's status to `counts`. Same results as preparePoint for each point up to float
-/// rounding.
+/// rounding. gouraud[j] (storage as out's) holds the colour polynomial of out[j] when Gouraud-shaded.
 int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
-                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointSetupCounts& counts);
+                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointGouraud* gouraud,
+                  PointSetupCounts& counts);
 
 }  // namespace linesurf

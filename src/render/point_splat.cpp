@@ -165,10 +165,10 @@ PrimitiveStatus warpExact(const FrameContext& frame, float sigmaR, const Vec3f& 
 
 // Gouraud lighting (§6.2.2) at the corners (s, t) = (+-R, +-R) of the bounding quadrilateral,
 // as the bilinear polynomial C0 + Cs s + Ct t + Cst s t; small splats are lit once.
-void light(const FrameContext& frame, const Warped& s, PreparedPoint& out) {
+void light(const FrameContext& frame, const Warped& s, PreparedPoint& out, PointGouraud& g) {
   const Vec3f albedo(out.attr[0], out.attr[1], out.attr[2]);
   const bool flat = out.bounds.width() <= PreparedPoint::kFlatShadeSpan && out.bounds.height() <= PreparedPoint::kFlatShadeSpan;
-  out.gouraud = !flat;
+  out.gouraud = flat ? nullptr : &g;
   if (flat) {
     const Vec3f c = frame.shade(albedo, s.n, s.c);
     out.attr[0] = c.x(), out.attr[1] = c.y(), out.attr[2] = c.z();
@@ -179,15 +179,16 @@ void light(const FrameContext& frame, const Warped& s, PreparedPoint& out) {
               k01 = frame.shade(albedo, s.n, s.c - R * s.B0 + R * s.B1), k11 = frame.shade(albedo, s.n, s.c + R * s.B0 + R * s.B1);
   // bilinear in u = s/2R + 1/2, v = t/2R + 1/2; inside the cutoff |s|, |t| <= R (no clamping)
   const float inv2R = 0.5f / R;
-  out.C0 = 0.25f * (k00 + k10 + k01 + k11);
-  out.Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
-  out.Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
-  out.Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
+  g.C0 = 0.25f * (k00 + k10 + k01 + k11);
+  g.Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
+  g.Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
+  g.Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
 }
 
 }  // namespace
 
-PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out) {
+PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out,
+                             PointGouraud& gouraud) {
   const Camera& cam = frame.cam();
   const RenderOptions& opt = frame.opt();
   out.index = index;
@@ -261,7 +262,8 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   const Color col = frame.primitiveColor(point.color);
   const float attr[Z3Tile::kAttrs] = {col.x(), col.y(), col.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, n.x(), n.y(), n.z()};
   std::copy(attr, attr + Z3Tile::kAttrs, out.attr);
-  if (!opt.perPixelLighting) light(frame, s, out);
+  out.gouraud = nullptr;
+  if (!opt.perPixelLighting) light(frame, s, out, gouraud);
   return status;
 }
 
@@ -271,8 +273,10 @@ void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
   detail::PointShade shade;
   shade.attr = sp.attr;
   shade.zThreshold = sp.zThreshold;
-  shade.gouraud = sp.gouraud;
-  shade.C0 = sp.C0.data(), shade.Cs = sp.Cs.data(), shade.Ct = sp.Ct.data(), shade.Cst = sp.Cst.data();
+  shade.gouraud = sp.gouraud != nullptr;
+  if (sp.gouraud)
+    shade.C0 = sp.gouraud->C0.data(), shade.Cs = sp.gouraud->Cs.data(), shade.Ct = sp.gouraud->Ct.data(),
+    shade.Cst = sp.gouraud->Cst.data();
   ctx.tile.addFragments(detail::pointRowsZ3(sp.raster, shade, r, ctx.tile));
 }
 

@@ -31,23 +31,33 @@
 
 namespace linesurf {
 
-struct PreparedPoint {
+/// Gouraud colour of a splat wider than PreparedPoint::kFlatShadeSpan: C0 + Cs s + Ct t + Cst s t
+/// over the plane coordinates (s, t). Kept out of PreparedPoint (few splats need it).
+struct PointGouraud {
+  Vec3f C0 = Vec3f::Zero(), Cs = Vec3f::Zero(), Ct = Vec3f::Zero(), Cst = Vec3f::Zero();
+};
+
+/// One prepared splat: 128 bytes, two cache lines (prepare writes, and every tile it touches
+/// reads, one per visible point).
+struct alignas(64) PreparedPoint {
   PixelRect bounds;              ///< screen bounds of the cutoff ellipse (clamped to the viewport)
-  uint32_t index = 0;            ///< primitive index in the model
   detail::PointRaster raster;    ///< per-pixel weight and depth
   float zThreshold = 0;          ///< Z^3 merge tolerance
   /// The blended attributes (Z3Tile::Attr): colour (lit, or the albedo when lighting is
   /// deferred), alpha, 1, camera-space unit normal facing the viewer.
   float attr[Z3Tile::kAttrs] = {};
-  /// Gouraud: colour = C0 + Cs s + Ct t + Cst s t over the plane coordinates (s, t); false: attr.
-  bool gouraud = false;
-  Vec3f C0 = Vec3f::Zero(), Cs = Vec3f::Zero(), Ct = Vec3f::Zero(), Cst = Vec3f::Zero();
+  uint32_t index = 0;            ///< primitive index in the model
+  /// Gouraud-shaded: its colour polynomial (storage of the preparer's); null: attr's colour.
+  const PointGouraud* gouraud = nullptr;
   static constexpr int kFlatShadeSpan = 6;
 };
+static_assert(sizeof(PreparedPoint) == 128);
 
 /// Prepare stage (see splat_context.h); colour through frame.primitiveColor. Radius <= 0 or
-/// non-finite, or zero normal: Degenerate.
-PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out);
+/// non-finite, or zero normal: Degenerate. A Gouraud-shaded splat's colour polynomial goes to
+/// `gouraud`, and out.gouraud points to it.
+PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out,
+                             PointGouraud& gouraud);
 
 /// Rasterise stage: writes the splat's fragments inside ctx.rect into ctx.tile.
 void rasterizePoint(const PreparedPoint& splat, const SplatContext& ctx);

@@ -68,6 +68,7 @@ class SlotBuffer {
 struct Renderer::Buffers {
   std::mutex mutex;
   SlotBuffer<PreparedPoint> pts;      ///< point slots: per chunk, its visible points first
+  SlotBuffer<PointGouraud> gouraud;   ///< the Gouraud colours of the point slots that need them
   std::vector<TileSpan> pointTiles;   ///< tiles each point slot touches
   std::vector<PreparedSegment> segs;
   std::vector<PrimitiveStatus> segStatus;
@@ -148,6 +149,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   const size_t chunks = pointChunks + segChunks;
   const size_t pointSlots = pointChunks * chunkPoints;  // refs below pointSlots are points
   buf.pts.reserve(pointSlots);
+  buf.gouraud.reserve(pointSlots);
   if (buf.pointTiles.size() < pointSlots) buf.pointTiles.resize(pointSlots);
   if (buf.segs.size() < ns) buf.segs.resize(ns);
   buf.segStatus.resize(ns);
@@ -178,7 +180,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     size_t k = base;
     for (size_t i = base, e = std::min(np, base + chunkPoints); i < e; i += detail::kSetupBatch) {
       const int n = preparePoints(model_.points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, e - i)),
-                                  frame, setup, pts + k, buf.chunkCounts[c]);
+                                  frame, setup, pts + k, buf.gouraud.data() + k, buf.chunkCounts[c]);
       for (size_t j = k; j < k + size_t(n); ++j) countSpan(cnt, spans[j] = tileSpan(pts[j].bounds));
       k += size_t(n);
     }
