@@ -183,19 +183,21 @@ void BM_ContourFrame(benchmark::State& state) {
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
-  double prepare = 0, raster = 0, resolve = 0, fragments = 0;
+  double prepare = 0, raster = 0, resolve = 0, fragments = 0, allocated = 0;
   for (auto _ : state) {
     const RenderStats st = r.render(views[v++ % views.size()]).stats;
     prepare += st.prepareSeconds;
     raster += st.fragmentThreadSeconds;
     resolve += st.resolveThreadSeconds;
     fragments += double(st.fragments);
+    allocated += double(st.allocated);
   }
   const double n = double(std::max<int64_t>(1, state.iterations()));
   state.counters["prepare_ms"] = 1e3 * prepare / n;
   state.counters["raster_cpu_ms"] = 1e3 * raster / n;
   state.counters["resolve_cpu_ms"] = 1e3 * resolve / n;
   state.counters["kfrags"] = fragments / n / 1e3;
+  state.counters["new_layer"] = allocated / std::max(1.0, fragments);  // fraction of fragments opening a Z^3 layer
   state.counters["ns/frag"] = 1e9 * raster / std::max(1.0, fragments);
   state.counters["primitives"] = double(m->points.size() + m->segments.size());
   state.SetLabel(std::string(kMeshes[state.range(0)]) + (state.range(1) == 0 ? " points" : " lines") +

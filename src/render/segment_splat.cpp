@@ -23,14 +23,18 @@ constexpr double kMaxStretch = detail::kMaxStretch;
 // ScreenSpace subdivision: a new sub-segment wherever M changes by more than this (relative
 // Frobenius norm) from one end of the sub-segment to the other.
 constexpr double kPieceTolerance = 0.04;
+// Segments shorter than this fraction of their nearest depth take M in the middle as the mean of
+// the ends (relative error of the order of its square, 1e-4).
+constexpr double kShortSegment = 0.01;
 // Rasterisation visits the pixel centres within this distance (pixels) of the projected footprint
 // box: the projection and the per-pixel ray-plane intersection differ by rounding only.
 constexpr float kSpanSlack = 0.05f;
 // Smooth segments get one lighting station per this many radians the shading normal turns.
 constexpr float kStationTurn = 0.1f;
-// Rectangles of at most this many pixels are rasterised in whole rows, larger ones in the spans
-// of the projected footprint box.
-constexpr int kFullRowsArea = 64;
+// Rectangles of at most this many pixels are rasterised whole (as point splats are), larger ones
+// in the rows' spans of the projected footprint box: a span costs its set-up, a pixel outside the
+// footprint only its share of a SIMD vector.
+constexpr int kWholeRectArea = 96;
 
 SegmentExtra& extraOf(PreparedSegment& out) {
   if (!out.extra) out.extra = std::make_unique<SegmentExtra>();
@@ -113,7 +117,10 @@ void footprint(const Strip& st, double radius, const FrameContext& frame, Footpr
   auto covAt = [&](double a) { return segment::resamplingCovariance(st.c0 + a * st.e, st.e, st.s, sigmaR, Vh, f); };
   fp.M0 = covAt(0);
   fp.M1 = covAt(L);
-  const Mat2d Mmid = covAt(0.5 * L);
+  // M's second-order change along a segment short against its depth is below rounding of the
+  // piece test: the mean of the ends stands for the middle
+  const double dMin = std::min(-st.c0.z(), -(st.c0.z() + L * st.e.z()));
+  const Mat2d Mmid = L < kShortSegment * dMin ? Mat2d(0.5 * (fp.M0 + fp.M1)) : covAt(0.5 * L);
   const double scale = std::min(fp.M0.norm(), fp.M1.norm());
   const double change = std::max((fp.M1 - fp.M0).norm(), 4 * (Mmid - 0.5 * (fp.M0 + fp.M1)).norm());
   const int K = int(std::clamp(std::ceil(change / (kPieceTolerance * scale)), 1.0, double(kMaxSegmentPieces)));
@@ -180,7 +187,12 @@ PrimitiveStatus screenBounds(const Strip& st, const Footprint& fp, const FrameCo
                         c0 + fp.aMax * st.e + fp.bMax * st.s, c0 + fp.aMin * st.e + fp.bMax * st.s};
   Vec3f boxf[4];
   for (int i = 0; i < 4; ++i) boxf[i] = box[i].cast<float>();
-  for (const Vec4f& pl : frame.frustum) {
+  bool inDepth = true;
+  for (const Vec3f& q : boxf) inDepth &= -q.z() >= cam.nearDepth() && -q.z() <= cam.farDepth();
+  // In front of the eye the side planes sort the corners as their projections sort against the
+  // viewport, so the pixel bounds below test them; otherwise every frustum plane is tested.
+  for (size_t k = 0; k < frame.frustum.size() && !inDepth; ++k) {
+    const Vec4f& pl = frame.frustum[k];
     bool allOut = true;
     for (const Vec3f& q : boxf)
       if (pl.head<3>().dot(q) + pl.w() >= 0) {
@@ -191,8 +203,6 @@ PrimitiveStatus screenBounds(const Strip& st, const Footprint& fp, const FrameCo
   }
   float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   depthClipped = false;
-  bool inDepth = true;
-  for (const Vec3f& q : boxf) inDepth &= -q.z() >= cam.nearDepth() && -q.z() <= cam.farDepth();
   if (inDepth) {  // the common case: the projected corners bound the box (and give the row spans)
     for (int i = 0; i < 4; ++i) {
       out.screenQuad[i] = cam.project(boxf[i]).head<2>();
@@ -219,7 +229,8 @@ PrimitiveStatus screenBounds(const Strip& st, const Footprint& fp, const FrameCo
 // Ray through pixel (px, py) at depth 1: r = ((px - cx)/f, -(py - cy)/f, -1); the plane
 // n.(P - o) = 0 is hit at depth t = (n.o)/(n.r), a = t (e.r) - e.o, b = t (s.r) - s.o.
 void rasterConstants(const Strip& st, const Footprint& fp, double radius, const FrameContext& frame, bool depthClipped,
-                     detail::SegmentRaster& k) {
+                     PreparedSegment& out) {
+  detail::SegmentRaster& k = out.raster;
   const Camera& cam = frame.cam();
   const Vec3f o = st.c0.cast<float>(), e = st.e.cast<float>(), s = st.s.cast<float>(), n = st.n.cast<float>();
   const float no = n.dot(o);
@@ -243,6 +254,13 @@ void rasterConstants(const Strip& st, const Footprint& fp, double radius, const 
   k.zThreshold1 = frame.zThreshold(float(R * std::sqrt(g.dot(fp.M1 * g)) + radius));
   k.nearD = cam.nearDepth(), k.farD = cam.farDepth();
   k.clipDepth = depthClipped;
+  k.pieceCount = fp.K;
+  if (fp.K > 1) {
+    const SegmentExtra& x = *out.extra;
+    k.pieces = x.pieces.data();
+    k.pieceInvLength = x.pieceInvLength;
+    k.pieceMaxReach = x.pieceMaxReach;
+  }
 }
 
 // --- prepare, stage 6: shading --------------------------------------------------------------
@@ -281,17 +299,18 @@ void shading(const Segment& seg, const Strip& st, int K, const FrameContext& fra
   out.dc = Vec3f::Zero();
   const bool textured = frame.texture != nullptr;
   int S = 0;  // stations - 1 (Gouraud)
+  const float cosTurn = st.smooth ? normalAt(0).dot(normalAt(1)) : 1.0f;
+  const bool turns = cosTurn < std::cos(kStationTurn);
   if (!opt.perPixelLighting) {
     S = K;
-    const float cosTurn = st.smooth ? normalAt(0).dot(normalAt(1)) : 1.0f;
-    if (cosTurn < std::cos(kStationTurn)) {  // one station per kStationTurn the shading normal turns
+    if (turns) {  // one station per kStationTurn the shading normal turns
       const float turn = std::acos(std::clamp(cosTurn, -1.0f, 1.0f));
       S = std::clamp(int(std::ceil(turn / kStationTurn)), K, kMaxSegmentPieces);
     }
   }
   const Vec3f c0 = st.c0.cast<float>();
   auto pointAt = [&](int k) { return (st.c0 + (st.L * k / S) * st.e).cast<float>(); };
-  if (!textured && S <= 1) {
+  if (!textured && S <= 1 && !turns) {
     out.shade = st.smooth ? SegmentShade::Smooth : S == 0 ? SegmentShade::Constant : SegmentShade::Linear;
     if (S == 1) {
       const Vec3f k0 = frame.shade(albedo, n0, c0), k1 = frame.shade(albedo, normalAt(1), pointAt(1));
@@ -305,13 +324,18 @@ void shading(const Segment& seg, const Strip& st, int K, const FrameContext& fra
   x.textured = textured;
   x.uv0 = seg.uv0;
   x.uv1 = seg.uv1;
-  x.diffuse.resize(S > 0 ? S + 1 : 0);
-  x.specular.resize(S > 0 ? S + 1 : 0);
+  x.stations = S > 0 ? S + 1 : 0;
+  if (!textured) x.colour.resize(3 * size_t(x.stations));
   for (int k = 0; S > 0 && k <= S; ++k) {
     const Vec3f nf = normalAt(float(k) / float(S));
     const Vec3f p = pointAt(k);
-    x.specular[k] = frame.shade(Vec3f::Zero(), nf, p);
-    x.diffuse[k] = frame.shade(Vec3f::Ones(), nf, p) - x.specular[k];
+    if (!textured) {  // the lit colour itself
+      const Vec3f c = frame.shade(albedo, nf, p);
+      for (int ch = 0; ch < 3; ++ch) x.colour[size_t(ch * x.stations + k)] = c[ch];
+      continue;
+    }
+    x.specular.push_back(frame.shade(Vec3f::Zero(), nf, p));
+    x.diffuse.push_back(frame.shade(Vec3f::Ones(), nf, p) - x.specular.back());
   }
 }
 
@@ -335,7 +359,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
     out.bounds = {};
     return status;
   }
-  rasterConstants(st, fp, seg.radius, frame, depthClipped, out.raster);
+  rasterConstants(st, fp, seg.radius, frame, depthClipped, out);
   shading(seg, st, fp.K, frame, out);
   return status;
 }
@@ -388,6 +412,12 @@ float segmentWeightAt(const PreparedSegment& sp, const FrameContext&, const Vec2
 
 namespace {
 
+// floor(v) for |v| < 2^31 (std::floor is a library call in the generic x86-64 build)
+inline int floorInt(float v) {
+  const int i = int(v);
+  return i - (float(i) > v);
+}
+
 // The rows' spans of the projected footprint box (a convex quad): pixel centres of row y
 // (py = y + 0.5) inside it, widened by kSpanSlack pixel against rounding (a centre farther out
 // lies outside the footprint box, where the weight is zero).
@@ -395,10 +425,8 @@ struct QuadSpans {
   float ylo[4], yhi[4], xa[4], ya[4], slope[4];
   int edges = 0;
   bool full = false;  ///< no quad: whole rows
-  explicit QuadSpans(const PreparedSegment& sp, const PixelRect& r) {
-    // small rectangles: whole rows cost less than the spans' set-up (the weights are zero
-    // outside the footprint box anyway)
-    full = !sp.useSpans || r.width() * r.height() <= kFullRowsArea;
+  explicit QuadSpans(const PreparedSegment& sp) {
+    full = !sp.useSpans;
     for (int i = 0; i < 4 && !full; ++i) {
       const Vec2f& p = sp.screenQuad[i];
       const Vec2f& q = sp.screenQuad[(i + 1) % 4];
@@ -421,8 +449,8 @@ struct QuadSpans {
       hi = std::max(hi, x);
     }
     if (!(hi >= lo)) return false;
-    xb = std::max(r.x0, int(std::ceil(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
-    xe = std::min(r.x1, int(std::floor(std::min(hi, 1e8f) - 0.5f + kSpanSlack)) + 1);
+    xb = std::max(r.x0, -floorInt(-(std::max(lo, -1e8f) - 0.5f - kSpanSlack)));
+    xe = std::min(r.x1, floorInt(std::min(hi, 1e8f) - 0.5f + kSpanSlack) + 1);
     return xe > xb;
   }
 };
@@ -432,7 +460,8 @@ struct FragmentAttributes {
   const PreparedSegment& sp;
   const FrameContext& frame;
   float attr[Z3Tile::kAttrs];
-  FragmentAttributes(const PreparedSegment& s, const FrameContext& f) : sp(s), frame(f) {
+  float dn2 = 0;  ///< |n1 - n0|^2 (Smooth)
+  FragmentAttributes(const PreparedSegment& s, const FrameContext& f) : sp(s), frame(f), dn2(s.dn.squaredNorm()) {
     std::copy(sp.attr, sp.attr + Z3Tile::kAttrs, attr);
   }
   void at(float u) {
@@ -440,13 +469,13 @@ struct FragmentAttributes {
       case SegmentShade::Constant: return;
       case SegmentShade::Linear: return linearColour(u);
       case SegmentShade::Smooth: {
+        // n0 and n1 are unit and at most kStationTurn apart, so |n0 + u dn|^2 = 1 - x with
+        // x = u (1 - u) |dn|^2 <= 0.0025: 1 / sqrt(1 - x) to 5e-9 by its series
         linearColour(u);
-        const float nx = sp.n0.x() + u * sp.dn.x(), ny = sp.n0.y() + u * sp.dn.y(), nz = sp.n0.z() + u * sp.dn.z();
-        const float len2 = nx * nx + ny * ny + nz * nz;
-        if (len2 > 0) {
-          const float inv = 1.0f / std::sqrt(len2);
-          attr[Z3Tile::kNx] = nx * inv, attr[Z3Tile::kNy] = ny * inv, attr[Z3Tile::kNz] = nz * inv;
-        }
+        const float x = u * (1 - u) * dn2, inv = 1 + x * (0.5f + 0.375f * x);
+        attr[Z3Tile::kNx] = (sp.n0.x() + u * sp.dn.x()) * inv;
+        attr[Z3Tile::kNy] = (sp.n0.y() + u * sp.dn.y()) * inv;
+        attr[Z3Tile::kNz] = (sp.n0.z() + u * sp.dn.z()) * inv;
         return;
       }
       case SegmentShade::Stations: return stations(u);
@@ -465,7 +494,16 @@ struct FragmentAttributes {
       const Vec2f uv = x.uv0 + u * (x.uv1 - x.uv0);
       c = frame.texture->sampleBilinear(uv.x(), uv.y()).head<3>();
     }
-    if (!x.diffuse.empty()) {
+    if (!x.colour.empty()) {  // untextured: the stations' colours, piecewise linear
+      const int n = x.stations;
+      const float fs = u * float(n - 1);
+      const int k = std::min(int(fs), n - 2);
+      const float v = fs - float(k);
+      for (int ch = 0; ch < 3; ++ch) {
+        const float* cc = x.colour.data() + ch * n;
+        c[ch] = cc[k] + v * (cc[k + 1] - cc[k]);
+      }
+    } else if (!x.diffuse.empty()) {
       const int n = int(x.diffuse.size());
       const float fs = u * float(n - 1);
       const int k = std::min(int(fs), n - 2);
@@ -483,15 +521,45 @@ struct FragmentAttributes {
   }
 };
 
-// ScreenSpace segments of one sub-segment (nearly all of them): the closed form evaluated in
-// SIMD over the rows' spans, gathered into blocks of at most kBlock pixels (detail/splat_rows.h).
+// ScreenSpace segments: the closed form evaluated in SIMD over the rows' spans (the whole
+// rectangle's rows when it is small), straight into the Z^3 tile (detail/splat_rows.h).
 void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
-  FragmentAttributes shade(sp, ctx.frame);
-  const QuadSpans quad(sp, r);
-  detail::FragmentBlock fb;
+  // the rows' spans: whole rows of a small rectangle, else the projected footprint box's
   detail::RowSpan spans[detail::kBlock];
-  int spanCount = 0, pixels = 0;
+  int spanCount = 0;
+  const bool whole = r.width() * r.height() <= kWholeRectArea || !sp.useSpans;
+  const QuadSpans quad(sp);
   uint64_t inserted = 0;
+  const bool stations = sp.shade == SegmentShade::Stations;
+  if (!stations || !sp.extra->textured) {  // straight into the Z^3 tile, attributes in SIMD
+    detail::SegmentShadeRows shade;
+    shade.attr = sp.attr;
+    for (int k = 0; k < 3; ++k) shade.dc[k] = sp.dc[k], shade.n0[k] = sp.n0[k], shade.dn[k] = sp.dn[k];
+    shade.dn2 = sp.dn.squaredNorm();
+    shade.smooth = sp.smooth && (sp.shade == SegmentShade::Smooth || stations);
+    shade.exactNormal = stations;
+    if (stations && sp.extra->stations >= 2) {
+      shade.stations = sp.extra->stations;
+      shade.stationColour = sp.extra->colour.data();
+    }
+    auto flush = [&] {
+      inserted += detail::segmentRowsZ3(sp.raster, shade, spans, spanCount, ctx.tile);
+      spanCount = 0;
+    };
+    for (int y = r.y0; y < r.y1; ++y) {
+      int xb = r.x0, xe = r.x1;
+      if (!whole && !quad.row(r, float(y) + 0.5f, xb, xe)) continue;
+      if (spanCount == detail::kBlock) flush();
+      spans[spanCount++] = {y, xb, xe};
+    }
+    if (spanCount > 0) flush();
+    ctx.tile.addFragments(inserted);
+    return;
+  }
+  // textured: fragments in blocks, attributes per fragment
+  FragmentAttributes shade(sp, ctx.frame);
+  detail::FragmentBlock fb;
+  int pixels = 0;
   auto flush = [&] {
     const int m = detail::segmentFragments(sp.raster, spans, spanCount, fb);
     for (int i = 0; i < m; ++i) {
@@ -502,8 +570,8 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
     spanCount = pixels = 0;
   };
   for (int y = r.y0; y < r.y1; ++y) {
-    int xb, xe;
-    if (!quad.row(r, float(y) + 0.5f, xb, xe)) continue;
+    int xb = r.x0, xe = r.x1;
+    if (!whole && !quad.row(r, float(y) + 0.5f, xb, xe)) continue;
     for (int x0 = xb; x0 < xe; x0 += detail::kBlock) {
       const int x1 = std::min(xe, x0 + detail::kBlock);
       if (pixels + (x1 - x0) > detail::kBlock) flush();
@@ -515,11 +583,11 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
   ctx.tile.addFragments(inserted);
 }
 
-// Everything else (several sub-segments, Approx, Reference): per pixel, scalar.
+// Approx and Reference: per pixel, scalar.
 void rasterizeScalar(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
   const detail::SegmentRaster& k = sp.raster;
   FragmentAttributes shade(sp, ctx.frame);
-  const QuadSpans quad(sp, r);
+  const QuadSpans quad(sp);
   uint64_t inserted = 0;
   for (int y = r.y0; y < r.y1; ++y) {
     const float py = float(y) + 0.5f;
@@ -549,7 +617,7 @@ void rasterizeScalar(const PreparedSegment& sp, const SplatContext& ctx, const P
 void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);
   if (r.empty()) return;
-  if (sp.method == SegmentMethod::ScreenSpace && sp.pieceCount() == 1) return rasterizeRows(sp, ctx, r);
+  if (sp.method == SegmentMethod::ScreenSpace) return rasterizeRows(sp, ctx, r);
   rasterizeScalar(sp, ctx, r);
 }
 

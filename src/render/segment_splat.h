@@ -26,21 +26,8 @@
 
 namespace linesurf {
 
-/// One sub-segment of the ScreenSpace method: plane coordinates (a along the segment from p0,
-/// b across) with the resampling covariance held constant.
-struct SegmentPiece {
-  float a0 = 0, a1 = 0;              ///< along-range [a0, a1] of the sub-segment
-  float m00 = 1, m01 = 0, m11 = 1;   ///< M^-1 in (a, b)
-  float scale0 = 0, scale1 = 0;      ///< weight scale 1 / (h sqrt(det M)) at a0 and a1
-  float reach = 0;                   ///< R sqrt(M_aa): how far along a kernel reaches
-  // derived once in prepare (the per-pixel closed form needs no division)
-  float skew = 0;                    ///< m01 / m00
-  float across = 1;                  ///< m11 - m01^2 / m00 = 1 / M_bb
-  float invM00 = 1;                  ///< 1 / m00
-  float k = 1;                       ///< sqrt(m00 / 2)
-  float erfScale = 1;                ///< sqrt(pi) / 2 / k
-  float slope = 0;                   ///< (scale1 - scale0) / (a1 - a0), 0 when negligible
-};
+/// One sub-segment of the ScreenSpace method (detail/splat_rows.h: the SIMD rows evaluate them).
+using SegmentPiece = detail::SegmentPiece;
 
 /// One node of the Reference quadrature.
 struct SegmentNode {
@@ -75,10 +62,13 @@ struct SegmentExtra {
   std::vector<SegmentQuad> quads;
   bool longCase = true;
   const segment::WeightTextures* textures = nullptr;
-  /// Shading at stations evenly spaced over [0, length] (Gouraud, §6.2.2): colour = albedo *
-  /// diffuse + specular, albedo from the texture (§5.2.4: uv interpolated between the
-  /// endpoints) when textured.
+  /// Shading at stations evenly spaced over [0, length] (Gouraud, §6.2.2): the lit colour when
+  /// untextured; textured, colour = albedo * diffuse + specular with the albedo from the
+  /// texture (§5.2.4: uv interpolated between the endpoints).
   std::vector<Vec3f> diffuse, specular;
+  /// untextured: the lit colour of station k, channel c at [c * stations + k]
+  std::vector<float> colour;
+  int stations = 0;
   bool textured = false;
   Vec2f uv0 = Vec2f::Zero(), uv1 = Vec2f::Zero();
 };
@@ -88,8 +78,8 @@ struct SegmentExtra {
 enum class SegmentShade : uint8_t {
   Constant,  ///< PreparedSegment::attr for every fragment (deferred lighting, one normal)
   Linear,    ///< colour attr + u dc (Gouraud between the end stations), one normal
-  Smooth,    ///< colour attr + u dc, normal normalize(n0 + u dn) (smooth line models)
-  Stations,  ///< several stations or a texture: SegmentExtra, per fragment
+  Smooth,    ///< colour attr + u dc, normal normalize(n0 + u dn) (smooth line models, turn <= 0.1 rad)
+  Stations,  ///< several stations (SIMD rows, untextured) or a texture (per fragment): SegmentExtra
 };
 
 struct PreparedSegment {

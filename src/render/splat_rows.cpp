@@ -2,6 +2,9 @@
 // detail/splat_rows.h). Compiled once per x86 target; hwy picks the best the CPU runs.
 #include "detail/splat_rows.h"
 
+#include <algorithm>
+#include <cmath>
+
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "render/splat_rows.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -84,17 +87,25 @@ int PointFragments(const PointRaster& P, int x0, int y0, int width, int k0, int 
   return m;
 }
 
-// erf(x) from exp(-x^2) (Abramowitz & Stegun 7.1.26, absolute error < 1.5e-7).
-HWY_INLINE VF erfFromExp(DF d, VF x, VF expMinusX2) {
-  const VF ax = hn::Abs(x);
-  const VF t = hn::Div(hn::Set(d, 1.0f), hn::MulAdd(hn::Set(d, 0.3275911f), ax, hn::Set(d, 1.0f)));
-  VF p = hn::Set(d, 1.061405429f);
-  p = hn::MulAdd(p, t, hn::Set(d, -1.453152027f));
-  p = hn::MulAdd(p, t, hn::Set(d, 1.421413741f));
-  p = hn::MulAdd(p, t, hn::Set(d, -0.284496736f));
-  p = hn::MulAdd(p, t, hn::Set(d, 0.254829592f));
-  p = hn::Mul(p, t);
-  const VF r = hn::NegMulAdd(p, expMinusX2, hn::Set(d, 1.0f));
+// --- segments (§5: the ScreenSpace closed form of segment_methods.cpp) ----------------------
+
+// erf(x) without exp (Abramowitz & Stegun 7.1.28: 1 - (1 + a1 x + ... + a6 x^6)^-16, absolute
+// error < 3e-7; about 1e-6 in float).
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V erfRational(D d, V x) {
+  const V ax = hn::Abs(x);
+  V p = hn::Set(d, 0.0000430638f);
+  p = hn::MulAdd(p, ax, hn::Set(d, 0.0002765672f));
+  p = hn::MulAdd(p, ax, hn::Set(d, 0.0001520143f));
+  p = hn::MulAdd(p, ax, hn::Set(d, 0.0092705272f));
+  p = hn::MulAdd(p, ax, hn::Set(d, 0.0422820123f));
+  p = hn::MulAdd(p, ax, hn::Set(d, 0.0705230784f));
+  p = hn::MulAdd(p, ax, hn::Set(d, 1.0f));
+  p = hn::Mul(p, p);  // ^2
+  p = hn::Mul(p, p);  // ^4
+  p = hn::Mul(p, p);  // ^8
+  p = hn::Mul(p, p);  // ^16
+  const V r = hn::Sub(hn::Set(d, 1.0f), hn::Div(hn::Set(d, 1.0f), p));
   return hn::CopySign(r, x);
 }
 
@@ -117,49 +128,113 @@ HWY_INLINE int expandSpans(DF d, const RowSpan* spans, int count, float* px, flo
   return n;
 }
 
+// A segment's weight, depth and along-axis parameter u at the pixels (px, py) of the lanes in
+// `valid`: the closed form of segment_methods.cpp (screenSpaceWeight), summed over the
+// sub-segments that can reach the lanes. Returns the lanes with a fragment (w > 0).
+template <class D>
+struct SegmentKernel {
+  using V = hn::Vec<D>;
+  D d;
+  const SegmentRaster& S;
+  V one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
+  V a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f),
+    R2 = hn::Set(d, S.R2);
+  V aMin = hn::Set(d, S.aMin), aMax = hn::Set(d, S.aMax), bMax = hn::Set(d, S.bMax);
+  V depthNum = hn::Set(d, S.depthNum), nearD = hn::Set(d, S.nearD), farD = hn::Set(d, S.farD);
+  V Ndx = hn::Set(d, S.N.dx), Ndy = hn::Set(d, S.N.dy), N0 = hn::Set(d, S.N.c);
+  V Adx = hn::Set(d, S.A.dx), Ady = hn::Set(d, S.A.dy), A0 = hn::Set(d, S.A.c);
+  V Bdx = hn::Set(d, S.B.dx), Bdy = hn::Set(d, S.B.dy), B0 = hn::Set(d, S.B.c);
+  // one sub-segment's constants
+  struct Piece {
+    V a0, len, skew, across, invM00, k, erfScale, scale0, slope;
+    bool flat;  ///< slope == 0
+  };
+  Piece first;
+  static Piece piece(D d, float pa0, float len, float skew, float across, float invM00, float k, float erfScale,
+                     float scale0, float slope) {
+    return {hn::Set(d, pa0), hn::Set(d, len), hn::Set(d, skew), hn::Set(d, across), hn::Set(d, invM00), hn::Set(d, k),
+            hn::Set(d, erfScale), hn::Set(d, scale0), hn::Set(d, slope), slope == 0};
+  }
+  static Piece piece(D d, const SegmentPiece& p) {
+    return piece(d, p.a0, p.a1 - p.a0, p.skew, p.across, p.invM00, p.k, p.erfScale, p.scale0, p.slope);
+  }
+  explicit SegmentKernel(const SegmentRaster& s)
+      : S(s), first(piece(D(), 0, s.length, s.skew, s.across, s.invM00, s.k, s.erfScale, s.scale0, s.slope)) {}
+
+  // The integral along one sub-segment at plane coordinates (a, b), zero outside `inside`.
+  HWY_INLINE V pieceWeight(const Piece& p, V a, V b, hn::Mask<D> inside) const {
+    // with x = a - a0 - tau: q(tau) = m00 (tau - tau*)^2 + qmin, kernels count where q <= R^2
+    const V tauStar = hn::MulAdd(p.skew, b, hn::Sub(a, p.a0));
+    const V qmin = hn::Mul(hn::Mul(b, b), p.across);
+    const V delta = hn::Sqrt(hn::Mul(hn::Max(hn::Sub(R2, qmin), zero), p.invM00));
+    const V t0 = hn::Max(zero, hn::Sub(tauStar, delta)), t1 = hn::Min(p.len, hn::Add(tauStar, delta));
+    inside = hn::And(inside, hn::And(hn::Lt(qmin, R2), hn::Gt(t1, t0)));
+    if (hn::AllFalse(d, inside)) return zero;
+    const V u0 = hn::Mul(p.k, hn::Sub(t0, tauStar)), u1 = hn::Mul(p.k, hn::Sub(t1, tauStar));
+    const V halfQ = hn::Mul(hn::Min(qmin, R2), mhalf);  // -qmin / 2
+    const V g = hn::Exp(d, halfQ);
+    // integral of exp(-m00 (tau - tau*)^2 / 2) over [t0, t1]: erf without exp
+    const V i0 = hn::Mul(p.erfScale, hn::Sub(erfRational(d, u1), erfRational(d, u0)));
+    V w = hn::Mul(hn::Mul(hn::MulAdd(p.slope, tauStar, p.scale0), i0), g);
+    if (!p.flat) {
+      // the scale's slope adds slope / m00 (g e0 - g e1), g e_i = exp(-qmin/2 - u_i^2): at an end
+      // the cutoff bounds (not the sub-segment's end) that is exp(-R^2/2) at both, so only the
+      // ends the sub-segment cuts need an exp (long segments: rarely a vector)
+      const V cut = hn::Mul(R2, mhalf);
+      const auto cut0 = hn::And(inside, hn::Gt(t0, hn::Sub(tauStar, delta)));
+      const auto cut1 = hn::And(inside, hn::Lt(t1, hn::Add(tauStar, delta)));
+      V ge0 = hn::Exp(d, cut), ge1 = ge0;
+      if (!hn::AllFalse(d, cut0))
+        ge0 = hn::IfThenElse(cut0, hn::Exp(d, hn::Max(hn::NegMulAdd(u0, u0, halfQ), cut)), ge0);
+      if (!hn::AllFalse(d, cut1))
+        ge1 = hn::IfThenElse(cut1, hn::Exp(d, hn::Max(hn::NegMulAdd(u1, u1, halfQ), cut)), ge1);
+      w = hn::MulAdd(hn::Mul(p.slope, p.invM00), hn::Sub(ge0, ge1), w);
+    }
+    return hn::IfThenElseZero(inside, w);
+  }
+
+  HWY_INLINE hn::Mask<D> operator()(V px, V py, hn::Mask<D> valid, V& w, V& z, V& u) const {
+    // the ray through the pixel meets the strip's plane (in front of the eye) at depth z
+    const V nr = hn::MulAdd(Ndx, px, hn::MulAdd(Ndy, py, N0));
+    const V iN = hn::Div(one, nr);
+    z = hn::Mul(depthNum, iN);
+    auto inside = hn::And(hn::Lt(nr, zero), valid);
+    if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
+    const V a = hn::MulSub(hn::MulAdd(Adx, px, hn::MulAdd(Ady, py, A0)), iN, a0);
+    const V b = hn::MulSub(hn::MulAdd(Bdx, px, hn::MulAdd(Bdy, py, B0)), iN, b0);
+    inside = hn::And(inside, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
+    if (hn::AllFalse(d, inside)) return inside;
+    if (S.pieceCount == 1) {
+      w = pieceWeight(first, a, b, inside);
+    } else {  // the pieces whose reach can contain the lanes' a (with a piece of margin each side)
+      w = zero;
+      const float aLo = hn::GetLane(hn::MinOfLanes(d, hn::IfThenElse(inside, a, hn::Set(d, 1e30f))));
+      const float aHi = hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElse(inside, a, hn::Set(d, -1e30f))));
+      const float K = float(S.pieceCount);
+      const int k0 = int(std::clamp(std::floor((aLo - S.pieceMaxReach) * S.pieceInvLength) - 1.0f, 0.0f, K));
+      const int k1 = int(std::clamp(std::floor((aHi + S.pieceMaxReach) * S.pieceInvLength) + 2.0f, 0.0f, K));
+      for (int k = k0; k < k1; ++k) w = hn::Add(w, pieceWeight(piece(d, S.pieces[k]), a, b, inside));
+    }
+    u = hn::Min(one, hn::Max(zero, hn::Mul(a, invLen)));
+    return hn::And(inside, hn::Gt(w, zero));
+  }
+};
+
 int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount, FragmentBlock& out) {
+  const SegmentKernel<DF> kernel(S);
   const DF d;
   const int L = int(hn::Lanes(d));
   alignas(64) float pxs[kBlock + kMaxLanes], pys[kBlock + kMaxLanes];
   const int n = expandSpans(d, spans, spanCount, pxs, pys);
-  const VF one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
-  const VF a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0);
-  const VF len = hn::Set(d, S.length), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f), R2 = hn::Set(d, S.R2);
-  const VF aMin = hn::Set(d, S.aMin), aMax = hn::Set(d, S.aMax), bMax = hn::Set(d, S.bMax);
-  const VF skew = hn::Set(d, S.skew), across = hn::Set(d, S.across), invM00 = hn::Set(d, S.invM00);
-  const VF kk = hn::Set(d, S.k), erfScale = hn::Set(d, S.erfScale), scale0 = hn::Set(d, S.scale0),
-           slope = hn::Set(d, S.slope);
-  const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
-  const VF depthNum = hn::Set(d, S.depthNum), nearD = hn::Set(d, S.nearD), farD = hn::Set(d, S.farD);
   const VF lane = hn::Iota(d, 0.0f), count = hn::Set(d, float(n));
+  const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
   int m = 0;
   for (int i = 0; i < n; i += L) {
     const VF px = hn::Load(d, pxs + i), py = hn::Load(d, pys + i);
-    // the ray through the pixel meets the strip's plane (in front of the eye) at depth z
-    const VF nr = affine(d, S.N, px, py);
-    const VF iN = hn::Div(one, nr);
-    const VF z = hn::Mul(depthNum, iN);
-    auto inside = hn::And(hn::Lt(nr, zero), hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
-    if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
-    const VF a = hn::MulSub(affine(d, S.A, px, py), iN, a0), b = hn::MulSub(affine(d, S.B, px, py), iN, b0);
-    inside = hn::And(inside, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
-    // the integral along the sub-segment in closed form (segment_methods.cpp, screenSpaceWeight)
-    const VF tauStar = hn::MulAdd(skew, b, a);
-    const VF qmin = hn::Mul(hn::Mul(b, b), across);
-    inside = hn::And(inside, hn::Lt(qmin, R2));
-    const VF delta = hn::Sqrt(hn::Mul(hn::Max(hn::Sub(R2, qmin), zero), invM00));
-    const VF t0 = hn::Max(zero, hn::Sub(tauStar, delta)), t1 = hn::Min(len, hn::Add(tauStar, delta));
-    inside = hn::And(inside, hn::Gt(t1, t0));
-    const VF u0 = hn::Mul(kk, hn::Sub(t0, tauStar)), u1 = hn::Mul(kk, hn::Sub(t1, tauStar));
-    const VF g = hn::Exp(d, hn::Mul(hn::Min(qmin, R2), mhalf));
-    const VF e0 = hn::Exp(d, hn::Neg(hn::Min(hn::Mul(u0, u0), R2))),
-             e1 = hn::Exp(d, hn::Neg(hn::Min(hn::Mul(u1, u1), R2)));
-    const VF i0 = hn::Mul(erfScale, hn::Sub(erfFromExp(d, u1, e1), erfFromExp(d, u0, e0)));
-    VF w = hn::Mul(hn::Mul(hn::MulAdd(slope, tauStar, scale0), i0), g);
-    w = hn::MulAdd(hn::Mul(hn::Mul(slope, invM00), g), hn::Sub(e0, e1), w);
-    const VF u = hn::Min(one, hn::Max(zero, hn::Mul(a, invLen)));
-    inside = hn::And(inside, hn::Gt(w, zero));
-    m += pack(d, inside, px, py, w, z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
+    VF w, z, u;
+    const auto keep = kernel(px, py, hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count), w, z, u);
+    if (hn::AllFalse(d, keep)) continue;
+    m += pack(d, keep, px, py, w, z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
   }
   return m;
 }
@@ -341,6 +416,142 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
   return whole;
 }
 
+// The Z^3 fast path of the segment rows, as PointRowsT's: of the lanes `inside` at tile pixels
+// p .. p + lanes - 1, those on an empty pixel open its first layer, those within the z threshold
+// of a pixel's single layer merge into it (masked load-add-store per blended sum, attrAt(k) the
+// lanes' attributes; the normal sums only when the tile blends them), those behind a single
+// opaque layer are dropped; returns the lanes left for Z3Tile::insert.
+template <class D>
+struct Z3Rows {
+  using V = hn::Vec<D>;
+  D d;
+  hn::RebindToSigned<D> di;
+  float* pl[Z3Tile::kFields];
+  int32_t* cnt;
+  bool opaque;
+  int nAttr;
+  uint64_t opened = 0, occluded = 0;
+  Z3Rows(Z3Tile& z3, bool opaqueFragments)
+      : cnt(z3.counts()), opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1) {
+    for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
+  }
+  template <class AttrAt>
+  HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
+    const V zero = hn::Zero(d);
+    const auto count = hn::LoadU(di, cnt + p);
+    const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Zero(di))));
+    const auto single = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Set(di, 1))));
+    const V z0 = hn::LoadU(d, pl[Z3Tile::kZ] + p);
+    const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, pl[Z3Tile::kThr] + p)));
+    const auto fast = hn::Or(open, hn::And(single, within));
+    const auto behind =
+        hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(d, pl[Z3Tile::kOpaque] + p), zero))));
+    if (!hn::AllFalse(d, fast)) {
+      for (int k = 0; k < nAttr; ++k) {
+        const V add = hn::Mul(w, attrAt(k));
+        const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, pl[k] + p), add));
+        hn::BlendedStore(sum, fast, d, pl[k] + p);
+      }
+      hn::BlendedStore(z, open, d, pl[Z3Tile::kZ] + p);
+      hn::BlendedStore(thr, open, d, pl[Z3Tile::kThr] + p);
+      if (opaque) hn::BlendedStore(hn::Set(d, 1.0f), open, d, pl[Z3Tile::kOpaque] + p);
+      else hn::BlendedStore(zero, fast, d, pl[Z3Tile::kOpaque] + p);
+      hn::BlendedStore(hn::Set(di, 1), hn::RebindMask(di, open), di, cnt + p);
+      opened += hn::CountTrue(d, open);
+    }
+    occluded += hn::CountTrue(d, behind);
+    return hn::AndNot(hn::Or(fast, behind), inside);
+  }
+};
+
+// One segment straight into the Z^3 tile over its rows' spans, with the fast path of PointRowsT
+// (open a layer on an empty pixel, merge into a single layer within the threshold); colour and
+// normal per lane from u (SegmentShadeRows), the other fragments through Z3Tile::insert.
+template <class D>
+HWY_INLINE uint64_t SegmentRowsT(D d, const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans,
+                                 int count, Z3Tile& z3) {
+  using V = hn::Vec<D>;
+  const int L = int(hn::Lanes(d));
+  const SegmentKernel<D> kernel(S);
+  const V oneF = hn::Set(d, 1.0f), centre = hn::Iota(d, 0.5f);
+  const V thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
+  V attr[Z3Tile::kAttrs], dc[3], n0[3], dn[3];
+  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(d, A.attr[k]);
+  for (int k = 0; k < 3; ++k) dc[k] = hn::Set(d, A.dc[k]), n0[k] = hn::Set(d, A.n0[k]), dn[k] = hn::Set(d, A.dn[k]);
+  const V dn2 = hn::Set(d, A.dn2), c05 = hn::Set(d, 0.5f), c0375 = hn::Set(d, 0.375f);
+  const hn::RebindToSigned<D> di;
+  const V lastStation = hn::Set(d, float(std::max(A.stations - 1, 1)));
+  const auto lastSegment = hn::Set(di, std::max(A.stations - 2, 0));
+  Z3Rows<D> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
+  uint64_t inserted = 0;
+  for (int r = 0; r < count; ++r) {
+    const RowSpan& sp = spans[r];
+    const V py = hn::Set(d, float(sp.y) + 0.5f);
+    const size_t rowBase = z3.index(sp.x0, sp.y);
+    for (int x = sp.x0; x < sp.x1; x += L) {
+      const V px = hn::Add(centre, hn::Set(d, float(x)));
+      V w, z, u;
+      const auto inside = kernel(px, py, hn::FirstN(d, size_t(sp.x1 - x)), w, z, u);
+      if (hn::AllFalse(d, inside)) continue;
+      inserted += hn::CountTrue(d, inside);
+      // the fragment's attributes: colour linear in u, smooth normals by the series of
+      // segment_splat.cpp (FragmentAttributes)
+      V a[Z3Tile::kAttrs];
+      for (int k = 0; k < Z3Tile::kAttrs; ++k) a[k] = attr[k];
+      if (A.stations >= 2) {  // piecewise linear between the lighting stations
+        const V fs = hn::Mul(u, lastStation);
+        const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), lastSegment);
+        const V v = hn::Sub(fs, hn::ConvertTo(d, k));
+        for (int c = 0; c < 3; ++c) {
+          const float* sc = A.stationColour + c * A.stations;
+          const V c0 = hn::GatherIndex(d, sc, k), c1 = hn::GatherIndex(d, sc + 1, k);
+          a[c] = hn::MulAdd(v, hn::Sub(c1, c0), c0);
+        }
+      } else {
+        for (int c = 0; c < 3; ++c) a[c] = hn::MulAdd(u, dc[c], attr[c]);
+      }
+      if (A.smooth) {
+        V m[3];
+        for (int c = 0; c < 3; ++c) m[c] = hn::MulAdd(u, dn[c], n0[c]);
+        V inv;
+        if (A.exactNormal) {
+          const V len2 = hn::MulAdd(m[0], m[0], hn::MulAdd(m[1], m[1], hn::Mul(m[2], m[2])));
+          inv = hn::IfThenElseZero(hn::Gt(len2, hn::Zero(d)), hn::Div(oneF, hn::Sqrt(len2)));
+        } else {
+          const V xx = hn::Mul(hn::Mul(u, hn::Sub(oneF, u)), dn2);
+          inv = hn::MulAdd(xx, hn::MulAdd(xx, c0375, c05), oneF);
+        }
+        for (int c = 0; c < 3; ++c) a[Z3Tile::kNx + c] = hn::Mul(m[c], inv);
+      }
+      const V thr = hn::MulAdd(u, thrD, thr0);
+      const size_t p = rowBase + size_t(x - sp.x0);
+      const auto rest = z3rows(p, inside, w, z, thr, [&](int k) { return a[k]; });
+      if (hn::AllFalse(d, rest)) continue;
+      // the other fragments (a new layer in front of or behind others, compression, occlusion)
+      alignas(64) float mk[kMaxLanes], zs[kMaxLanes], ws[kMaxLanes], ts[kMaxLanes], as[Z3Tile::kAttrs][kMaxLanes];
+      hn::StoreU(hn::VecFromMask(d, rest), d, mk);
+      hn::StoreU(z, d, zs), hn::StoreU(w, d, ws), hn::StoreU(thr, d, ts);
+      for (int k = 0; k < Z3Tile::kAttrs; ++k) hn::StoreU(a[k], d, as[k]);
+      for (int i = 0; i < L; ++i) {
+        if (mk[i] == 0) continue;
+        float fa[Z3Tile::kAttrs];
+        for (int k = 0; k < Z3Tile::kAttrs; ++k) fa[k] = as[k][i];
+        z3.insert(x + i, sp.y, zs[i], ts[i], ws[i], fa);
+      }
+    }
+  }
+  z3.addFastCounts(z3rows.opened, z3rows.occluded);
+  return inserted;
+}
+
+uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
+  int widest = 0;  // narrow segments run on narrower vectors: fewer idle lanes
+  for (int r = 0; r < count; ++r) widest = std::max(widest, spans[r].x1 - spans[r].x0);
+  if (widest <= 4) return SegmentRowsT(hn::CappedTag<float, 4>(), S, A, spans, count, z3);
+  if (widest <= 8) return SegmentRowsT(hn::CappedTag<float, 8>(), S, A, spans, count, z3);
+  return SegmentRowsT(DF(), S, A, spans, count, z3);
+}
+
 int64_t Target() { return HWY_TARGET; }
 
 }  // namespace HWY_NAMESPACE
@@ -351,6 +562,7 @@ HWY_AFTER_NAMESPACE();
 namespace linesurf::detail {
 HWY_EXPORT(PointFragments);
 HWY_EXPORT(SegmentFragments);
+HWY_EXPORT(SegmentRowsZ3);
 HWY_EXPORT(Target);
 HWY_EXPORT(PointRowsZ3);
 HWY_EXPORT(ResolveSingleLayerRow);
@@ -367,6 +579,10 @@ uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelR
 }
 int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out) {
   return HWY_DYNAMIC_DISPATCH(ResolveSingleLayerRow)(tile, y, x0, n, bg, out);
+}
+uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
+                       Z3Tile& tile) {
+  return HWY_DYNAMIC_DISPATCH(SegmentRowsZ3)(s, shade, spans, count, tile);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

@@ -368,9 +368,10 @@ TEST(SegmentSplat, RandomViewsGiveSaneSplats) {
     if (sa != PrimitiveStatus::Drawn && sa != PrimitiveStatus::Clipped) continue;
     ++drawn;
     fallbacks += ap.fallback;
-    if (ap.extra)
+    if (ap.extra) {
       for (const SegmentQuad& q : ap.extra->quads)
         for (const Vec2f& c : q.corner) ASSERT_TRUE(c.allFinite());
+    }
     const RenderOptions o = optionsFor(SegmentMethod::Approx);
     const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
     for (int y = ap.bounds.y0; y < ap.bounds.y1; y += 3)

@@ -63,9 +63,27 @@ uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelR
 /// others (empty, several layers, and the pixels from `returned` on) are left to the caller.
 int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out);
 
-/// Per-pixel constants of one ScreenSpace segment splat of a single sub-segment (§5, the
-/// closed form of segment_methods.cpp): the ray through (px, py) meets the strip's plane at depth
-/// depthNum / N with plane coordinates a = A / N - a0 (along), b = B / N - b0 (across).
+/// One sub-segment of the ScreenSpace method: plane coordinates (a along the segment from p0,
+/// b across) with the resampling covariance held constant.
+struct SegmentPiece {
+  float a0 = 0, a1 = 0;              ///< along-range [a0, a1] of the sub-segment
+  float m00 = 1, m01 = 0, m11 = 1;   ///< M^-1 in (a, b)
+  float scale0 = 0, scale1 = 0;      ///< weight scale 1 / (h sqrt(det M)) at a0 and a1
+  float reach = 0;                   ///< R sqrt(M_aa): how far along a kernel reaches
+  // derived once in prepare (the per-pixel closed form needs no division)
+  float skew = 0;                    ///< m01 / m00
+  float across = 1;                  ///< m11 - m01^2 / m00 = 1 / M_bb
+  float invM00 = 1;                  ///< 1 / m00
+  float k = 1;                       ///< sqrt(m00 / 2)
+  float erfScale = 1;                ///< sqrt(pi) / 2 / k
+  float slope = 0;                   ///< (scale1 - scale0) / (a1 - a0), 0 when negligible
+};
+
+/// Per-pixel constants of one ScreenSpace segment splat (§5, the closed form of
+/// segment_methods.cpp): the ray through (px, py) meets the strip's plane at depth depthNum / N
+/// with plane coordinates a = A / N - a0 (along), b = B / N - b0 (across). The first sub-segment
+/// is held here (skew .. slope); with pieceCount > 1 all of them are in pieces[] (evenly spaced,
+/// 1 / pieceInvLength long, reaching at most pieceMaxReach beyond their ends).
 struct SegmentRaster {
   Affine2 N, A, B;
   float depthNum = 0, a0 = 0, b0 = 0;
@@ -76,6 +94,9 @@ struct SegmentRaster {
   float zThreshold0 = 0, zThreshold1 = 0;  ///< z threshold at p0 and p1, linear in u between
   float nearD = 0, farD = 0;
   bool clipDepth = false;
+  int pieceCount = 1;
+  const SegmentPiece* pieces = nullptr;  ///< pieceCount > 1: owned by the prepared segment
+  float pieceInvLength = 0, pieceMaxReach = 0;
 };
 
 /// A run of pixels [x0, x1) of row y.
@@ -86,6 +107,27 @@ struct RowSpan {
 /// As pointFragments for one segment, over `count` row spans holding at most kBlock pixels in
 /// all; p = the along-axis parameter u = clamp(a / length, 0, 1), q = the z threshold.
 int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, FragmentBlock& out);
+
+/// The blended attributes of one untextured segment's fragments (PreparedSegment):
+/// attr[Z3Tile::kAttrs] at u = 0, the colour attr + u dc, and with smooth the normal
+/// normalize(n0 + u dn) (by a series when n0, n1 are unit and at most 0.1 rad apart, dn2 = |dn|^2).
+struct SegmentShadeRows {
+  const float* attr = nullptr;
+  float dc[3] = {}, n0[3] = {}, dn[3] = {}, dn2 = 0;
+  bool smooth = false;
+  /// normalize(n0 + u dn) exactly (the endpoint normals turn by more than 0.1 rad)
+  bool exactNormal = false;
+  /// stations >= 2: the colour piecewise linear between `stations` evenly spaced stations,
+  /// stationColour[c * stations + k] (channel c of station k), instead of attr + u dc
+  int stations = 0;
+  const float* stationColour = nullptr;
+};
+
+/// Rasterises one segment over `count` row spans (inside tile.rect()) straight into the Z^3 tile,
+/// as pointRowsZ3 does points: the weights of segmentFragments, the SIMD fast path for the
+/// common fragments, Z3Tile::insert for the others. Returns how many fragments it inserted.
+uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
+                       Z3Tile& tile);
 
 /// Name of the target the functions above dispatch to (Highway's TargetName).
 const char* simdTargetName();
