@@ -56,10 +56,10 @@ struct ContourOptions {
   /// interpolated at its endpoints (Segment::normal0/normal1, made perpendicular to it);
   /// area-weighted vertex normals are computed when the mesh has none. The segment's own
   /// `normal` (its strip's plane, culling) and every point's normal are then the vertex normals
-  /// interpolated there (made perpendicular to the segment) as well, so that the line model and
-  /// the point model cut from it shade and cover alike (issue 14: Table 5's mean absolute
-  /// difference on Al 2.95 -> 1.51); an interpolated normal on the far side of the triangle's
-  /// plane is replaced by the triangle's normal. false: the thesis's one-normal model (the
+  /// interpolated there (made perpendicular to the segment), leaning at most 10 degrees from the
+  /// triangle's normal (further, back-face culling opens holes at creases), so that the line
+  /// model and the point model cut from it shade and cover alike (issue 14: Table 5's mean
+  /// absolute difference on Al 2.95 -> 1.97). false: the thesis's one-normal model (the
   /// triangle's normal, or as vertexNormals says).
   bool endpointNormals = true;
   /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.
