@@ -93,6 +93,18 @@ RenderResult renderImage(const HybridModel& model, const Camera& camera, const R
 
 namespace {
 
+// Stage 3 reads each tile's primitives in bin order; their prepared records are fetched this
+// many references ahead (issue 13: contour segments' records missed the cache on every tile).
+constexpr size_t kPrefetchAhead = 4;
+
+void prefetchPrimitive(uint32_t ref, size_t pointSlots, const PreparedPoint* pts, const PreparedSegment* segs) {
+  const char* a;
+  size_t bytes;
+  if (ref < pointSlots) a = reinterpret_cast<const char*>(pts + ref), bytes = sizeof(PreparedPoint);
+  else a = reinterpret_cast<const char*>(segs + (ref - pointSlots)), bytes = sizeof(PreparedSegment);
+  for (size_t o = 0; o < bytes; o += 64) __builtin_prefetch(a + o);
+}
+
 void count(PrimitiveStatus s, uint64_t& drawn, uint64_t& clipped, uint64_t& culled, uint64_t& outside,
            uint64_t& degenerate) {
   switch (s) {
@@ -272,7 +284,11 @@ RenderResult Renderer::render(const Camera& cam) const {
     z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
-    for (size_t k = tileStart[tile]; k < tileStart[tile + 1]; ++k) {
+    const size_t kEnd = tileStart[tile + 1];
+    for (size_t k = tileStart[tile]; k < kEnd; ++k) {
+      // the bins visit primitives in index order with gaps: their prepared records are cold
+      // (a PreparedSegment spans several cache lines), so fetch the record kPrefetchAhead on
+      if (k + kPrefetchAhead < kEnd) prefetchPrimitive(refs[k + kPrefetchAhead], pointSlots, pts, segs);
       uint32_t p = refs[k];
       if (p < pointSlots) rasterizePoint(pts[p], ctx);
       else rasterizeSegment(segs[p - pointSlots], ctx);
