@@ -239,6 +239,54 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
   return m;
 }
 
+// The Z^3 fast path of the point and segment rows: of the lanes `inside` at tile pixels
+// p .. p + lanes - 1, those on an empty pixel open its first layer, those within the z threshold
+// of a pixel's single layer merge into it (masked load-add-store per blended sum, attrAt(k) the
+// lanes' attributes; the normal sums only when the tile blends them), those behind a single
+// opaque layer are dropped; returns the lanes left for Z3Tile::insert.
+template <class D>
+struct Z3Rows {
+  using V = hn::Vec<D>;
+  D d;
+  hn::RebindToSigned<D> di;
+  float* pl[Z3Tile::kFields];
+  int32_t* cnt;
+  bool opaque;
+  int nAttr;
+  uint64_t opened = 0, occluded = 0;
+  Z3Rows(Z3Tile& z3, bool opaqueFragments)
+      : cnt(z3.counts()), opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1) {
+    for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
+  }
+  template <class AttrAt>
+  HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
+    const V zero = hn::Zero(d);
+    const auto count = hn::LoadU(di, cnt + p);
+    const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Zero(di))));
+    const auto single = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Set(di, 1))));
+    const V z0 = hn::LoadU(d, pl[Z3Tile::kZ] + p);
+    const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, pl[Z3Tile::kThr] + p)));
+    const auto fast = hn::Or(open, hn::And(single, within));
+    const auto behind =
+        hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(d, pl[Z3Tile::kOpaque] + p), zero))));
+    if (!hn::AllFalse(d, fast)) {
+      for (int k = 0; k < nAttr; ++k) {
+        const V add = hn::Mul(w, attrAt(k));
+        const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, pl[k] + p), add));
+        hn::BlendedStore(sum, fast, d, pl[k] + p);
+      }
+      hn::BlendedStore(z, open, d, pl[Z3Tile::kZ] + p);
+      hn::BlendedStore(thr, open, d, pl[Z3Tile::kThr] + p);
+      if (opaque) hn::BlendedStore(hn::Set(d, 1.0f), open, d, pl[Z3Tile::kOpaque] + p);
+      else hn::BlendedStore(zero, fast, d, pl[Z3Tile::kOpaque] + p);
+      hn::BlendedStore(hn::Set(di, 1), hn::RebindMask(di, open), di, cnt + p);
+      opened += hn::CountTrue(d, open);
+    }
+    occluded += hn::CountTrue(d, behind);
+    return hn::AndNot(hn::Or(fast, behind), inside);
+  }
+};
+
 // One point splat straight into the Z^3 tile (detail/splat_rows.h), in chunks of rows, two passes
 // per chunk, both branch-free in the common case:
 //  1. weights and depths (the same operations as PointFragments) of the chunk's pixels into a
@@ -270,22 +318,15 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const Poin
   HWY_ALIGN float bw[kRowChunk + kMaxLanes], bz[kRowChunk + kMaxLanes], bs[kRowChunk + kMaxLanes], bt[kRowChunk + kMaxLanes];
   // Z^3 pass constants
   using VZ = hn::Vec<DZ>;
-  const hn::RebindToSigned<DZ> diz;
-  const VZ zeroZ = hn::Zero(dz), oneZ = hn::Set(dz, 1.0f), thr = hn::Set(dz, A.zThreshold);
-  const bool normals = z3.blendNormals();
-  const int nAttr = normals ? Z3Tile::kAttrs : Z3Tile::kW + 1;
+  const VZ zeroZ = hn::Zero(dz), thr = hn::Set(dz, A.zThreshold);
   VZ attr[Z3Tile::kAttrs], c0[3], cs[3], ct[3], cst[3];
   for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, A.attr[k]);
   for (int k = 0; k < 3; ++k) {
     c0[k] = hn::Set(dz, A.gouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(dz, A.gouraud ? A.Cs[k] : 0.0f);
     ct[k] = hn::Set(dz, A.gouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(dz, A.gouraud ? A.Cst[k] : 0.0f);
   }
-  const bool opaque = A.attr[Z3Tile::kA] >= 1.0f;
-  float* pl[Z3Tile::kFields];
-  for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
-  int32_t* cnt = z3.counts();
-  const auto iZero = hn::Zero(diz), iOne = hn::Set(diz, 1);
-  uint64_t inserted = 0, opened = 0, occluded = 0;
+  Z3Rows<DZ> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
+  uint64_t inserted = 0;
   const int chunkRows = std::max(rowsPerVec, (kRowChunk / Wp) / rowsPerVec * rowsPerVec);
   const VF Wv = hn::Set(d, float(W));
   for (int cy = 0; cy < H; cy += chunkRows) {
@@ -317,34 +358,14 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const Poin
         const VZ w = hn::LoadU(dz, bw + k), z = hn::LoadU(dz, bz + k);
         const auto inside = hn::Gt(w, zeroZ);
         const size_t p = rowBase + size_t(c);
-        const auto count = hn::LoadU(diz, cnt + p);
-        const auto open = hn::And(inside, hn::RebindMask(dz, hn::Eq(count, iZero)));
-        const auto single = hn::And(inside, hn::RebindMask(dz, hn::Eq(count, iOne)));
-        const VZ z0 = hn::LoadU(dz, pl[Z3Tile::kZ] + p);
-        const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(dz, pl[Z3Tile::kThr] + p)));
-        const auto merge = hn::And(single, within);
-        const auto fast = hn::Or(open, merge);
-        // behind a single opaque layer (and not within its threshold): occluded
-        const auto behind = hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(dz, pl[Z3Tile::kOpaque] + p), zeroZ))));
         VZ s = zeroZ, t = zeroZ;
         if (A.gouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
-        for (int a = 0; a < nAttr; ++a) {
-          VZ v = attr[a];
+        const auto rest = z3rows(p, inside, w, z, thr, [&](int a) {
           if (A.gouraud && a < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
-            v = hn::Add(hn::Add(hn::Add(c0[a], hn::Mul(s, cs[a])), hn::Mul(t, ct[a])), hn::Mul(hn::Mul(s, t), cst[a]));
-          const VZ add = hn::Mul(w, v);
-          const VZ sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(dz, pl[a] + p), add));
-          hn::BlendedStore(sum, fast, dz, pl[a] + p);
-        }
-        hn::BlendedStore(z, open, dz, pl[Z3Tile::kZ] + p);
-        hn::BlendedStore(thr, open, dz, pl[Z3Tile::kThr] + p);
-        if (opaque) hn::BlendedStore(oneZ, open, dz, pl[Z3Tile::kOpaque] + p);
-        else hn::BlendedStore(zeroZ, fast, dz, pl[Z3Tile::kOpaque] + p);
-        hn::BlendedStore(iOne, hn::RebindMask(diz, open), diz, cnt + p);
+            return hn::Add(hn::Add(hn::Add(c0[a], hn::Mul(s, cs[a])), hn::Mul(t, ct[a])), hn::Mul(hn::Mul(s, t), cst[a]));
+          return attr[a];
+        });
         inserted += hn::CountTrue(dz, inside);
-        opened += hn::CountTrue(dz, open);
-        occluded += hn::CountTrue(dz, behind);
-        const auto rest = hn::AndNot(hn::Or(fast, behind), inside);
         if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
         // the other fragments (a new layer in front of or behind others, compression, occlusion)
         HWY_ALIGN float mk[kMaxLanes];
@@ -362,7 +383,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const Poin
       }
     }
   }
-  z3.addFastCounts(opened, occluded);
+  z3.addFastCounts(z3rows.opened, z3rows.occluded);
   return inserted;
 }
 
@@ -416,53 +437,6 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
   return whole;
 }
 
-// The Z^3 fast path of the segment rows, as PointRowsT's: of the lanes `inside` at tile pixels
-// p .. p + lanes - 1, those on an empty pixel open its first layer, those within the z threshold
-// of a pixel's single layer merge into it (masked load-add-store per blended sum, attrAt(k) the
-// lanes' attributes; the normal sums only when the tile blends them), those behind a single
-// opaque layer are dropped; returns the lanes left for Z3Tile::insert.
-template <class D>
-struct Z3Rows {
-  using V = hn::Vec<D>;
-  D d;
-  hn::RebindToSigned<D> di;
-  float* pl[Z3Tile::kFields];
-  int32_t* cnt;
-  bool opaque;
-  int nAttr;
-  uint64_t opened = 0, occluded = 0;
-  Z3Rows(Z3Tile& z3, bool opaqueFragments)
-      : cnt(z3.counts()), opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1) {
-    for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
-  }
-  template <class AttrAt>
-  HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
-    const V zero = hn::Zero(d);
-    const auto count = hn::LoadU(di, cnt + p);
-    const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Zero(di))));
-    const auto single = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Set(di, 1))));
-    const V z0 = hn::LoadU(d, pl[Z3Tile::kZ] + p);
-    const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, pl[Z3Tile::kThr] + p)));
-    const auto fast = hn::Or(open, hn::And(single, within));
-    const auto behind =
-        hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(d, pl[Z3Tile::kOpaque] + p), zero))));
-    if (!hn::AllFalse(d, fast)) {
-      for (int k = 0; k < nAttr; ++k) {
-        const V add = hn::Mul(w, attrAt(k));
-        const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, pl[k] + p), add));
-        hn::BlendedStore(sum, fast, d, pl[k] + p);
-      }
-      hn::BlendedStore(z, open, d, pl[Z3Tile::kZ] + p);
-      hn::BlendedStore(thr, open, d, pl[Z3Tile::kThr] + p);
-      if (opaque) hn::BlendedStore(hn::Set(d, 1.0f), open, d, pl[Z3Tile::kOpaque] + p);
-      else hn::BlendedStore(zero, fast, d, pl[Z3Tile::kOpaque] + p);
-      hn::BlendedStore(hn::Set(di, 1), hn::RebindMask(di, open), di, cnt + p);
-      opened += hn::CountTrue(d, open);
-    }
-    occluded += hn::CountTrue(d, behind);
-    return hn::AndNot(hn::Or(fast, behind), inside);
-  }
-};
 
 // One segment straight into the Z^3 tile over its rows' spans, with the fast path of PointRowsT
 // (open a layer on an empty pixel, merge into a single layer within the threshold); colour and
