@@ -15,6 +15,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/endpoint_normals.h"
+#include "detail/segment_width.h"
 
 namespace linesurf {
 namespace {
@@ -378,6 +379,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
   out.segments.reserve(picks.size());
   if (options.provenance) out.provenance.reserve(picks.size());
   std::vector<uint32_t> members;
+  std::vector<uint32_t> owner(n, detail::kKeptPoint);  // the segment that replaced each point
   for (const Pick& pk : picks) {
     members.clear();
     DirectionView dir;
@@ -390,7 +392,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     const Vec3d nid = geometry.normals[i].cast<double>();
     Line line;
     seedLine(ctx.pos[i], nid, ctx.pos[dir.k], line);
-    double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin, radius = 0;
+    double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
     uint32_t jmin = i, jmax = i;  // the points at the two ends (their normals: smooth line models)
     Eigen::Vector4d colour = Eigen::Vector4d::Zero();
     for (uint32_t j : members) {
@@ -399,7 +401,6 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
       double t = w.dot(line.dir);
       if (t < tmin) tmin = t, jmin = j;
       if (t > tmax) tmax = t, jmax = j;
-      radius = std::max(radius, radiusOf(j) + (w - t * line.dir).norm());
       colour += cloud.points[j].color.cast<double>();
     }
     // A segment stands for a row of points, each covering half a spacing on either side: extend
@@ -421,7 +422,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     s.normal = nn.normalized().cast<float>();
     if (options.endpointNormals) detail::setEndpointNormals(s, geometry.normals[jmin], geometry.normals[jmax]);
     s.color = cloud.attributes.colors ? Color((colour / double(members.size())).cast<float>()) : Color(1, 1, 1, 1);
-    s.radius = float(radius);
+    for (uint32_t j : members) owner[j] = uint32_t(out.segments.size());
     out.segments.push_back(s);
     if (options.provenance) {
       std::vector<uint32_t> prov;
@@ -431,6 +432,13 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
         if (j != i) prov.push_back(j);
       out.provenance.push_back(std::move(prov));
     }
+  }
+  // Half-widths (§3.1.5 "enlarge the radius by ε", made tight): the strips and the kept discs
+  // cover every replaced point's Voronoi cell; docs/decisions.md "Issue 13 (i13width)".
+  {
+    std::vector<double> radii(n);
+    for (size_t j = 0; j < n; ++j) radii[j] = radiusOf(j);
+    detail::setSegmentWidths(out.segments, owner, radii, cloud, geometry);
   }
   for (auto& [name, values] : cloud.pointProperties) {
     if (values.size() != n) continue;

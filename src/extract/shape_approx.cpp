@@ -12,6 +12,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/endpoint_normals.h"
+#include "detail/segment_width.h"
 #include "linesurf/geometry/point_geometry.h"
 
 namespace linesurf {
@@ -34,7 +35,7 @@ namespace {
 /// What one cluster contributes; clusters are processed independently and concatenated in order.
 struct ClusterOutput {
   std::vector<Segment> segments;
-  std::vector<std::vector<uint32_t>> provenance;
+  std::vector<std::vector<uint32_t>> provenance;  ///< always filled: the widths need the members
   bool small = false, degenerate = false, curvatureUsed = false;
   size_t degenerateRuns = 0;
 };
@@ -265,18 +266,7 @@ ClusterOutput extractCluster(size_t c, const Context& ctx) {
       if (opt.endpointNormals) detail::setEndpointNormals(s, g.normals[members[ls]], g.normals[members[le]]);
       s.color = colors ? Color((col / double(count)).cast<float>()) : Color(1, 1, 1, 1);
       s.radius = float(opt.radiusScale * std::clamp(sliceWidth, dAvgX, 2.0 * dAvgX));
-      // Hybrids close where their point models close (issue 14): with point radii, the strip
-      // covers exactly every replaced point's disc (its radius plus its distance to the segment,
-      // the rule of §3.1.5); the slice-width rule above left holes with hole-free point radii.
-      if (ctx.cloud.attributes.radii) {
-        double cover = 0;
-        for (size_t e = begin; e < ownPos; ++e) {
-          const uint32_t p = members[own[e].second];
-          const Vec3d w = position(p) - ps;
-          cover = std::max(cover, double(ctx.cloud.points[p].radius) + (w - w.dot(dir) * dir).norm());
-        }
-        s.radius = float(cover);
-      }
+      // With point radii the width is set once all segments exist (extractShapeApprox below).
       out.segments.push_back(s);
       std::vector<uint32_t> prov;
       prov.reserve(count);
@@ -285,10 +275,8 @@ ClusterOutput extractCluster(size_t c, const Context& ctx) {
         ctx.replaced[p] = 1;
         prov.push_back(p);
       }
-      if (opt.provenance) {
-        std::sort(prov.begin(), prov.end());
-        out.provenance.push_back(std::move(prov));
-      }
+      std::sort(prov.begin(), prov.end());
+      out.provenance.push_back(std::move(prov));
     }
   }
   return out;
@@ -368,12 +356,15 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
     for (uint32_t i : kept) dst.push_back(values[i]);
   }
   ShapeApproxStats st;
+  std::vector<uint32_t> owner(n, detail::kKeptPoint);  // the segment that replaced each point
   for (size_t c = 0; c < nc; ++c) {
     auto& o = outputs[c];
     st.segments += o.segments.size();
-    out.segments.insert(out.segments.end(), o.segments.begin(), o.segments.end());
-    if (options.provenance)
-      for (auto& p : o.provenance) out.provenance.push_back(std::move(p));
+    for (auto& p : o.provenance) {
+      for (uint32_t j : p) owner[j] = uint32_t(out.segments.size());
+      out.segments.push_back(o.segments[&p - o.provenance.data()]);
+      if (options.provenance) out.provenance.push_back(std::move(p));
+    }
     st.smallClusters += o.small;
     st.degenerateClusters += o.degenerate;
     st.curvatureDirectionUsed += o.curvatureUsed;
@@ -383,6 +374,15 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
     int bin = size <= 1 ? 0 : size <= 3 ? 1 : size <= 9 ? 2 : size <= 99 ? 3 : size <= 999 ? 4 : 5;
     ++st.sizeHistogram[bin];
     if (size > 100) ++st.largeClusters, st.largeClusterPoints += size;
+  }
+  // Hybrids close where their point models close (issue 14): with point radii, the strips and
+  // the kept discs cover every replaced point's Voronoi cell (the rule of the hole-free point
+  // radius), no wider than each member's disc plus its distance (the rule of §3.1.5);
+  // docs/decisions.md "Issue 13 (i13width)". Without radii the slice-width rule stays.
+  if (cloud.attributes.radii) {
+    std::vector<double> radii(n);
+    for (size_t j = 0; j < n; ++j) radii[j] = cloud.points[j].radius;
+    detail::setSegmentWidths(out.segments, owner, radii, cloud, geometry);
   }
   st.inputPoints = n;
   st.clusters = nc;
