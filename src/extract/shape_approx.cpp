@@ -259,9 +259,19 @@ ClusterOutput extractCluster(size_t c, const Context& ctx) {
         ++out.degenerateRuns;
         continue;
       }
+      // Beyond the thesis (issue 13, docs/decisions.md "Issue 13 (i13width)"): the line through
+      // p_s and p_e moved sideways (in the segment's plane) to the middle of the run's spread
+      // across it, so that the farthest member is as close as it can be for this direction.
+      const Vec3d across = nseg.normalized().cross(dir);
+      double lo = 0, hi = 0;
+      for (size_t e = begin; e < ownPos; ++e) {
+        const double o = (position(members[own[e].second]) - ps).dot(across);
+        lo = std::min(lo, o), hi = std::max(hi, o);
+      }
+      const Vec3d shift = 0.5 * (lo + hi) * across;
       Segment s;
-      s.p0 = ps.cast<float>();
-      s.p1 = pe.cast<float>();
+      s.p0 = (ps + shift).cast<float>();
+      s.p1 = (pe + shift).cast<float>();
       s.normal = nseg.normalized().cast<float>();
       if (opt.endpointNormals) detail::setEndpointNormals(s, g.normals[members[ls]], g.normals[members[le]]);
       s.color = colors ? Color((col / double(count)).cast<float>()) : Color(1, 1, 1, 1);

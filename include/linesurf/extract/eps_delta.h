@@ -84,9 +84,12 @@ void validate(const EpsDeltaOptions& options);
 /// geometry spacing when it has none; colours and extra point properties carried over), then the
 /// segments in extraction order. Segment endpoints are the projections of the extreme replaced
 /// points onto the segment's line, its normal is the anchor normal made perpendicular to the
-/// segment, its colour the mean of the replaced points' colours, its radius
-/// max_j (r_j + dist(q_j, segment)) <= max r_j + epsilon so the strip covers every replaced
-/// point's disc (§3.1.5). A comment "eps-delta: epsilon=E delta=D k=K" records the tolerances.
+/// segment, its colour the mean of the replaced points' colours, its radius the least (from the
+/// thinnest member's radius up) at which the strips cover every replaced point's Voronoi cell
+/// (local Delaunay star) together with the neighbouring segments, at most
+/// max_j (r_j + dist(q_j, segment)) <= max r_j + epsilon, the cover of every replaced disc
+/// (§3.1.5's "radius + ε" made tight; docs/decisions.md "Issue 13 (i13width)").
+/// A comment "eps-delta: epsilon=E delta=D k=K" records the tolerances.
 /// Deterministic for any thread count. Throws linesurf::Error (BadParameter) for absurd options
 /// or geometry that does not match the cloud.
 HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geometry,

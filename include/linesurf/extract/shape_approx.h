@@ -38,8 +38,9 @@ struct ShapeApproxOptions {
   /// The curvature directions of a cluster are used only when their axial mean is coherent:
   /// |mean of (cos 2a, sin 2a)| >= this (in [0, 1]); 1 never uses them.
   float curvatureCoherence = 0.5f;
-  /// Segment half-width as a multiple of the cluster's average spacing across the segments
-  /// (d_avg,x); > 0. See docs/decisions.md for the hole-free rule.
+  /// Without point radii in the cloud: segment half-width as a multiple of the cluster's average
+  /// spacing across the segments (d_avg,x); > 0. With radii the strips cover the replaced points'
+  /// Voronoi cells instead (docs/decisions.md "Issue 13 (i13width)") and this is not used.
   float radiusScale = 1.0f;
   bool provenance = false;  ///< fill HybridModel::provenance with the points each segment replaced
   /// Smooth line models (beyond the thesis): each segment also carries the normals of the
@@ -82,7 +83,8 @@ Clustering clusterShapeApprox(const PointGeometry& geometry, const ShapeApproxOp
 /// @param cloud     the point cloud (points only); its colours and radii are kept for points
 /// @param geometry  computePointGeometry(cloud): normals, local Delaunay neighbours, k_min directions
 /// @return the hybrid model: the points no segment replaced (input order), then the segments in
-///         cluster order. Deterministic for any thread count.
+///         cluster order. A segment runs from p_s to p_e (§3.2.4.5) moved sideways to the middle
+///         of its run's spread (beyond the thesis). Deterministic for any thread count.
 /// Throws linesurf::Error (BadParameter) for absurd options or a geometry of another size.
 HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& geometry,
                                const ShapeApproxOptions& options = {}, ShapeApproxStats* stats = nullptr);
