@@ -100,7 +100,7 @@ RegisterCommand reg(32, [](CLI::App& app) {
   bind(sub, "maxIterations", o.clustering.maxIterations, "Hierarchical: reseeding iterations per split, >= 1");
   sub->add_option("--clusters-out", a->clustersOut, "Also write the cloud coloured by cluster (.ply)");
   bind(sub, "radiusScale", o.radiusScale,
-       "Segment half-width as a multiple of the cluster's spacing across segments (>= 1 renders hole-free)");
+       "Clouds without point radii only: segment half-width as a multiple of the cluster's spacing across segments (with radii the width covers the replaced points' Voronoi cells)");
   bind(sub, "minClusterSize", o.minClusterSize, "Clusters with fewer points stay points (§3.2.4.1), >= 2");
   bind(sub, "minRunPoints", o.minRunPoints, "Runs of influenced squares with fewer points stay points (§3.2.4.5), >= 2");
   bindGeometryOptions(sub, a->geometry);
