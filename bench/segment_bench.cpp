@@ -27,6 +27,7 @@
 #include "linesurf/render/renderer.h"
 #include "linesurf/render/segment_splat.h"
 #include "render/point_setup.h"
+#include "render/segment_setup.h"
 #include "render/segment_splat.h"
 
 namespace {
@@ -150,7 +151,13 @@ void BM_HybridFrame(benchmark::State& state) {
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
-  for (auto _ : state) benchmark::DoNotOptimize(r.render(views[v++ % views.size()]).color.pixels.data());
+  double prepCpu = 0;
+  for (auto _ : state) {
+    const RenderResult res = r.render(views[v++ % views.size()]);
+    benchmark::DoNotOptimize(res.color.pixels.data());
+    prepCpu += res.stats.prepareThreadSeconds;
+  }
+  state.counters["prep_cpu_ms"] = 1e3 * prepCpu / double(std::max<int64_t>(1, state.iterations()));
   state.SetLabel(std::string(kModels[state.range(0)]) + (state.range(1) == 0 ? " points" : state.range(1) == 1 ? " eps-delta" : state.range(1) == 2 ? " greedy" : " hierarchical"));
   state.counters["points"] = double(m->points.size());
   state.counters["segments"] = double(m->segments.size());
@@ -183,10 +190,11 @@ void BM_ContourFrame(benchmark::State& state) {
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
-  double prepare = 0, raster = 0, resolve = 0, fragments = 0, allocated = 0;
+  double prepare = 0, prepCpu = 0, raster = 0, resolve = 0, fragments = 0, allocated = 0;
   for (auto _ : state) {
     const RenderStats st = r.render(views[v++ % views.size()]).stats;
     prepare += st.prepareSeconds;
+    prepCpu += st.prepareThreadSeconds;
     raster += st.fragmentThreadSeconds;
     resolve += st.resolveThreadSeconds;
     fragments += double(st.fragments);
@@ -194,6 +202,7 @@ void BM_ContourFrame(benchmark::State& state) {
   }
   const double n = double(std::max<int64_t>(1, state.iterations()));
   state.counters["prepare_ms"] = 1e3 * prepare / n;
+  state.counters["prep_cpu_ms"] = 1e3 * prepCpu / n;
   state.counters["raster_cpu_ms"] = 1e3 * raster / n;
   state.counters["resolve_cpu_ms"] = 1e3 * resolve / n;
   state.counters["kfrags"] = fragments / n / 1e3;
@@ -204,7 +213,8 @@ void BM_ContourFrame(benchmark::State& state) {
                  " simd=" + renderSimdTarget());
 }
 // The prepare stage alone, one thread: ns per primitive of the bunny's contour points (SIMD
-// batches, as the renderer runs them) and contour segments.
+// batches, as the renderer runs them) and contour segments (second argument: 0 SIMD batches as
+// the renderer runs them, 1 the exact path prepareSegment alone, one at a time).
 void BM_ContourPrepare(benchmark::State& state) {
   std::string error;
   const HybridModel* m = contourModel(0, int(state.range(0)), error);
@@ -227,14 +237,19 @@ void BM_ContourPrepare(benchmark::State& state) {
         preparePoints(m->points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, pts.size() - i)), frame,
                       setup, pts.data() + i, gouraud.data() + i, counts);
     }
-    for (size_t i = 0; i < segs.size(); ++i) status[i] = prepareSegment(m->segments[i], uint32_t(i), frame, segs[i]);
+    if (state.range(1) == 0)  // as the renderer runs them: SIMD batches, the exact path for the lanes they leave
+      prepareSegments(m->segments.data(), 0, segs.size(), frame, segmentSetupFrame(frame), segs.data(), status.data());
+    else  // the exact path alone, one at a time
+      for (size_t i = 0; i < segs.size(); ++i) status[i] = prepareSegment(m->segments[i], uint32_t(i), frame, segs[i]);
     benchmark::DoNotOptimize(status.data());
   }
   state.counters["ns/primitive"] = benchmark::Counter(double(pts.size() + segs.size()),
                                                       benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  state.SetLabel(state.range(0) == 0 ? "bunny contour points" : "bunny contour lines");
+  const char* path[] = {" (batches)", " (exact path)"};
+  state.SetLabel(std::string(state.range(0) == 0 ? "bunny contour points" : "bunny contour lines") +
+                 (segs.empty() ? "" : path[state.range(1)]) + " simd=" + renderSimdTarget());
 }
-BENCHMARK(BM_ContourPrepare)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_ContourPrepare)->Args({0, 0})->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 BENCHMARK(BM_ContourFrame)
     ->ArgsProduct({{0, 1, 2, 3, 4, 5, 6}, {0, 1}})

@@ -18,6 +18,7 @@
 #include "detail/splat_rows.h"
 #include "point_setup.h"
 #include "point_splat.h"
+#include "segment_setup.h"
 #include "segment_splat.h"
 #include "linesurf/render/splat_context.h"
 
@@ -201,9 +202,10 @@ RenderResult Renderer::render(const Camera& cam) const {
   }, 1);
   PrimitiveStatus* const segStatus = buf.segStatus.data();
   std::atomic<int64_t> segmentNs{0};
+  const detail::SegmentSetupFrame segSetup = segmentSetupFrame(frame);
   parallelForRange(0, ns, [&](size_t i0, size_t i1) {
     const double t0 = threadCpuSeconds();
-    for (size_t i = i0; i < i1; ++i) segStatus[i] = prepareSegment(model_.segments[i], uint32_t(i), frame, segs[i]);
+    prepareSegments(model_.segments.data(), uint32_t(i0), i1 - i0, frame, segSetup, segs + i0, segStatus + i0);
     segmentNs += int64_t(1e9 * (threadCpuSeconds() - t0));
   }, 256);
   for (const PointSetupCounts& c : buf.chunkCounts) {
@@ -213,10 +215,11 @@ RenderResult Renderer::render(const Camera& cam) const {
     st.pointsOutside += c.outside;
     st.pointsDegenerate += c.degenerate;
   }
-  for (size_t i = 0; i < ns; ++i)
+  for (size_t i = 0; i < ns; ++i) {  // (the records of segments not drawn are not read)
     count(segStatus[i], st.segmentsDrawn, st.segmentsClipped, st.segmentsCulled, st.segmentsOutside,
           st.segmentsDegenerate);
-  for (size_t i = 0; i < ns; ++i) st.segmentsFallback += segs[i].fallback;
+    if (visible(segStatus[i])) st.segmentsFallback += segs[i].fallback;
+  }
   parallelFor(0, segChunks, [&](size_t c) {
     uint32_t* cnt = buf.counts.data() + (pointChunks + c) * tiles;
     for (size_t i = c * segChunkSize, e = std::min(ns, i + segChunkSize); i < e; ++i)

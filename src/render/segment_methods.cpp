@@ -16,58 +16,16 @@ namespace linesurf {
 namespace segment {
 
 using detail::kPi;
-// Same limit as point splats (detail/splat_math.h): the resampling filter is never stretched
-// beyond kMaxStretch sigma_r.
-constexpr double kMaxStretch = detail::kMaxStretch;
 // Reference quadrature: node spacing sigma_r / kNodesPerSigma, at most kMaxNodes nodes.
 constexpr double kNodesPerSigma = 32.0;
 constexpr int kMaxNodes = 1 << 16;
 
-namespace {
-
-// --- the resampling covariance along the segment (§5.1.2) -------------------------------------
-
-// Symmetric 2x2 with eigenvalues clamped to [lo, hi].
-Mat2d clampEigen(const Mat2d& M, double lo, double hi) {
-  const double a = M(0, 0), b = M(0, 1), c = M(1, 1);
-  // within the range iff M - lo I and hi I - M are positive semi-definite (no square root)
-  if (a >= lo && c >= lo && (a - lo) * (c - lo) >= b * b && hi >= a && hi >= c && (hi - a) * (hi - c) >= b * b) return M;
-  const double mean = 0.5 * (a + c), diff = 0.5 * (a - c);
-  const double rad = std::sqrt(diff * diff + b * b);
-  double l0 = mean + rad, l1 = mean - rad;
-  if (l0 <= hi && l1 >= lo) return M;
-  Vec2dd e0 = rad > 0 ? (std::abs(b) > 0 ? Vec2dd(l0 - c, b).normalized() : (a >= c ? Vec2dd(1, 0) : Vec2dd(0, 1)))
-                      : Vec2dd(1, 0);
-  if (!e0.allFinite()) e0 = Vec2dd(1, 0);
-  const Vec2dd e1(-e0.y(), e0.x());
-  l0 = std::clamp(l0, lo, hi);
-  l1 = std::clamp(l1, lo, hi);
-  return l0 * e0 * e0.transpose() + l1 * e1 * e1.transpose();
-}
-
-}  // namespace
-
 // Behind the eye the prefilter is dropped, as for point splats.
 Mat2d resamplingCovariance(const Vec3d& p, const Vec3d& e, const Vec3d& s, double sigmaR, double Vh, double f) {
-  Mat2d M = Mat2d::Identity() * (sigmaR * sigmaR);
-  const double d = -p.z();
-  const double hi = (kMaxStretch * sigmaR) * (kMaxStretch * sigmaR);
-  if (d > 0 && Vh > 0) {
-    const Vec3d gx(f / d, 0, f * p.x() / (d * d));
-    const Vec3d gy(0, -f / d, -f * p.y() / (d * d));
-    Mat2d J;
-    J << gx.dot(e), gx.dot(s), gy.dot(e), gy.dot(s);
-    const Mat2d JtJ = J.transpose() * J;
-    const double det = JtJ.determinant();
-    if (det > 0 && std::isfinite(det)) {
-      Mat2d adj;
-      adj << JtJ(1, 1), -JtJ(0, 1), -JtJ(1, 0), JtJ(0, 0);
-      M += (Vh / det) * adj;
-    } else {
-      return Mat2d::Identity() * hi;  // edge-on here: as stretched as allowed
-    }
-  }
-  return clampEigen(M, sigmaR * sigmaR, hi);
+  const Sym2 M = covariance(p.data(), e.data(), s.data(), sigmaR, Vh, f);
+  Mat2d out;
+  out << M.a, M.b, M.b, M.c;
+  return out;
 }
 
 namespace {

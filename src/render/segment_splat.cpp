@@ -20,17 +20,12 @@ using segment::Vec2dd;
 // kMinFacing everywhere are culled, and no kernel reaches farther than kMaxStretch sigma_r.
 constexpr double kMinFacing = detail::kMinFacing;
 constexpr double kMaxStretch = detail::kMaxStretch;
-// ScreenSpace subdivision: a new sub-segment wherever M changes by more than this (relative
-// Frobenius norm) from one end of the sub-segment to the other.
-constexpr double kPieceTolerance = 0.04;
-// Segments shorter than this fraction of their nearest depth take M in the middle as the mean of
-// the ends (relative error of the order of its square, 1e-4).
-constexpr double kShortSegment = 0.01;
+using segment::kPieceTolerance;
+using segment::kShortSegment;
 // Rasterisation visits the pixel centres within this distance (pixels) of the projected footprint
 // box: the projection and the per-pixel ray-plane intersection differ by rounding only.
 constexpr float kSpanSlack = 0.05f;
-// Smooth segments get one lighting station per this many radians the shading normal turns.
-constexpr float kStationTurn = 0.1f;
+using segment::kStationTurn;
 // Rectangles of at most this many pixels are rasterised whole (as point splats are), larger ones
 // in the rows' spans of the projected footprint box: a span costs its set-up, a pixel outside the
 // footprint only its share of a SIMD vector.

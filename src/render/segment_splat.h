@@ -26,6 +26,17 @@
 
 namespace linesurf {
 
+namespace segment {
+/// ScreenSpace subdivision: a new sub-segment wherever M changes by more than this (relative
+/// Frobenius norm) from one end of the sub-segment to the other.
+inline constexpr double kPieceTolerance = 0.04;
+/// Segments shorter than this fraction of their nearest depth take M in the middle as the mean of
+/// the ends (relative error of the order of its square, 1e-4).
+inline constexpr double kShortSegment = 0.01;
+/// Smooth segments get one lighting station per this many radians the shading normal turns.
+inline constexpr float kStationTurn = 0.1f;
+}  // namespace segment
+
 /// One sub-segment of the ScreenSpace method (detail/splat_rows.h: the SIMD rows evaluate them).
 using SegmentPiece = detail::SegmentPiece;
 
@@ -83,6 +94,9 @@ enum class SegmentShade : uint8_t {
 };
 
 struct PreparedSegment {
+  /// null in the common case. First, with the fields below up to `shade`: for a segment it does
+  /// not draw prepareSegment writes (and reads) only the record's first cache line or two.
+  std::unique_ptr<SegmentExtra> extra;
   PixelRect bounds;      ///< screen bounding box (clamped to the viewport); bins the segment
   uint32_t index = 0;    ///< index in model.segments
   SegmentMethod method = SegmentMethod::ScreenSpace;  ///< evaluation used (after fallback)
@@ -100,14 +114,15 @@ struct PreparedSegment {
   /// Smooth) and the smooth normal n0 + u dn (unit at both ends, facing the viewer).
   float attr[Z3Tile::kAttrs] = {};
   Vec3f dc = Vec3f::Zero(), n0 = Vec3f::Zero(), dn = Vec3f::Zero();
-  std::unique_ptr<SegmentExtra> extra;  ///< null in the common case
 
   /// Number of ScreenSpace sub-segments.
   int pieceCount() const { return extra && !extra->pieces.empty() ? int(extra->pieces.size()) : 1; }
   float length() const { return raster.length; }
 };
 
-/// Prepare stage for one segment (see linesurf/render/segment_splat.h and splat_context.h).
+/// Prepare stage for one segment (see linesurf/render/segment_splat.h and splat_context.h): the
+/// exact path, in double. The renderer prepares segments in batches (segment_setup.h: the common
+/// case in SIMD, float), which hand every segment they cannot decide safely to this function.
 PrimitiveStatus prepareSegment(const Segment& segment, uint32_t index, const FrameContext& frame,
                                PreparedSegment& out);
 

@@ -1,0 +1,217 @@
+// The prepare stage's SIMD batches against its exact path (src/render/segment_setup.h,
+// segment_splat.h): for many random segments (random orientations, lengths from 1e-4 to 3,
+// radii from 3e-4 to 0.3, distances from 1.2 to 300, near-grazing strips, segments through the
+// near plane, smooth normals turning by less and more than 0.1 rad, one- and two-sided, Gouraud
+// and per-pixel lighting), prepareSegments gives every segment the status of prepareSegment and
+// the same PreparedSegment constants to the tolerances stated in `agree` (float rounding), except
+// that a segment at the viewport's edge may differ by one pixel of bounds (and so between Drawn,
+// Clipped and Outside). The lanes the SIMD code cannot decide go to prepareSegment itself: the
+// test checks that they are a minority, and not none (the awkward cases above are among them).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "linesurf/render/camera.h"
+#include "render/segment_setup.h"
+#include "render/segment_splat.h"
+
+namespace linesurf {
+namespace {
+
+struct Case {
+  std::vector<Segment> segs;
+};
+
+// Random segments around the origin; every 8th strip is nearly edge-on to the eye.
+std::vector<Segment> randomSegments(int n, const Vec3f& eye, bool smooth, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1, 1), u01(0, 1);
+  auto dir = [&] {
+    Vec3f v;
+    do v = Vec3f(u(rng), u(rng), u(rng));
+    while (!(v.squaredNorm() > 1e-4f && v.squaredNorm() <= 1));
+    return Vec3f(v.normalized());
+  };
+  std::vector<Segment> out;
+  for (int i = 0; i < n; ++i) {
+    Segment s;
+    const Vec3f c = dir() * std::pow(u01(rng), 0.5f) * 1.5f;
+    const Vec3f e = dir();
+    const float len = std::pow(10.0f, -4 + 4.5f * u01(rng));
+    s.p0 = c - 0.5f * len * e;
+    s.p1 = c + 0.5f * len * e;
+    s.radius = std::pow(10.0f, -3.5f + 3 * u01(rng));
+    Vec3f n = dir();
+    if (i % 8 == 0) n = (eye - c).normalized().cross(e) + 0.01f * u(rng) * dir();  // near grazing
+    n -= n.dot(e) * e;
+    s.normal = n.normalized();
+    if (smooth) {
+      const float turn = i % 5 == 0 ? 0.3f : 0.08f * u01(rng);  // some turn by more than 0.1 rad
+      const Vec3f side = e.cross(s.normal);
+      s.normal0 = (s.normal * std::cos(turn / 2) - side * std::sin(turn / 2)).normalized();
+      s.normal1 = (s.normal * std::cos(turn / 2) + side * std::sin(turn / 2)).normalized();
+    }
+    s.color = Color(u01(rng), u01(rng), u01(rng), 1);
+    out.push_back(s);
+  }
+  return out;
+}
+
+bool visible(PrimitiveStatus s) { return s == PrimitiveStatus::Drawn || s == PrimitiveStatus::Clipped; }
+
+// The constants of a (visible) prepared segment agree with the exact stages' to float rounding:
+// relative 1e-3 for the footprint and the piece (the float covariance is good to 1e-4), plane
+// coordinates at the segment's middle to 1e-3 of the footprint plus 1e-5 of the terms summed
+// (float rounding, magnified as the ray grazes the plane), colours to 2e-3.
+std::string agree(const PreparedSegment& f, const PreparedSegment& x, const Vec2f& centre) {
+  const detail::SegmentRaster &a = f.raster, &b = x.raster;
+  using detail::Affine2;
+  std::string err;
+  auto rel = [&](const char* what, float p, float q, float scale, float tol) {
+    if (!(std::abs(p - q) <= tol * scale)) err += std::string(what) + " " + std::to_string(p) + " vs " + std::to_string(q) + "; ";
+  };
+  if (std::abs(f.bounds.x0 - x.bounds.x0) > 1 || std::abs(f.bounds.x1 - x.bounds.x1) > 1 ||
+      std::abs(f.bounds.y0 - x.bounds.y0) > 1 || std::abs(f.bounds.y1 - x.bounds.y1) > 1)
+    err += "bounds; ";
+  if (f.method != x.method || f.useSpans != x.useSpans || f.smooth != x.smooth || f.shade != x.shade ||
+      f.pieceCount() != x.pieceCount() || a.clipDepth != b.clipDepth || f.index != x.index)
+    err += "kind; ";
+  const float ext = b.aMax - b.aMin + b.bMax;
+  rel("length", a.length, b.length, b.length, 1e-5f);
+  rel("aMin", a.aMin, b.aMin, ext, 1e-3f);
+  rel("aMax", a.aMax, b.aMax, ext, 1e-3f);
+  rel("bMax", a.bMax, b.bMax, b.bMax, 1e-3f);
+  rel("skew", a.skew, b.skew, std::max(1.0f, std::abs(b.skew)), 1e-3f);
+  rel("across", a.across, b.across, b.across, 1e-3f);
+  rel("invM00", a.invM00, b.invM00, b.invM00, 1e-3f);
+  rel("k", a.k, b.k, b.k, 1e-3f);
+  rel("erfScale", a.erfScale, b.erfScale, b.erfScale, 1e-3f);
+  rel("scale0", a.scale0, b.scale0, b.scale0, 1e-3f);
+  rel("slope*L", a.slope * a.length, b.slope * b.length, b.scale0, 2e-3f);
+  rel("zThreshold0", a.zThreshold0, b.zThreshold0, b.zThreshold0, 1e-3f);
+  rel("zThreshold1", a.zThreshold1, b.zThreshold1, b.zThreshold1, 1e-3f);
+  // the ray through `centre` (the segment's middle) meets the plane at the same depth and (a, b),
+  // to the rounding of the terms each path sums, magnified where the ray grazes the plane
+  const float px = centre.x(), py = centre.y();
+  const float na = a.N.at(px, py), nb = b.N.at(px, py);
+  const float graze = (std::abs(b.N.dx * px) + std::abs(b.N.dy * py) + std::abs(b.N.c)) / std::abs(nb);
+  const float ta = a.depthNum / na, tb = b.depthNum / nb;
+  rel("depth", ta, tb, std::abs(tb), 1e-5f * graze + 1e-4f);
+  auto terms = [&](const Affine2& A, float c) {
+    return (std::abs(A.dx * px) + std::abs(A.dy * py) + std::abs(A.c)) / std::abs(nb) * graze + std::abs(c);
+  };
+  rel("a", a.A.at(px, py) / na - a.a0, b.A.at(px, py) / nb - b.a0, 1e-3f * ext + 1e-5f * terms(b.A, b.a0), 1);
+  rel("b", a.B.at(px, py) / na - a.b0, b.B.at(px, py) / nb - b.b0, 1e-3f * ext + 1e-5f * terms(b.B, b.b0), 1);
+  for (int k = 0; k < 4 && x.useSpans; ++k)
+    for (int c = 0; c < 2; ++c)
+      rel("quad", f.screenQuad[k][c], x.screenQuad[k][c], 1e-2f + 1e-5f * std::abs(x.screenQuad[k][c]), 1);
+  for (int c = 0; c < Z3Tile::kAttrs; ++c) rel("attr", f.attr[c], x.attr[c], 1, 2e-3f);
+  for (int c = 0; c < 3; ++c) rel("dc", f.dc[c], x.dc[c], 1, 2e-3f);
+  if (x.smooth)
+    for (int c = 0; c < 3; ++c) rel("n0", f.n0[c], x.n0[c], 1, 1e-4f), rel("dn", f.dn[c], x.dn[c], 1, 1e-4f);
+  return err;
+}
+
+struct Tally {
+  size_t segments = 0, scalar = 0;  ///< all, and those the SIMD code left to prepareSegment
+  int compared = 0, edge = 0, visible = 0;
+};
+
+// One frame: every segment's status and constants from the batches against the exact path's.
+void check(const std::vector<Segment>& segs, const Camera& cam, const RenderOptions& o, bool endpointNormals,
+           Tally& tally) {
+  FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1.5f});
+  frame.endpointNormals = endpointNormals;
+  const size_t n = segs.size();
+  std::vector<PreparedSegment> batched(n), exact(n);
+  std::vector<PrimitiveStatus> sb(n), sx(n);
+  // odd ranges, as the renderer's threads split them
+  for (size_t i = 0; i < n; i += 97)
+    tally.scalar += prepareSegments(segs.data(), uint32_t(i), std::min<size_t>(97, n - i), frame,
+                                    segmentSetupFrame(frame), batched.data() + i, sb.data() + i);
+  tally.segments += n;
+  for (size_t i = 0; i < n; ++i) sx[i] = prepareSegment(segs[i], uint32_t(i), frame, exact[i]);
+  const PixelRect view{0, 0, cam.width(), cam.height()};
+  for (size_t i = 0; i < n; ++i) {
+    if (sb[i] != sx[i]) {
+      // only at the viewport's edge, within a pixel of the exact bounds
+      const PixelRect& eb = visible(sx[i]) ? exact[i].bounds : batched[i].bounds;
+      const bool edge = (visible(sb[i]) || sb[i] == PrimitiveStatus::Outside) &&
+                        (visible(sx[i]) || sx[i] == PrimitiveStatus::Outside) &&
+                        (std::abs(eb.x0 - view.x0) <= 1 || std::abs(eb.y0 - view.y0) <= 1 ||
+                         std::abs(eb.x1 - view.x1) <= 1 || std::abs(eb.y1 - view.y1) <= 1 || eb.empty());
+      EXPECT_TRUE(edge) << "segment " << i << " status " << int(sb[i]) << " vs exact " << int(sx[i]);
+      ++tally.edge;
+    } else if (visible(sb[i])) {
+      const Vec3f mid = cam.toCamera(0.5f * (segs[i].p0 + segs[i].p1));
+      const std::string err = agree(batched[i], exact[i], cam.project(mid).head<2>());
+      EXPECT_TRUE(err.empty()) << "segment " << i << ": " << err;
+      ++tally.compared;
+    }
+    tally.visible += visible(sx[i]);
+  }
+}
+
+TEST(SegmentPrepare, BatchesAgreeWithTheExactPath) {
+  Tally tally;
+  int frames = 0;
+  for (float dist : {1.2f, 3.0f, 20.0f, 300.0f}) {
+    const Vec3f eye = Vec3f(0.3f, 0.2f, 1).normalized() * dist;
+    for (int variant = 0; variant < 4; ++variant) {
+      const bool smooth = variant & 1;
+      RenderOptions o;
+      o.backfaceCulling = variant != 2;
+      o.perPixelLighting = variant == 3;
+      const float fov = dist > 50 ? 2.0f : 40.0f;
+      const Camera cam = Camera::lookAt(eye, Vec3f::Zero(), Vec3f(0, 1, 0), fov, 320, 240, dist > 2 ? 0.05f : 0.5f, 1000);
+      check(randomSegments(3000, eye, smooth, uint32_t(11 + variant + 7 * frames)), cam, o, smooth, tally);
+      ++frames;
+    }
+  }
+  // most segments are compared, few sit at the viewport's edge; the SIMD code decides most of
+  // them (the rest: near grazing, turning normals, near-plane, long and near ones)
+  EXPECT_GT(tally.compared, tally.visible * 99 / 100);
+  EXPECT_LT(tally.edge, tally.compared / 200);
+  EXPECT_LT(tally.scalar, tally.segments / 2);
+  EXPECT_GT(tally.scalar, tally.segments / 100);
+  std::printf("%zu segments, %zu to the exact path, %d visible, %d compared, %d at the edge\n", tally.segments,
+              tally.scalar, tally.visible, tally.compared, tally.edge);
+}
+
+TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
+  // degenerate input the exact stages count (zero/NaN/infinite radius, NaN endpoints, zero length)
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 3), Vec3f::Zero(), Vec3f(0, 1, 0), 40, 64, 64);
+  RenderOptions o;
+  const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+  Segment base;
+  base.p0 = Vec3f(-0.1f, 0, 0), base.p1 = Vec3f(0.1f, 0, 0), base.normal = Vec3f(0, 0, 1), base.radius = 0.02f;
+  std::vector<Segment> segs(8, base);
+  segs[1].radius = 0;
+  segs[2].radius = NAN;
+  segs[3].radius = INFINITY;
+  segs[4].p0.x() = NAN;
+  segs[5].p1 = segs[5].p0;
+  segs[6].normal = Vec3f::Zero();  // no normal: the strip facing the viewer
+  segs[7].normal = Vec3f(1, 0, 0);  // along the segment: no usable normal either
+  std::vector<PreparedSegment> out(segs.size()), ref(segs.size());
+  std::vector<PrimitiveStatus> st(segs.size());
+  prepareSegments(segs.data(), 0, segs.size(), frame, segmentSetupFrame(frame), out.data(), st.data());
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const PrimitiveStatus x = prepareSegment(segs[i], uint32_t(i), frame, ref[i]);
+    EXPECT_EQ(int(st[i]), int(x)) << i;
+    if (visible(x)) {
+      const Vec2f mid = cam.project(cam.toCamera(0.5f * (segs[i].p0 + segs[i].p1))).head<2>();
+      EXPECT_EQ(agree(out[i], ref[i], mid), "") << i;
+    }
+  }
+  EXPECT_EQ(st[0], PrimitiveStatus::Drawn);
+  for (int i : {1, 2, 3, 4, 5}) EXPECT_EQ(st[size_t(i)], PrimitiveStatus::Degenerate) << i;
+  EXPECT_EQ(st[6], PrimitiveStatus::Drawn);
+}
+
+}  // namespace
+}  // namespace linesurf
