@@ -22,6 +22,8 @@ struct ExperimentArgs {
   float contourScale = 1.0f;
   float contourSpacing = 0;
   bool contourVertexNormals = false;
+  float contourMergeNormalDeviation = ContourOptions{}.mergeNormalDeviation;
+  float contourMergeAngle = ContourOptions{}.mergeAngle;
   bool noImages = false;
 };
 
@@ -55,6 +57,8 @@ void run(const ExperimentArgs& a) {
   o.contour.spacingScale = a.contourScale;
   o.contour.spacing = a.contourSpacing;
   o.contour.vertexNormals = a.contourVertexNormals;
+  o.contour.mergeNormalDeviation = a.contourMergeNormalDeviation;
+  o.contour.mergeAngle = a.contourMergeAngle;
 
   ExperimentResults res = runExperiment(o, progressBar());
   endProgress();
@@ -118,6 +122,13 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(0.0, 1e30));
   sub->add_flag("--contour-vertex-normals", a->contourVertexNormals,
                 "contour: normals interpolated from the mesh's vertex normals instead of the triangle's (smooth shading)");
+  sub->add_option("--contour-merge-normal-deviation", a->contourMergeNormalDeviation,
+                  "contour: polyline merging, largest deviation along the normal x d (0: no merging; extract contour "
+                  "--merge-normal-deviation)")
+      ->capture_default_str();
+  sub->add_option("--contour-merge-angle", a->contourMergeAngle,
+                  "contour: polyline merging, largest normal angle in degrees (extract contour --merge-angle)")
+      ->capture_default_str();
   sub->callback([a] { run(*a); });
 });
 

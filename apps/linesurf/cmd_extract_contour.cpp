@@ -72,8 +72,11 @@ void run(ContourArgs& a) {
                   s.radius, o.seed));
   say(fmt::format("faces: {} cut by P=, {} by P|| ({} at d/2 or finer), {} between planes, {} degenerate skipped",
                   s.cutByFamily[0], s.cutByFamily[1], s.halvedSpacing, s.uncutTriangles, s.degenerateTriangles));
-  say(fmt::format("output: {} segments, {} points{}", s.segments, s.points,
-                  s.convertedSegments ? fmt::format(" (from {} segments)", s.convertedSegments) : std::string()));
+  say(fmt::format("output: {} segments, {} points{}{}", s.segments, s.points,
+                  s.convertedSegments ? fmt::format(" (from {} segments)", s.convertedSegments) : std::string(),
+                  s.polylines ? fmt::format("; {} segments merged into {} along {} contour polylines",
+                                            s.segmentsBeforeMerge, s.segments, s.polylines)
+                              : std::string()));
   say(fmt::format("time: read {:.2f} s, extract {:.3f} s, write {:.2f} s, total {:.2f} s", readSeconds, s.seconds,
                   writeSeconds, total.seconds()));
   say("wrote " + a.output);
@@ -99,6 +102,13 @@ RegisterCommand reg(33, [](CLI::App& app) {
   sub->add_flag(flagName("vertexNormals"), o.vertexNormals, "Interpolate the mesh's vertex normals instead of the face normal");
   bind(sub, "familySwitchSine", o.familySwitchSine,
        "Use P= unless its sin(theta) is below this and P|| cuts steeper, [0, 1] (1: steeper family always; 0: P= only)");
+  bind(sub, "mergeNormalDeviation", o.mergeNormalDeviation,
+       "Merge consecutive segments of a contour polyline while the original vertices stay within this x d of the merged "
+       "segment along the surface normal (0: no merging, one segment per face and plane)");
+  bind(sub, "mergeTangentDeviation", o.mergeTangentDeviation,
+       "Merging: largest deviation across the merged segment within the surface, x d");
+  bind(sub, "mergeAngle", o.mergeAngle, "Merging: largest angle between merged and original normals, degrees [0, 90)");
+  bind(sub, "mergeMaxPieces", o.mergeMaxPieces, "Merging: most original segments in one merged segment (1: no merging)");
   sub->add_flag("--flat", a->flat,
                 "One normal per segment (the thesis) instead of interpolated vertex normals at both endpoints");
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY instead of binary");

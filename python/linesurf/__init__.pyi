@@ -87,9 +87,11 @@ def extract_shape_approx(cloud: PointsLike, *, method: str = "greedy", delta_n: 
                          min_run_points: int = 4, provenance: bool = False, curvature: bool = True, k: int = 12,
                          recompute_normals: bool = False, orientation_penalty: float = 0.5) -> SimpleNamespace: ...
 def extract_contour(mesh: Mesh, *, spacing: float = 0.0, spacing_scale: float = 1.0, seed: int = 1,
-                    radius_scale: float = 0.75, points_below: float = 0.0, all_points: bool = False,
+                    radius_scale: float = 0.55, points_below: float = 0.0, all_points: bool = False,
                     vertex_normals: bool = False, family_switch_sine: float = 1.0,
-                    endpoint_normals: bool = True) -> SimpleNamespace: ...
+                    endpoint_normals: bool = True, merge_normal_deviation: float = 0.01,
+                    merge_tangent_deviation: float = 0.05, merge_angle: float = 0.5,
+                    merge_max_pieces: int = 32) -> SimpleNamespace: ...
 def verify(cloud: PointsLike, hybrid: Model, *, epsilon: Optional[float] = None, delta: Optional[float] = None,
            k: Optional[int] = None) -> Dict[str, Any]: ...
 

@@ -938,12 +938,15 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
   m.def(
       "extract_contour",
       [](const TriangleMesh& mesh, float spacing, float spacing_scale, uint64_t seed, float radius_scale,
-         float points_below, bool all_points, bool vertex_normals, float family_switch_sine, bool endpoint_normals) {
+         float points_below, bool all_points, bool vertex_normals, float family_switch_sine, bool endpoint_normals,
+         float merge_normal_deviation, float merge_tangent_deviation, float merge_angle, int merge_max_pieces) {
         ContourOptions o;
         o.spacing = spacing, o.spacingScale = spacing_scale, o.seed = seed, o.radiusScale = radius_scale;
         o.pointsBelow = points_below, o.allPoints = all_points, o.vertexNormals = vertex_normals;
         o.familySwitchSine = family_switch_sine;
         o.endpointNormals = endpoint_normals;
+        o.mergeNormalDeviation = merge_normal_deviation, o.mergeTangentDeviation = merge_tangent_deviation;
+        o.mergeAngle = merge_angle, o.mergeMaxPieces = merge_max_pieces;
         validate(o);
         if (mesh.faces.empty()) throwBadOption("mesh", "holds no faces: contour extraction needs a triangle mesh");
         ContourStats st;
@@ -956,18 +959,23 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         stats["triangles"] = st.triangles, stats["segments"] = st.segments, stats["points"] = st.points;
         stats["spacing"] = st.spacing, stats["radius"] = st.radius, stats["degenerate_triangles"] = st.degenerateTriangles;
         stats["converted_segments"] = st.convertedSegments;
+        stats["segments_before_merge"] = st.segmentsBeforeMerge, stats["polylines"] = st.polylines;
         py::dict r;
         r["model"] = out;
         r["stats"] = stats;
         return namespaceOf(r);
       },
       py::arg("mesh"), py::kw_only(), py::arg("spacing") = 0.0f, py::arg("spacing_scale") = 1.0f, py::arg("seed") = 1,
-      py::arg("radius_scale") = 0.75f, py::arg("points_below") = 0.0f, py::arg("all_points") = false,
+      py::arg("radius_scale") = ContourOptions{}.radiusScale, py::arg("points_below") = 0.0f, py::arg("all_points") = false,
       py::arg("vertex_normals") = false, py::arg("family_switch_sine") = 1.0f, py::arg("endpoint_normals") = true,
+      py::arg("merge_normal_deviation") = ContourOptions{}.mergeNormalDeviation,
+      py::arg("merge_tangent_deviation") = ContourOptions{}.mergeTangentDeviation,
+      py::arg("merge_angle") = ContourOptions{}.mergeAngle, py::arg("merge_max_pieces") = ContourOptions{}.mergeMaxPieces,
       R"doc(Contour-plane extraction from a triangle Mesh, thesis §3.3 (= `linesurf extract contour`).
 
 spacing: largest distance d between neighbouring segments (0: spacing_scale x mean edge length);
-endpoint_normals=False gives the thesis's one normal per segment (the CLI's --flat).
+endpoint_normals=False gives the thesis's one normal per segment (the CLI's --flat);
+merge_normal_deviation=0 keeps one segment per face and plane (no polyline merging).
 Returns a namespace with model and stats (dict: triangles, segments, points, spacing, radius, ...).)doc");
   m.def(
       "verify",

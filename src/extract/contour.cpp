@@ -13,6 +13,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/mesh_normals.h"
+#include "detail/contour_merge.h"
 
 namespace linesurf {
 namespace {
@@ -45,6 +46,10 @@ uint64_t splitmix64(uint64_t& state) {
 }
 double uniform01(uint64_t& state) { return double(splitmix64(state) >> 11) * 0x1.0p-53; }
 
+// Polyline merging: the merged segment's colour (length-weighted mean) stays within this of every
+// piece's colour, per channel (about 2/255: below what an 8-bit image shows).
+constexpr float kMergeColorTolerance = 0.008f;
+
 constexpr size_t kBlock = 4096;  // fixed blocks: deterministic partial sums for any thread count
 
 // A cut endpoint on edge (a, b) of a face (local corners 0..2), point = P_a + lambda (P_b - P_a),
@@ -52,6 +57,7 @@ constexpr size_t kBlock = 4096;  // fixed blocks: deterministic partial sums for
 struct EdgePoint {
   int a = 0, b = 0;
   double lambda = 0;
+  int64_t plane = 0;  // k: plane k of the face's level
 };
 
 struct FaceInfo {
@@ -107,7 +113,7 @@ class Cutter {
     Vec3d P[3];
     for (int c = 0; c < 3; ++c) P[c] = mesh_.positions[F[c]].cast<double>();
     auto point = [&](int a, int b, double k) {
-      EdgePoint e{a, b, (k - s.t[a]) / (s.t[b] - s.t[a])};
+      EdgePoint e{a, b, (k - s.t[a]) / (s.t[b] - s.t[a]), int64_t(k)};
       Vec3f p = (P[a] + e.lambda * (P[b] - P[a])).cast<float>();
       return std::pair{e, p};
     };
@@ -187,6 +193,14 @@ void checkContourOptions(const ContourOptions& o) {
     throwBadOption("pointsBelow", "conflicts with `allPoints`: choose one");
   if (!(o.familySwitchSine >= 0 && o.familySwitchSine <= 1))
     throwBadOption("familySwitchSine", fmt::format("must be in [0, 1], got {}", o.familySwitchSine));
+  if (!(std::isfinite(o.mergeNormalDeviation) && o.mergeNormalDeviation >= 0))
+    throwBadOption("mergeNormalDeviation", fmt::format("must be a finite multiple of d >= 0 (0 = no merging), got {}", o.mergeNormalDeviation));
+  if (!(std::isfinite(o.mergeTangentDeviation) && o.mergeTangentDeviation >= 0))
+    throwBadOption("mergeTangentDeviation", fmt::format("must be a finite multiple of d >= 0, got {}", o.mergeTangentDeviation));
+  if (!(std::isfinite(o.mergeAngle) && o.mergeAngle >= 0 && o.mergeAngle < 90))
+    throwBadOption("mergeAngle", fmt::format("must be in [0, 90) degrees, got {}", o.mergeAngle));
+  if (o.mergeMaxPieces < 1 || o.mergeMaxPieces > 1024)
+    throwBadOption("mergeMaxPieces", fmt::format("must be in [1, 1024], got {}", o.mergeMaxPieces));
   if (o.planes) {
     for (int f = 0; f < 2; ++f)
       if (!o.planes->normal[f].allFinite() || std::abs(o.planes->normal[f].norm() - 1) > 1e-6 ||
@@ -410,6 +424,11 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
     stats.pointFaces.resize(stats.points);
   }
 
+  // Polyline merging (issue 13): the ends' mesh edges and planes, and the vertex normals there.
+  const bool merge = options.mergeNormalDeviation > 0 && options.mergeMaxPieces > 1 && stats.segments > 1;
+  std::vector<detail::ContourEndKey> endKeys(merge ? 2 * stats.segments : 0);
+  std::vector<Vec3f> endNormals(merge && (useVertexNormals || smooth) ? 2 * stats.segments : 0);
+
   // Pass C: write the primitives.
   blockedWithProgress(nf, options.progress, 0.5, 1.0, [&](size_t begin, size_t end) {
     for (size_t f = begin; f < end; ++f) {
@@ -477,10 +496,36 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
           s.uv1 = interp.uv(f, w1);
         }
         if (options.recordFaces) stats.segmentFaces[si] = uint32_t(f);
+        if (merge) {
+          const auto& F = mesh.faces[f];
+          endKeys[2 * si] = detail::contourEndKey(F[ea.a], F[ea.b], ea.plane, fi.level, fi.family);
+          endKeys[2 * si + 1] = detail::contourEndKey(F[eb.a], F[eb.b], eb.plane, fi.level, fi.family);
+          if (!endNormals.empty()) {
+            endNormals[2 * si] = interp.vertexNormal(f, w0).cast<float>();
+            endNormals[2 * si + 1] = interp.vertexNormal(f, w1).cast<float>();
+          }
+        }
         ++si;
       });
     }
   });
+
+  stats.segmentsBeforeMerge = stats.segments;
+  if (merge) {
+    detail::ContourMergeLimits lim;
+    lim.normalDeviation = double(options.mergeNormalDeviation) * d;
+    lim.tangentDeviation = double(options.mergeTangentDeviation) * d;
+    lim.cosAngle = std::cos(double(options.mergeAngle) * std::numbers::pi / 180.0);
+    lim.maxPieces = options.mergeMaxPieces;
+    if (interp.textured && mesh.texture->width > 0 && mesh.texture->height > 0)
+      lim.uvTolerance = 0.5 / double(std::max(mesh.texture->width, mesh.texture->height));
+    lim.colorTolerance = kMergeColorTolerance;
+    lim.smooth = smooth;
+    const detail::ContourMergeCounts c = detail::mergeContourPolylines(
+        model.segments, endKeys, endNormals, lim, options.recordFaces ? &stats.segmentFaces : nullptr);
+    stats.segments = model.segments.size();
+    stats.polylines = c.polylines;
+  }
 
   model.attributes.normals = true;
   model.attributes.radii = true;

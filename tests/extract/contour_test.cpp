@@ -103,9 +103,15 @@ void expectSpacingAtMostD(const TriangleMesh& mesh, const HybridModel& model, co
   EXPECT_LE(worst, d + tol);
 }
 
+// The raw cut: one segment per face and plane crossed (no polyline merging).
+ContourOptions unmerged(ContourOptions o = {}) {
+  o.mergeNormalDeviation = 0;
+  return o;
+}
+// The raw cut with the source face of every primitive.
 ContourOptions withFaces(ContourOptions o = {}) {
   o.recordFaces = true;
-  return o;
+  return unmerged(o);
 }
 
 // Open cylinder of radius r, height h along z, with a seam (duplicated vertices) and per-corner
@@ -292,7 +298,7 @@ TEST(Contour, RandomPlanesArePerpendicularAndNotAxisAligned) {
 TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
   TriangleMesh mesh = shapes::sphereMesh(1.0f, 2);
   ContourStats segSt, ptSt;
-  HybridModel segs = extractContour(mesh, {}, &segSt);
+  HybridModel segs = extractContour(mesh, unmerged(), &segSt);
   ContourOptions o = withFaces();
   o.allPoints = true;
   HybridModel pts = extractContour(mesh, o, &ptSt);
@@ -341,8 +347,8 @@ TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
 TEST(Contour, PointsBelowMakesAHybridModel) {
   TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
   ContourStats all;
-  HybridModel segs = extractContour(mesh, {}, &all);
-  ContourOptions o;
+  HybridModel segs = extractContour(mesh, unmerged(), &all);
+  ContourOptions o = unmerged();
   o.pointsBelow = float(0.5 * all.spacing);
   ContourStats st;
   HybridModel hybrid = extractContour(mesh, o, &st);
@@ -558,7 +564,7 @@ TEST(Contour, CliCountsModesAndErrors) {
   auto dir = test::scratchDir("contour_cli");
   writeMesh(dir / "sphere.ply", shapes::sphereMesh(1.0f, 3));
   const std::string in = (dir / "sphere.ply").string();
-  auto lines = test::runCli(fmt::format("extract contour {} -o {}", in, (dir / "lines.ply").string()));
+  auto lines = test::runCli(fmt::format("extract contour {} -o {} --merge-normal-deviation 0", in, (dir / "lines.ply").string()));
   ASSERT_EQ(lines.exitCode, 0) << lines.out;
   auto points = test::runCli(fmt::format("extract contour {} -o {} --all-points", in, (dir / "points.ply").string()));
   ASSERT_EQ(points.exitCode, 0) << points.out;

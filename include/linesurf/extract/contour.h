@@ -62,6 +62,25 @@ struct ContourOptions {
   /// absolute difference on Al 2.95 -> 1.97). false: the thesis's one-normal model (the
   /// triangle's normal, or as vertexNormals says).
   bool endpointNormals = true;
+  /// Polyline merging (beyond the thesis, issue 13): consecutive segments of one contour polyline
+  /// (one plane, chained through shared mesh edges; never across a break, a family or a plane)
+  /// become one segment while every original vertex in between stays within
+  /// mergeNormalDeviation × d of it along the surface normal there and within
+  /// mergeTangentDeviation × d across it in the surface, and the normals agree within mergeAngle
+  /// degrees: every piece's strip plane with the merged strip's plane and, for smooth models, the
+  /// merged endpoint normals interpolated along it (as the renderer does) with the vertex normals
+  /// at the interior vertices. Colours (and uvs on textured meshes) must stay continuous too. At
+  /// most mergeMaxPieces segments become one. mergeNormalDeviation = 0 or mergeMaxPieces = 1: no
+  /// merging (one segment per face and plane crossed, the thesis's model). Ignored with allPoints
+  /// (the point model of Table 5 is cut from the unmerged segments). Every merge moved Table 5's
+  /// line-vs-point difference up a little, in proportion to how much was merged (whichever limit
+  /// binds); 0.5 degrees keeps it within +0.007 on the seven shared meshes, 1 degree within
+  /// +0.028, 5 degrees +0.14 (docs/decisions.md, "Issue 13 (i13merge)"). The tangent deviation
+  /// 0.05 d = radiusScale - 0.5: neighbouring strips (d apart, half-width 0.55 d) still overlap.
+  float mergeNormalDeviation = 0.01f;
+  float mergeTangentDeviation = 0.05f;
+  float mergeAngle = 0.5f;
+  int mergeMaxPieces = 32;
   /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.
   float pointsBelow = 0;
   /// Every segment becomes ⌈l/d⌉+1 points at regular intervals: pure point model (Table 5).
@@ -80,7 +99,9 @@ struct ContourStats {
   size_t halvedSpacing = 0;        ///< faces that needed a finer level (m >= 1)
   size_t uncutTriangles = 0;       ///< faces that no plane of their lattice crosses
   size_t vertexTouches = 0;        ///< planes touching a face only at a vertex (no segment)
-  size_t segments = 0;             ///< segments in the output
+  size_t segments = 0;             ///< segments in the output (after merging)
+  size_t segmentsBeforeMerge = 0;  ///< one per face and plane crossed (= segments without merging)
+  size_t polylines = 0;            ///< contour polylines found when merging (0 without merging)
   size_t points = 0;               ///< points in the output
   size_t convertedSegments = 0;    ///< segments turned into points
   double spacing = 0;              ///< d used
