@@ -450,6 +450,29 @@ struct QuadSpans {
   }
 };
 
+// The rows' spans a segment's rasterisation walks over r: the cutoff region's (detail::segmentSpans) when tight,
+// else those of the footprint box, whole rows when the rectangle is small or the box is clipped.
+template <class Emit>
+void forEachRowSpan(const PreparedSegment& sp, const PixelRect& r, bool tight, Emit&& emit) {
+  if (tight && sp.method == SegmentMethod::ScreenSpace) {
+    detail::RowSpan rows[detail::kBlock];
+    for (int y0 = r.y0; y0 < r.y1; y0 += detail::kBlock) {  // bands of at most kBlock rows
+      const PixelRect band{r.x0, y0, r.x1, std::min(r.y1, y0 + detail::kBlock)};
+      const int n = detail::segmentSpans(sp.raster, band, kSpanSlack, rows);
+      if (n < 0) break;  // degenerate constants (the first band already): the box
+      for (int i = 0; i < n; ++i) emit(rows[i].y, rows[i].x0, rows[i].x1);
+      if (y0 + detail::kBlock >= r.y1) return;
+    }
+  }
+  const bool whole = r.width() * r.height() <= kWholeRectArea || !sp.useSpans;
+  const QuadSpans quad(sp);
+  for (int y = r.y0; y < r.y1; ++y) {
+    int xb = r.x0, xe = r.x1;
+    if (!whole && !quad.row(r, float(y) + 0.5f, xb, xe)) continue;
+    emit(y, xb, xe);
+  }
+}
+
 // The blended attributes of a segment fragment at along-parameter u (Z3Tile::Attr).
 struct FragmentAttributes {
   const PreparedSegment& sp;
@@ -516,14 +539,11 @@ struct FragmentAttributes {
   }
 };
 
-// ScreenSpace segments: the closed form evaluated in SIMD over the rows' spans (the whole
-// rectangle's rows when it is small), straight into the Z^3 tile (detail/splat_rows.h).
+// ScreenSpace segments: the closed form evaluated in SIMD over the rows' spans of the cutoff
+// region (TightSpans), straight into the Z^3 tile (detail/splat_rows.h).
 void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
-  // the rows' spans: whole rows of a small rectangle, else the projected footprint box's
   detail::RowSpan spans[detail::kBlock];
   int spanCount = 0;
-  const bool whole = r.width() * r.height() <= kWholeRectArea || !sp.useSpans;
-  const QuadSpans quad(sp);
   uint64_t inserted = 0;
   const bool stations = sp.shade == SegmentShade::Stations;
   if (!stations || !sp.extra->textured) {  // straight into the Z^3 tile, attributes in SIMD
@@ -541,12 +561,10 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
       inserted += detail::segmentRowsZ3(sp.raster, shade, spans, spanCount, ctx.tile);
       spanCount = 0;
     };
-    for (int y = r.y0; y < r.y1; ++y) {
-      int xb = r.x0, xe = r.x1;
-      if (!whole && !quad.row(r, float(y) + 0.5f, xb, xe)) continue;
+    forEachRowSpan(sp, r, true, [&](int y, int xb, int xe) {
       if (spanCount == detail::kBlock) flush();
       spans[spanCount++] = {y, xb, xe};
-    }
+    });
     if (spanCount > 0) flush();
     ctx.tile.addFragments(inserted);
     return;
@@ -564,16 +582,14 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
     inserted += uint64_t(m);
     spanCount = pixels = 0;
   };
-  for (int y = r.y0; y < r.y1; ++y) {
-    int xb = r.x0, xe = r.x1;
-    if (!whole && !quad.row(r, float(y) + 0.5f, xb, xe)) continue;
+  forEachRowSpan(sp, r, true, [&](int y, int xb, int xe) {
     for (int x0 = xb; x0 < xe; x0 += detail::kBlock) {
       const int x1 = std::min(xe, x0 + detail::kBlock);
       if (pixels + (x1 - x0) > detail::kBlock) flush();
       spans[spanCount++] = {y, x0, x1};
       pixels += x1 - x0;
     }
-  }
+  });
   if (spanCount > 0) flush();
   ctx.tile.addFragments(inserted);
 }
@@ -608,6 +624,13 @@ void rasterizeScalar(const PreparedSegment& sp, const SplatContext& ctx, const P
 }
 
 }  // namespace
+
+std::vector<detail::RowSpan> segmentRowSpans(const PreparedSegment& sp, const PixelRect& rect, bool tight) {
+  std::vector<detail::RowSpan> out;
+  const PixelRect r = sp.bounds.intersect(rect);
+  if (!r.empty()) forEachRowSpan(sp, r, tight, [&](int y, int xb, int xe) { out.push_back({y, xb, xe}); });
+  return out;
+}
 
 void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   const PixelRect r = sp.bounds.intersect(ctx.rect);

@@ -129,6 +129,11 @@ PrimitiveStatus prepareSegment(const Segment& segment, uint32_t index, const Fra
 /// Rasterise stage for one segment on one tile.
 void rasterizeSegment(const PreparedSegment& segment, const SplatContext& ctx);
 
+/// The row spans rasterizeSegment walks for the segment over `rect` (a tile): with tight, those of
+/// the polygon around the cutoff region it walks (ScreenSpace), else those of the footprint box.
+/// For tests: the tight walk must find every fragment of the box walk.
+std::vector<detail::RowSpan> segmentRowSpans(const PreparedSegment& segment, const PixelRect& rect, bool tight);
+
 /// The segment's resampling-filter weight at screen position `pixel` (pixel units; centres at
 /// i + 0.5), as rasterizeSegment's scalar path gives it (0 outside the footprint or behind the
 /// eye). For tests and error measurements (docs/segment-splatting.md).

@@ -139,6 +139,7 @@ struct SegmentKernel {
   V one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
   V a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f),
     R2 = hn::Set(d, S.R2);
+  V gcut = hn::Exp(d, hn::Mul(R2, mhalf));  ///< exp(-R^2 / 2): the slope term's ends where the cutoff bounds
   V aMin = hn::Set(d, S.aMin), aMax = hn::Set(d, S.aMax), bMax = hn::Set(d, S.bMax);
   V depthNum = hn::Set(d, S.depthNum), nearD = hn::Set(d, S.nearD), farD = hn::Set(d, S.farD);
   V Ndx = hn::Set(d, S.N.dx), Ndy = hn::Set(d, S.N.dy), N0 = hn::Set(d, S.N.c);
@@ -183,7 +184,7 @@ struct SegmentKernel {
       const V cut = hn::Mul(R2, mhalf);
       const auto cut0 = hn::And(inside, hn::Gt(t0, hn::Sub(tauStar, delta)));
       const auto cut1 = hn::And(inside, hn::Lt(t1, hn::Add(tauStar, delta)));
-      V ge0 = hn::Exp(d, cut), ge1 = ge0;
+      V ge0 = gcut, ge1 = gcut;
       if (!hn::AllFalse(d, cut0))
         ge0 = hn::IfThenElse(cut0, hn::Exp(d, hn::Max(hn::NegMulAdd(u0, u0, halfQ), cut)), ge0);
       if (!hn::AllFalse(d, cut1))
@@ -237,6 +238,81 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
     m += pack(d, keep, px, py, w, z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
   }
   return m;
+}
+
+// The rows' spans of a segment's cutoff region (detail/splat_rows.h: segmentSpans). Eight
+// half-planes g(x, y) >= 0 of the pixel (the support lines of the footprint's capsules in the
+// directions (+-1, 0), (0, +-1), (+-1/ra, +-1/rb)), each a lower or an upper bound on x affine
+// in the row; the rows in SIMD lanes.
+int SegmentSpans(const SegmentRaster& S, const PixelRect& r, float slack, RowSpan* out) {
+  constexpr int kC = 8;
+  float loY[kC], lo0[kC], hiY[kC], hi0[kC];
+  const float R = std::sqrt(S.R2);
+  float h[kC], ra, rb, ua, ub;
+  // M = (M^-1)^-1 in (a, b); the support of {v : v^T M^-1 v <= R^2} in direction n is R sqrt(n^T M n)
+  auto support = [&](float a0, float a1, float skew, float across, float invM00, bool first) {
+    const float Mbb = 1 / across, Mab = -skew * Mbb, Maa = invM00 + skew * skew * Mbb;
+    const float ea = R * std::sqrt(Maa), eb = R * std::sqrt(Mbb);
+    if (first) ra = ea, rb = eb, ua = 1 / ea, ub = 1 / eb;
+    const float cross = 2 * Mab * ua * ub, diag = Maa * ua * ua + Mbb * ub * ub;
+    const float ep = R * std::sqrt(std::max(0.0f, diag + cross)), em = R * std::sqrt(std::max(0.0f, diag - cross));
+    const float hs[kC] = {a1 + ea, -a0 + ea, eb, eb, ua * a1 + ep, ua * a1 + em, -ua * a0 + em, -ua * a0 + ep};
+    for (int i = 0; i < kC; ++i) h[i] = first ? hs[i] : std::max(h[i], hs[i]);
+  };
+  if (S.pieceCount > 1 && S.pieces) {
+    for (int k = 0; k < S.pieceCount; ++k) {
+      const SegmentPiece& p = S.pieces[k];
+      if (!(p.across > 0) || !(p.invM00 > 0)) return -1;
+      support(p.a0, p.a1, p.skew, p.across, p.invM00, k == 0);
+    }
+  } else {
+    if (!(S.across > 0) || !(S.invM00 > 0)) return -1;
+    support(0, S.length, S.skew, S.across, S.invM00, true);
+  }
+  const float dirs[kC][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {ua, ub}, {ua, -ub}, {-ua, ub}, {-ua, -ub}};
+  // n.(a, b) <= h with a = A / N - a0, b = B / N - b0, times N < 0: g = n_a A + n_b B - K0 N >= 0,
+  // pushed `slack` pixel outward (|gx| + |gy| >= |grad g|); a lower bound on x where gx > 0, an
+  // upper one where gx < 0, none where gx = 0 (conservative). Where N > 0 no pixel meets both of
+  // the opposite directions (+-1, 0): N < 0 needs no bound of its own.
+  float sum = 0;
+  for (int i = 0; i < kC; ++i) {
+    const float na = dirs[i][0], nb = dirs[i][1];
+    // the rows' float rounding of a and b is covered by the slack; this by far more
+    const float K0 = na * S.a0 + nb * S.b0 + h[i] + 1e-5f * (std::abs(na) * ra + std::abs(nb) * rb);
+    const float gx = na * S.A.dx + nb * S.B.dx - K0 * S.N.dx, gy = na * S.A.dy + nb * S.B.dy - K0 * S.N.dy;
+    const float g0 = na * S.A.c + nb * S.B.c - K0 * S.N.c + slack * (std::abs(gx) + std::abs(gy));
+    const float inv = -1.0f / (gx != 0 ? gx : 1.0f);
+    const bool lower = gx > 0, upper = gx < 0;
+    loY[i] = lower ? gy * inv : 0.0f, lo0[i] = lower ? g0 * inv : -1e8f;
+    hiY[i] = upper ? gy * inv : 0.0f, hi0[i] = upper ? g0 * inv : 1e8f;
+    sum += loY[i] + lo0[i] + hiY[i] + hi0[i];
+  }
+  if (!std::isfinite(sum)) return -1;
+  // rows in lanes: pixel centres x + 0.5 in [max lower, min upper]
+  const DF d;
+  const hn::RebindToSigned<DF> di;
+  const int L = int(hn::Lanes(d));
+  const VF half = hn::Set(d, 0.5f), big = hn::Set(d, 1e8f);
+  const auto rx0 = hn::Set(di, r.x0), rx1 = hn::Set(di, r.x1);
+  HWY_ALIGN int32_t xb[kMaxLanes], xe[kMaxLanes];
+  int count = 0;
+  for (int y = r.y0; y < r.y1; y += L) {
+    const VF py = hn::Iota(d, float(y) + 0.5f);
+    VF lo[2] = {hn::Neg(big), hn::Neg(big)}, hi[2] = {big, big};
+    for (int i = 0; i < kC; ++i) {
+      lo[i & 1] = hn::Max(lo[i & 1], hn::MulAdd(hn::Set(d, loY[i]), py, hn::Set(d, lo0[i])));
+      hi[i & 1] = hn::Min(hi[i & 1], hn::MulAdd(hn::Set(d, hiY[i]), py, hn::Set(d, hi0[i])));
+    }
+    const VF l = hn::Min(hn::Max(lo[0], lo[1]), big), u = hn::Max(hn::Min(hi[0], hi[1]), hn::Neg(big));
+    hn::Store(hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(l, half))), rx0), di, xb);
+    hn::Store(hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(u, half))), hn::Set(di, 1)), rx1), di, xe);
+    const int rows = std::min(L, r.y1 - y);
+    for (int j = 0; j < rows; ++j) {
+      out[count] = {y + j, xb[j], xe[j]};
+      count += xe[j] > xb[j];
+    }
+  }
+  return count;
 }
 
 // The Z^3 fast path of the point and segment rows: of the lanes `inside` at tile pixels
@@ -438,79 +514,138 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
 }
 
 
-// One segment straight into the Z^3 tile over its rows' spans, with the fast path of PointRowsT
-// (open a layer on an empty pixel, merge into a single layer within the threshold); colour and
-// normal per lane from u (SegmentShadeRows), the other fragments through Z3Tile::insert.
-template <class D>
-HWY_INLINE uint64_t SegmentRowsT(D d, const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans,
-                                 int count, Z3Tile& z3) {
-  using V = hn::Vec<D>;
-  const int L = int(hn::Lanes(d));
-  const SegmentKernel<D> kernel(S);
-  const V oneF = hn::Set(d, 1.0f), centre = hn::Iota(d, 0.5f);
-  const V thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
-  V attr[Z3Tile::kAttrs], dc[3], n0[3], dn[3];
-  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(d, A.attr[k]);
-  for (int k = 0; k < 3; ++k) dc[k] = hn::Set(d, A.dc[k]), n0[k] = hn::Set(d, A.n0[k]), dn[k] = hn::Set(d, A.dn[k]);
-  const V dn2 = hn::Set(d, A.dn2), c05 = hn::Set(d, 0.5f), c0375 = hn::Set(d, 0.375f);
-  const hn::RebindToSigned<D> di;
-  const V lastStation = hn::Set(d, float(std::max(A.stations - 1, 1)));
+// One segment straight into the Z^3 tile over its rows' spans, in chunks of at most kSegChunk
+// pixels, two passes per chunk (as PointRowsT; beyond the thesis):
+//  1. the kernel, the z threshold and the attributes (colour from u, smooth normals, as
+//     segment_splat.cpp's FragmentAttributes) of the chunk's pixels packed across rows: lanes
+//     carry their own pixel centre, so a span of a few pixels does not start a vector of its own;
+//     0 weight where there is no fragment;
+//  2. per span, the Z^3 fast path of PointRowsT on the tile's planes (a span's pixels are
+//     contiguous there), vectors of at most the widest span's lanes; the other fragments through
+//     Z3Tile::insert.
+inline constexpr int kSegChunk = 512;
+
+template <class DZ>
+HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans,
+                                   int count, Z3Tile& z3) {
+  const DF d;
+  const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
+  const SegmentKernel<DF> kernel(S);
+  const VF oneF = hn::Set(d, 1.0f), zero = hn::Zero(d), iota = hn::Iota(d, 0.0f), centre = hn::Iota(d, 0.5f);
+  const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
+  VF attr[3], dc[3], n0[3], dn[3];
+  for (int k = 0; k < 3; ++k) {
+    attr[k] = hn::Set(d, A.attr[k]), dc[k] = hn::Set(d, A.dc[k]);
+    n0[k] = hn::Set(d, A.n0[k]), dn[k] = hn::Set(d, A.dn[k]);
+  }
+  const VF dn2 = hn::Set(d, A.dn2), c05 = hn::Set(d, 0.5f), c0375 = hn::Set(d, 0.375f);
+  const hn::RebindToSigned<DF> di;
+  const VF lastStation = hn::Set(d, float(std::max(A.stations - 1, 1)));
   const auto lastSegment = hn::Set(di, std::max(A.stations - 2, 0));
-  Z3Rows<D> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
+  // the chunk's pixels (centres) and pass 1's results, kMaxLanes of padding for whole vectors
+  constexpr int kPad = kSegChunk + kMaxLanes;
+  HWY_ALIGN float px[kPad], py[kPad], bw[kPad], bz[kPad], bt[kPad], bc[3][kPad], bn[3][kPad];
+  struct Run {
+    int y, x0, x1, at;  ///< pixels [x0, x1) of row y, from `at` in the chunk
+  };
+  Run runs[kSegChunk];
+  using VZ = hn::Vec<DZ>;
+  const VZ zeroZ = hn::Zero(dz);
+  VZ constAttr[Z3Tile::kAttrs];
+  for (int k = 0; k < Z3Tile::kAttrs; ++k) constAttr[k] = hn::Set(dz, A.attr[k]);
+  Z3Rows<DZ> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
   uint64_t inserted = 0;
-  for (int r = 0; r < count; ++r) {
-    const RowSpan& sp = spans[r];
-    const V py = hn::Set(d, float(sp.y) + 0.5f);
-    const size_t rowBase = z3.index(sp.x0, sp.y);
-    for (int x = sp.x0; x < sp.x1; x += L) {
-      const V px = hn::Add(centre, hn::Set(d, float(x)));
-      V w, z, u;
-      const auto inside = kernel(px, py, hn::FirstN(d, size_t(sp.x1 - x)), w, z, u);
-      if (hn::AllFalse(d, inside)) continue;
-      inserted += hn::CountTrue(d, inside);
-      // the fragment's attributes: colour linear in u, smooth normals by the series of
-      // segment_splat.cpp (FragmentAttributes)
-      V a[Z3Tile::kAttrs];
-      for (int k = 0; k < Z3Tile::kAttrs; ++k) a[k] = attr[k];
+  int r = 0, rx = count > 0 ? spans[0].x0 : 0;  // the next span and where in it the next chunk starts
+  while (r < count) {
+    // gather up to kSegChunk pixels of runs (a span wider than that is cut)
+    int n = 0, nRuns = 0;
+    while (r < count && n < kSegChunk) {
+      const RowSpan& sp = spans[r];
+      const int x1 = std::min(sp.x1, rx + (kSegChunk - n));
+      if (x1 > rx) {
+        runs[nRuns++] = {sp.y, rx, x1, n};
+        const VF y = hn::Set(d, float(sp.y) + 0.5f);
+        for (int i = 0; i < x1 - rx; i += L) {  // the next run overwrites the excess
+          hn::StoreU(hn::Add(centre, hn::Set(d, float(rx + i))), d, px + n + i);
+          hn::StoreU(y, d, py + n + i);
+        }
+        n += x1 - rx;
+      }
+      if (x1 < sp.x1) {
+        rx = x1;
+      } else if (++r < count) {
+        rx = spans[r].x0;
+      }
+    }
+    // 1. weights, depths, thresholds and attributes, lanes packed across rows
+    const VF nv = hn::Set(d, float(n));
+    for (int i = 0; i < n; i += L) {
+      const VF x = hn::LoadU(d, px + i), y = hn::LoadU(d, py + i);
+      VF w, z, u;
+      const auto keep = kernel(x, y, hn::Lt(hn::Add(iota, hn::Set(d, float(i))), nv), w, z, u);
+      if (hn::AllFalse(d, keep)) {
+        hn::Store(zero, d, bw + i);
+        continue;
+      }
+      hn::Store(hn::IfThenElseZero(keep, w), d, bw + i);
+      hn::Store(z, d, bz + i);
+      hn::Store(hn::MulAdd(u, thrD, thr0), d, bt + i);
       if (A.stations >= 2) {  // piecewise linear between the lighting stations
-        const V fs = hn::Mul(u, lastStation);
+        const VF fs = hn::Mul(u, lastStation);
         const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), lastSegment);
-        const V v = hn::Sub(fs, hn::ConvertTo(d, k));
+        const VF v = hn::Sub(fs, hn::ConvertTo(d, k));
         for (int c = 0; c < 3; ++c) {
           const float* sc = A.stationColour + c * A.stations;
-          const V c0 = hn::GatherIndex(d, sc, k), c1 = hn::GatherIndex(d, sc + 1, k);
-          a[c] = hn::MulAdd(v, hn::Sub(c1, c0), c0);
+          const VF c0 = hn::GatherIndex(d, sc, k), c1 = hn::GatherIndex(d, sc + 1, k);
+          hn::Store(hn::MulAdd(v, hn::Sub(c1, c0), c0), d, bc[c] + i);
         }
       } else {
-        for (int c = 0; c < 3; ++c) a[c] = hn::MulAdd(u, dc[c], attr[c]);
+        for (int c = 0; c < 3; ++c) hn::Store(hn::MulAdd(u, dc[c], attr[c]), d, bc[c] + i);
       }
       if (A.smooth) {
-        V m[3];
+        VF m[3];
         for (int c = 0; c < 3; ++c) m[c] = hn::MulAdd(u, dn[c], n0[c]);
-        V inv;
+        VF inv;
         if (A.exactNormal) {
-          const V len2 = hn::MulAdd(m[0], m[0], hn::MulAdd(m[1], m[1], hn::Mul(m[2], m[2])));
-          inv = hn::IfThenElseZero(hn::Gt(len2, hn::Zero(d)), hn::Div(oneF, hn::Sqrt(len2)));
+          const VF len2 = hn::MulAdd(m[0], m[0], hn::MulAdd(m[1], m[1], hn::Mul(m[2], m[2])));
+          inv = hn::IfThenElseZero(hn::Gt(len2, zero), hn::Div(oneF, hn::Sqrt(len2)));
         } else {
-          const V xx = hn::Mul(hn::Mul(u, hn::Sub(oneF, u)), dn2);
+          const VF xx = hn::Mul(hn::Mul(u, hn::Sub(oneF, u)), dn2);
           inv = hn::MulAdd(xx, hn::MulAdd(xx, c0375, c05), oneF);
         }
-        for (int c = 0; c < 3; ++c) a[Z3Tile::kNx + c] = hn::Mul(m[c], inv);
+        for (int c = 0; c < 3; ++c) hn::Store(hn::Mul(m[c], inv), d, bn[c] + i);
       }
-      const V thr = hn::MulAdd(u, thrD, thr0);
-      const size_t p = rowBase + size_t(x - sp.x0);
-      const auto rest = z3rows(p, inside, w, z, thr, [&](int k) { return a[k]; });
-      if (hn::AllFalse(d, rest)) continue;
-      // the other fragments (a new layer in front of or behind others, compression, occlusion)
-      alignas(64) float mk[kMaxLanes], zs[kMaxLanes], ws[kMaxLanes], ts[kMaxLanes], as[Z3Tile::kAttrs][kMaxLanes];
-      hn::StoreU(hn::VecFromMask(d, rest), d, mk);
-      hn::StoreU(z, d, zs), hn::StoreU(w, d, ws), hn::StoreU(thr, d, ts);
-      for (int k = 0; k < Z3Tile::kAttrs; ++k) hn::StoreU(a[k], d, as[k]);
-      for (int i = 0; i < L; ++i) {
-        if (mk[i] == 0) continue;
-        float fa[Z3Tile::kAttrs];
-        for (int k = 0; k < Z3Tile::kAttrs; ++k) fa[k] = as[k][i];
-        z3.insert(x + i, sp.y, zs[i], ts[i], ws[i], fa);
+    }
+    // 2. into the Z^3 tile, run by run
+    for (int q = 0; q < nRuns; ++q) {
+      const Run& run = runs[q];
+      const size_t rowBase = z3.index(run.x0, run.y);
+      const int width = run.x1 - run.x0;
+      for (int c = 0; c < width; c += LZ) {
+        const int k = run.at + c;
+        const VZ w = hn::LoadU(dz, bw + k);
+        const auto inside = hn::And(hn::Gt(w, zeroZ), hn::FirstN(dz, size_t(width - c)));
+        if (hn::AllFalse(dz, inside)) continue;
+        inserted += hn::CountTrue(dz, inside);
+        const VZ z = hn::LoadU(dz, bz + k), thr = hn::LoadU(dz, bt + k);
+        const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
+          if (a < 3) return hn::LoadU(dz, bc[a] + k);
+          if (A.smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
+          return constAttr[a];
+        });
+        if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
+        // the other fragments (a new layer in front of or behind others, compression, occlusion)
+        HWY_ALIGN float mk[kMaxLanes];
+        hn::StoreU(hn::VecFromMask(dz, rest), dz, mk);
+        for (int i = 0; i < LZ; ++i) {
+          if (mk[i] == 0) continue;
+          float fa[Z3Tile::kAttrs];
+          for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
+          for (int a = 0; a < 3; ++a) fa[a] = bc[a][k + i];
+          if (A.smooth)
+            for (int a = 0; a < 3; ++a) fa[Z3Tile::kNx + a] = bn[a][k + i];
+          z3.insert(run.x0 + c + i, run.y, bz[k + i], bt[k + i], bw[k + i], fa);
+        }
       }
     }
   }
@@ -519,11 +654,11 @@ HWY_INLINE uint64_t SegmentRowsT(D d, const SegmentRaster& S, const SegmentShade
 }
 
 uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
-  int widest = 0;  // narrow segments run on narrower vectors: fewer idle lanes
+  int widest = 0;  // the Z^3 pass runs on vectors of at most the widest span's lanes
   for (int r = 0; r < count; ++r) widest = std::max(widest, spans[r].x1 - spans[r].x0);
   if (widest <= 4) return SegmentRowsT(hn::CappedTag<float, 4>(), S, A, spans, count, z3);
   if (widest <= 8) return SegmentRowsT(hn::CappedTag<float, 8>(), S, A, spans, count, z3);
-  return SegmentRowsT(DF(), S, A, spans, count, z3);
+  return SegmentRowsT(hn::CappedTag<float, 16>(), S, A, spans, count, z3);
 }
 
 int64_t Target() { return HWY_TARGET; }
@@ -537,6 +672,7 @@ namespace linesurf::detail {
 HWY_EXPORT(PointFragments);
 HWY_EXPORT(SegmentFragments);
 HWY_EXPORT(SegmentRowsZ3);
+HWY_EXPORT(SegmentSpans);
 HWY_EXPORT(Target);
 HWY_EXPORT(PointRowsZ3);
 HWY_EXPORT(ResolveSingleLayerRow);
@@ -557,6 +693,9 @@ int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, f
 uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
                        Z3Tile& tile) {
   return HWY_DYNAMIC_DISPATCH(SegmentRowsZ3)(s, shade, spans, count, tile);
+}
+int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpan* out) {
+  return HWY_DYNAMIC_DISPATCH(SegmentSpans)(s, r, slack, out);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

@@ -104,6 +104,15 @@ struct RowSpan {
   int y, x0, x1;
 };
 
+/// The rows' spans over r (at most r.height()) of the pixels where the segment can have a
+/// fragment (beyond the thesis): a pixel's ray meets the strip's plane (N < 0) at (a, b) in the
+/// union over the sub-segments k of [a0_k, a1_k] x {0} + {v : v^T M_k^-1 v < R^2} (the capsule
+/// of the cutoff); its support lines in eight directions (the footprint box's sides and its
+/// corners cut along the ellipse's diagonals) are, multiplied by N, half-planes of the screen.
+/// Every bound is pushed `slack` pixel outward against rounding. Returns how many spans (empty
+/// rows left out), or -1 for degenerate constants (walk the footprint box instead).
+int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpan* out);
+
 /// As pointFragments for one segment, over `count` row spans holding at most kBlock pixels in
 /// all; p = the along-axis parameter u = clamp(a / length, 0, 1), q = the z threshold.
 int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, FragmentBlock& out);
