@@ -251,6 +251,34 @@ void BM_ContourPrepare(benchmark::State& state) {
 }
 BENCHMARK(BM_ContourPrepare)->Args({0, 0})->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
+// The rows' spans of the bunny contour segments' cutoff regions alone (detail::segmentSpans,
+// what the segment rows walk), 1000 of one view's, one thread: ns per drawn segment.
+void BM_SegmentSpans(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = contourModel(0, 1, error);
+  if (!m) return state.SkipWithError(error.c_str());
+  RenderOptions o;
+  const Renderer r(*m, o);
+  const Camera cam = Camera::spreadViews(r.sphere(), 8, 512, 512)[0];
+  FrameContext frame = FrameContext::make(cam, o, r.sphere(), m->attributes.colors);
+  frame.endpointNormals = m->attributes.endpointNormals;
+  std::vector<PreparedSegment> segs(m->segments.size());
+  std::vector<const PreparedSegment*> drawn;
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const PrimitiveStatus st = prepareSegment(m->segments[i], uint32_t(i), frame, segs[i]);
+    if (st == PrimitiveStatus::Drawn || st == PrimitiveStatus::Clipped) drawn.push_back(&segs[i]);
+  }
+  drawn.resize(std::min<size_t>(drawn.size(), 1000));  // records in the cache: the arithmetic alone
+  std::vector<detail::RowSpan> rows(512);
+  size_t spans = 0;
+  for (auto _ : state)
+    for (const PreparedSegment* sp : drawn) spans += size_t(std::max(0, detail::segmentSpans(sp->raster, sp->bounds, 0.05f, rows.data())));
+  benchmark::DoNotOptimize(spans);
+  state.counters["ns/segment"] = benchmark::Counter(double(drawn.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["spans/segment"] = double(spans) / double(state.iterations()) / double(std::max<size_t>(1, drawn.size()));
+}
+BENCHMARK(BM_SegmentSpans)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
 BENCHMARK(BM_ContourFrame)
     ->ArgsProduct({{0, 1, 2, 3, 4, 5, 6}, {0, 1}})
     ->Unit(benchmark::kMillisecond)

@@ -288,13 +288,25 @@ RenderResult Renderer::render(const Camera& cam) const {
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     const size_t kEnd = tileStart[tile + 1];
-    for (size_t k = tileStart[tile]; k < kEnd; ++k) {
+    for (size_t k = tileStart[tile]; k < kEnd;) {
       // the bins visit primitives in index order with gaps: their prepared records are cold
       // (a PreparedSegment spans several cache lines), so fetch the record kPrefetchAhead on
-      if (k + kPrefetchAhead < kEnd) prefetchPrimitive(refs[k + kPrefetchAhead], pointSlots, pts, segs);
-      uint32_t p = refs[k];
-      if (p < pointSlots) rasterizePoint(pts[p], ctx);
-      else rasterizeSegment(segs[p - pointSlots], ctx);
+      const uint32_t p = refs[k];
+      if (p < pointSlots) {
+        if (k + kPrefetchAhead < kEnd) prefetchPrimitive(refs[k + kPrefetchAhead], pointSlots, pts, segs);
+        rasterizePoint(pts[p], ctx);
+        ++k;
+        continue;
+      }
+      // segments in batches of consecutive references (their rows' spans found together), the
+      // next batch's records fetched meanwhile
+      const PreparedSegment* batch[kSegmentBatch];
+      int n = 0;
+      for (; k < kEnd && n < kSegmentBatch && refs[k] >= pointSlots; ++k) {
+        if (k + kSegmentBatch < kEnd) prefetchPrimitive(refs[k + kSegmentBatch], pointSlots, pts, segs);
+        batch[n++] = &segs[refs[k] - pointSlots];
+      }
+      rasterizeSegments(batch, n, ctx);
     }
     const double t1 = threadCpuSeconds();
     tileSeconds[tile].first = t1 - t0;

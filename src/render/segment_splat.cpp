@@ -458,7 +458,13 @@ void forEachRowSpan(const PreparedSegment& sp, const PixelRect& r, bool tight, E
     detail::RowSpan rows[detail::kBlock];
     for (int y0 = r.y0; y0 < r.y1; y0 += detail::kBlock) {  // bands of at most kBlock rows
       const PixelRect band{r.x0, y0, r.x1, std::min(r.y1, y0 + detail::kBlock)};
-      const int n = detail::segmentSpans(sp.raster, band, kSpanSlack, rows);
+      int n;
+      if (sp.raster.pieceCount == 1) {
+        const detail::SegmentRaster* one = &sp.raster;
+        detail::segmentSpansBatch(&one, &band, 1, kSpanSlack, rows, detail::kBlock, &n);
+      } else {
+        n = detail::segmentSpans(sp.raster, band, kSpanSlack, rows);
+      }
       if (n < 0) break;  // degenerate constants (the first band already): the box
       for (int i = 0; i < n; ++i) emit(rows[i].y, rows[i].x0, rows[i].x1);
       if (y0 + detail::kBlock >= r.y1) return;
@@ -540,8 +546,13 @@ struct FragmentAttributes {
 };
 
 // ScreenSpace segments: the closed form evaluated in SIMD over the rows' spans of the cutoff
-// region (TightSpans), straight into the Z^3 tile (detail/splat_rows.h).
-void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r) {
+// region (`given`, else forEachRowSpan's), straight into the Z^3 tile (detail/splat_rows.h).
+void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r,
+                   const detail::RowSpan* given = nullptr, int givenCount = 0) {
+  auto eachSpan = [&](auto&& emit) {
+    if (!given) return forEachRowSpan(sp, r, true, emit);
+    for (int i = 0; i < givenCount; ++i) emit(given[i].y, given[i].x0, given[i].x1);
+  };
   detail::RowSpan spans[detail::kBlock];
   int spanCount = 0;
   uint64_t inserted = 0;
@@ -561,7 +572,7 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
       inserted += detail::segmentRowsZ3(sp.raster, shade, spans, spanCount, ctx.tile);
       spanCount = 0;
     };
-    forEachRowSpan(sp, r, true, [&](int y, int xb, int xe) {
+    eachSpan([&](int y, int xb, int xe) {
       if (spanCount == detail::kBlock) flush();
       spans[spanCount++] = {y, xb, xe};
     });
@@ -582,7 +593,7 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
     inserted += uint64_t(m);
     spanCount = pixels = 0;
   };
-  forEachRowSpan(sp, r, true, [&](int y, int xb, int xe) {
+  eachSpan([&](int y, int xb, int xe) {
     for (int x0 = xb; x0 < xe; x0 += detail::kBlock) {
       const int x1 = std::min(xe, x0 + detail::kBlock);
       if (pixels + (x1 - x0) > detail::kBlock) flush();
@@ -637,6 +648,36 @@ void rasterizeSegment(const PreparedSegment& sp, const SplatContext& ctx) {
   if (r.empty()) return;
   if (sp.method == SegmentMethod::ScreenSpace) return rasterizeRows(sp, ctx, r);
   rasterizeScalar(sp, ctx, r);
+}
+
+void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatContext& ctx) {
+  // the rows' spans of the one-piece ScreenSpace segments at once (a band of at most kBlock
+  // rows of the tile: taller tiles take the one-by-one path), then every segment in order
+  const int stride = ctx.rect.height();
+  const detail::SegmentRaster* batch[kSegmentBatch];
+  PixelRect rects[kSegmentBatch];
+  int slot[kSegmentBatch], counts[kSegmentBatch];
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const PreparedSegment& sp = *segs[i];
+    slot[i] = -1;
+    const PixelRect r = sp.bounds.intersect(ctx.rect);
+    if (r.empty() || sp.method != SegmentMethod::ScreenSpace || sp.raster.pieceCount != 1 || stride > detail::kBlock)
+      continue;
+    slot[i] = m;
+    batch[m] = &sp.raster;
+    rects[m++] = r;
+  }
+  thread_local std::vector<detail::RowSpan> spans;
+  if (m > 0) {
+    if (spans.size() < size_t(kSegmentBatch * stride)) spans.resize(size_t(kSegmentBatch * stride));
+    detail::segmentSpansBatch(batch, rects, m, kSpanSlack, spans.data(), stride, counts);
+  }
+  for (int i = 0; i < n; ++i) {
+    const int k = slot[i];
+    if (k >= 0 && counts[k] >= 0) rasterizeRows(*segs[i], ctx, rects[k], spans.data() + size_t(k) * size_t(stride), counts[k]);
+    else rasterizeSegment(*segs[i], ctx);
+  }
 }
 
 }  // namespace linesurf

@@ -129,6 +129,12 @@ PrimitiveStatus prepareSegment(const Segment& segment, uint32_t index, const Fra
 /// Rasterise stage for one segment on one tile.
 void rasterizeSegment(const PreparedSegment& segment, const SplatContext& ctx);
 
+/// Rasterise stage for segments[0 .. n) on one tile, in that order (n <= kSegmentBatch): the
+/// same as rasterizeSegment one by one, with the rows' spans of the common ones found together
+/// (SIMD lanes = segments).
+inline constexpr int kSegmentBatch = 16;
+void rasterizeSegments(const PreparedSegment* const* segments, int n, const SplatContext& ctx);
+
 /// The row spans rasterizeSegment walks for the segment over `rect` (a tile): with tight, those of
 /// the polygon around the cutoff region it walks (ScreenSpace), else those of the footprint box.
 /// For tests: the tight walk must find every fragment of the box walk.

@@ -315,6 +315,91 @@ int SegmentSpans(const SegmentRaster& S, const PixelRect& r, float slack, RowSpa
   return count;
 }
 
+// SegmentSpans for a batch of one-piece segments with lanes = segments (detail/splat_rows.h):
+// the same eight constraints, set up once per vector of segments, then one row of every
+// segment per step.
+void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects, int n, float slack, RowSpan* out,
+                       int stride, int* counts) {
+  const DF d;
+  const hn::RebindToSigned<DF> di;
+  const int L = int(hn::Lanes(d));
+  constexpr int kC = 8;
+  for (int g0 = 0; g0 < n; g0 += L) {
+    const int m = std::min(L, n - g0);
+    // the segments' constants, structure of arrays (unused lanes copy the last)
+    enum { kR2, kLen, kSkew, kAcross, kInvM00, kA0, kB0, kAx, kAy, kAc, kBx, kBy, kBc, kNx, kNy, kNc, kIn };
+    HWY_ALIGN float in[kIn][kMaxLanes];
+    HWY_ALIGN int32_t rx0[kMaxLanes], rx1[kMaxLanes], ry0[kMaxLanes], rh[kMaxLanes];
+    int maxRows = 0;
+    for (int j = 0; j < L; ++j) {
+      const int i = g0 + std::min(j, m - 1);
+      const SegmentRaster& S = *segs[i];
+      const float v[kIn] = {S.R2,  S.length, S.skew, S.across, S.invM00, S.a0,  S.b0,  S.A.dx,
+                            S.A.dy, S.A.c,   S.B.dx, S.B.dy,   S.B.c,    S.N.dx, S.N.dy, S.N.c};
+      for (int f = 0; f < kIn; ++f) in[f][j] = v[f];
+      rx0[j] = rects[i].x0, rx1[j] = rects[i].x1, ry0[j] = rects[i].y0, rh[j] = rects[i].height();
+      if (j < m) maxRows = std::max(maxRows, rh[j]);
+    }
+    auto V = [&](int f) { return hn::Load(d, in[f]); };
+    const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+    const VF across = V(kAcross), invM00 = V(kInvM00), skew = V(kSkew), len = V(kLen);
+    const auto ok = hn::And(hn::Gt(across, zero), hn::Gt(invM00, zero));
+    // M = (M^-1)^-1 in (a, b); support R sqrt(n^T M n) of the cutoff ellipse in direction n
+    const VF Mbb = hn::Div(one, hn::IfThenElse(ok, across, one));
+    const VF Mab = hn::Neg(hn::Mul(skew, Mbb)), Maa = hn::MulAdd(hn::Mul(skew, skew), Mbb, invM00);
+    const VF R = hn::Sqrt(V(kR2));
+    const VF ea = hn::Mul(R, hn::Sqrt(hn::Max(Maa, zero))), eb = hn::Mul(R, hn::Sqrt(Mbb));
+    const VF ua = hn::Div(one, hn::IfThenElse(ok, ea, one)), ub = hn::Div(one, hn::IfThenElse(ok, eb, one));
+    const VF cross = hn::Mul(hn::Add(Mab, Mab), hn::Mul(ua, ub));
+    const VF diag = hn::MulAdd(hn::Mul(Maa, ua), ua, hn::Mul(hn::Mul(Mbb, ub), ub));
+    const VF ep = hn::Mul(R, hn::Sqrt(hn::Max(hn::Add(diag, cross), zero)));
+    const VF em = hn::Mul(R, hn::Sqrt(hn::Max(hn::Sub(diag, cross), zero)));
+    const VF nua = hn::Neg(ua), nub = hn::Neg(ub), neg1 = hn::Neg(one);
+    const VF na[kC] = {one, neg1, zero, zero, ua, ua, nua, nua}, nb[kC] = {zero, zero, one, neg1, ub, nub, ub, nub};
+    const VF h[kC] = {hn::Add(len, ea), ea, eb, eb, hn::MulAdd(ua, len, ep), hn::MulAdd(ua, len, em), em, ep};
+    // the constraints (as SegmentSpans): a lower bound x >= loY py + lo0 or an upper one
+    VF loY[kC], lo0[kC], hiY[kC], hi0[kC];
+    const VF sl = hn::Set(d, slack), rel = hn::Set(d, 1e-5f), big = hn::Set(d, 1e8f);
+    auto finite = ok;
+    for (int c = 0; c < kC; ++c) {
+      const VF margin = hn::Mul(rel, hn::MulAdd(hn::Abs(na[c]), ea, hn::Mul(hn::Abs(nb[c]), eb)));
+      const VF K0 = hn::Add(hn::MulAdd(na[c], V(kA0), hn::Mul(nb[c], V(kB0))), hn::Add(h[c], margin));
+      const VF gx = hn::NegMulAdd(K0, V(kNx), hn::MulAdd(na[c], V(kAx), hn::Mul(nb[c], V(kBx))));
+      const VF gy = hn::NegMulAdd(K0, V(kNy), hn::MulAdd(na[c], V(kAy), hn::Mul(nb[c], V(kBy))));
+      const VF g = hn::MulAdd(sl, hn::Add(hn::Abs(gx), hn::Abs(gy)),
+                              hn::NegMulAdd(K0, V(kNc), hn::MulAdd(na[c], V(kAc), hn::Mul(nb[c], V(kBc)))));
+      const auto lower = hn::Gt(gx, zero), upper = hn::Lt(gx, zero);
+      const VF inv = hn::Neg(hn::Div(one, hn::IfThenElse(hn::Or(lower, upper), gx, one)));
+      const VF by = hn::Mul(gy, inv), b0 = hn::Mul(g, inv);
+      loY[c] = hn::IfThenElseZero(lower, by), lo0[c] = hn::IfThenElse(lower, b0, hn::Neg(big));
+      hiY[c] = hn::IfThenElseZero(upper, by), hi0[c] = hn::IfThenElse(upper, b0, big);
+      finite = hn::And(finite, hn::Lt(hn::Abs(hn::Add(by, b0)), hn::Set(d, INFINITY)));
+    }
+    HWY_ALIGN int32_t okLane[kMaxLanes], xb[kMaxLanes], xe[kMaxLanes];
+    hn::Store(hn::VecFromMask(di, hn::RebindMask(di, finite)), di, okLane);
+    for (int j = 0; j < m; ++j) counts[g0 + j] = okLane[j] ? 0 : -1;
+    const auto X0 = hn::Load(di, rx0), X1 = hn::Load(di, rx1);
+    const VF half = hn::Set(d, 0.5f);
+    VF py = hn::Add(hn::ConvertTo(d, hn::Load(di, ry0)), half);
+    for (int t = 0; t < maxRows; ++t, py = hn::Add(py, one)) {
+      VF lo = hn::Neg(big), hi = big;
+      for (int c = 0; c < kC; ++c) {
+        lo = hn::Max(lo, hn::MulAdd(loY[c], py, lo0[c]));
+        hi = hn::Min(hi, hn::MulAdd(hiY[c], py, hi0[c]));
+      }
+      lo = hn::Min(lo, big), hi = hn::Max(hi, hn::Neg(big));
+      hn::Store(hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0), di, xb);
+      hn::Store(hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1), di, xe);
+      for (int j = 0; j < m; ++j) {
+        int& c = counts[g0 + j];
+        if (t >= rh[j] || c < 0) continue;
+        out[size_t(g0 + j) * size_t(stride) + size_t(c)] = {ry0[j] + t, xb[j], xe[j]};
+        c += xe[j] > xb[j];
+      }
+    }
+  }
+}
+
 // The Z^3 fast path of the point and segment rows: of the lanes `inside` at tile pixels
 // p .. p + lanes - 1, those on an empty pixel open its first layer, those within the z threshold
 // of a pixel's single layer merge into it (masked load-add-store per blended sum, attrAt(k) the
@@ -588,6 +673,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentS
         continue;
       }
       hn::Store(hn::IfThenElseZero(keep, w), d, bw + i);
+      u = hn::IfThenElseZero(keep, u);  // the other lanes' u may be anything (the station gather's index)
       hn::Store(z, d, bz + i);
       hn::Store(hn::MulAdd(u, thrD, thr0), d, bt + i);
       if (A.stations >= 2) {  // piecewise linear between the lighting stations
@@ -673,6 +759,7 @@ HWY_EXPORT(PointFragments);
 HWY_EXPORT(SegmentFragments);
 HWY_EXPORT(SegmentRowsZ3);
 HWY_EXPORT(SegmentSpans);
+HWY_EXPORT(SegmentSpansBatch);
 HWY_EXPORT(Target);
 HWY_EXPORT(PointRowsZ3);
 HWY_EXPORT(ResolveSingleLayerRow);
@@ -696,6 +783,10 @@ uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, co
 }
 int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpan* out) {
   return HWY_DYNAMIC_DISPATCH(SegmentSpans)(s, r, slack, out);
+}
+void segmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects, int n, float slack, RowSpan* out,
+                       int stride, int* counts) {
+  HWY_DYNAMIC_DISPATCH(SegmentSpansBatch)(segs, rects, n, slack, out, stride, counts);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

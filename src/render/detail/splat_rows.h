@@ -113,6 +113,12 @@ struct RowSpan {
 /// rows left out), or -1 for degenerate constants (walk the footprint box instead).
 int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpan* out);
 
+/// segmentSpans for n one-piece segments at once (pieceCount == 1; SIMD lanes = segments):
+/// segment i's spans over rects[i] (at most stride rows) go to out + i * stride, counts[i] their
+/// number, or -1 for degenerate constants.
+void segmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects, int n, float slack, RowSpan* out,
+                       int stride, int* counts);
+
 /// As pointFragments for one segment, over `count` row spans holding at most kBlock pixels in
 /// all; p = the along-axis parameter u = clamp(a / length, 0, 1), q = the z threshold.
 int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, FragmentBlock& out);
