@@ -300,10 +300,10 @@ RenderResult Renderer::render(const Camera& cam) const {
       }
       // segments in batches of consecutive references (their rows' spans found together), the
       // next batch's records fetched meanwhile
-      const PreparedSegment* batch[kSegmentBatch];
+      const PreparedSegment* batch[kRasterBatch];
       int n = 0;
-      for (; k < kEnd && n < kSegmentBatch && refs[k] >= pointSlots; ++k) {
-        if (k + kSegmentBatch < kEnd) prefetchPrimitive(refs[k + kSegmentBatch], pointSlots, pts, segs);
+      for (; k < kEnd && n < kRasterBatch && refs[k] >= pointSlots; ++k) {
+        if (k + kRasterBatch < kEnd) prefetchPrimitive(refs[k + kRasterBatch], pointSlots, pts, segs);
         batch[n++] = &segs[refs[k] - pointSlots];
       }
       rasterizeSegments(batch, n, ctx);

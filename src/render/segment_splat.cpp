@@ -654,9 +654,9 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
   // the rows' spans of the one-piece ScreenSpace segments at once (a band of at most kBlock
   // rows of the tile: taller tiles take the one-by-one path), then every segment in order
   const int stride = ctx.rect.height();
-  const detail::SegmentRaster* batch[kSegmentBatch];
-  PixelRect rects[kSegmentBatch];
-  int slot[kSegmentBatch], counts[kSegmentBatch];
+  const detail::SegmentRaster* batch[kRasterBatch];
+  PixelRect rects[kRasterBatch];
+  int slot[kRasterBatch], counts[kRasterBatch];
   int m = 0;
   for (int i = 0; i < n; ++i) {
     const PreparedSegment& sp = *segs[i];
@@ -670,7 +670,7 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
   }
   thread_local std::vector<detail::RowSpan> spans;
   if (m > 0) {
-    if (spans.size() < size_t(kSegmentBatch * stride)) spans.resize(size_t(kSegmentBatch * stride));
+    if (spans.size() < size_t(kRasterBatch * stride)) spans.resize(size_t(kRasterBatch * stride));
     detail::segmentSpansBatch(batch, rects, m, kSpanSlack, spans.data(), stride, counts);
   }
   for (int i = 0; i < n; ++i) {

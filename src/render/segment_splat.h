@@ -129,10 +129,10 @@ PrimitiveStatus prepareSegment(const Segment& segment, uint32_t index, const Fra
 /// Rasterise stage for one segment on one tile.
 void rasterizeSegment(const PreparedSegment& segment, const SplatContext& ctx);
 
-/// Rasterise stage for segments[0 .. n) on one tile, in that order (n <= kSegmentBatch): the
+/// Rasterise stage for segments[0 .. n) on one tile, in that order (n <= kRasterBatch): the
 /// same as rasterizeSegment one by one, with the rows' spans of the common ones found together
 /// (SIMD lanes = segments).
-inline constexpr int kSegmentBatch = 16;
+inline constexpr int kRasterBatch = 16;
 void rasterizeSegments(const PreparedSegment* const* segments, int n, const SplatContext& ctx);
 
 /// The row spans rasterizeSegment walks for the segment over `rect` (a tile): with tight, those of

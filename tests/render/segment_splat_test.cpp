@@ -1,6 +1,7 @@
 // Line-segment splats (thesis §5): points vs segments on the same surface, the three filter
 // evaluations against each other, the Approx construction's cases, degenerate segments.
 #include "render/segment_splat.h"
+#include "render/segment_setup.h"
 
 #include <gtest/gtest.h>
 
@@ -415,11 +416,11 @@ std::map<std::pair<int, int>, float> rowFragments(const PreparedSegment& ps, con
 // finds every fragment of weight > 0 that the footprint-box walk finds, with the same weight, on
 // random segments: any orientation, long (several sub-segments) and short, wide and thin,
 // grazing, crossing the near plane, seen from close and far, cut by 16-pixel tiles at random
-// offsets; and it walks fewer pixels.
+// offsets, prepared by the exact path and by the SIMD batches; and it walks fewer pixels.
 TEST(SegmentSplat, TightRowSpansKeepEveryFragmentOfTheBoxWalk) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> U(-1, 1);
-  size_t fragments = 0, walkedBox = 0, walkedTight = 0, checked = 0, multiPiece = 0, clipped = 0;
+  size_t fragments = 0, walkedBox = 0, walkedTight = 0, checked = 0, multiPiece = 0, clipped = 0, simdChecked = 0;
   for (int it = 0; it < 600; ++it) {
     Segment s;
     s.p0 = Vec3f(U(rng), U(rng), U(rng)) * 0.5f;
@@ -431,34 +432,46 @@ TEST(SegmentSplat, TightRowSpansKeepEveryFragmentOfTheBoxWalk) {
     s.radius = std::pow(10.0f, U(rng) - 1.5f);
     const Vec3f eye = Vec3f(U(rng), U(rng), U(rng)).normalized() * std::pow(10.0f, U(rng) + 0.1f);
     const Camera cam = Camera::lookAt(eye, 0.3f * Vec3f(U(rng), U(rng), U(rng)), Vec3f(0, 0, 1), 40, 96, 80, 0.05f, 100);
-    PreparedSegment ps;
+    // the exact prepare path and the renderer's SIMD batches (prepareSegments)
+    PreparedSegment ps, simd;
     const PrimitiveStatus st = prepareWith(s, cam, SegmentMethod::ScreenSpace, ps, false);
     if (st != PrimitiveStatus::Drawn && st != PrimitiveStatus::Clipped) continue;
+    static RenderOptions o;  // FrameContext keeps a pointer to it
+    o = optionsFor(SegmentMethod::ScreenSpace);
+    o.backfaceCulling = false;
+    const FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+    PrimitiveStatus sst = PrimitiveStatus::Degenerate;
+    prepareSegments(&s, 0, 1, frame, segmentSetupFrame(frame), &simd, &sst);
     multiPiece += ps.pieceCount() > 1;
     clipped += ps.raster.clipDepth;
     const int ox = int(rng() % 16), oy = int(rng() % 16);
-    for (int ty = -oy; ty < cam.height(); ty += 16)
-      for (int tx = -ox; tx < cam.width(); tx += 16) {
-        const PixelRect tile = PixelRect{tx, ty, tx + 16, ty + 16}.intersect(PixelRect{0, 0, cam.width(), cam.height()});
-        const auto box = rowFragments(ps, segmentRowSpans(ps, tile, false), walkedBox);
-        const auto tight = rowFragments(ps, segmentRowSpans(ps, tile, true), walkedTight);
-        for (const auto& [px, w] : box) {
-          ++checked;
-          const auto f = tight.find(px);
-          ASSERT_TRUE(f != tight.end()) << "segment " << it << " drops pixel " << px.first << "," << px.second
-                                        << " of weight " << w;
-          EXPECT_EQ(f->second, w) << it;
+    for (const PreparedSegment* p : {&ps, &simd}) {
+      if (p == &simd && sst != PrimitiveStatus::Drawn && sst != PrimitiveStatus::Clipped) continue;
+      simdChecked += p == &simd;
+      for (int ty = -oy; ty < cam.height(); ty += 16)
+        for (int tx = -ox; tx < cam.width(); tx += 16) {
+          const PixelRect tile = PixelRect{tx, ty, tx + 16, ty + 16}.intersect(PixelRect{0, 0, cam.width(), cam.height()});
+          const auto box = rowFragments(*p, segmentRowSpans(*p, tile, false), walkedBox);
+          const auto tight = rowFragments(*p, segmentRowSpans(*p, tile, true), walkedTight);
+          for (const auto& [px, w] : box) {
+            ++checked;
+            const auto f = tight.find(px);
+            ASSERT_TRUE(f != tight.end()) << "segment " << it << (p == &simd ? " (SIMD prepare)" : "") << " drops pixel "
+                                          << px.first << "," << px.second << " of weight " << w;
+            EXPECT_EQ(f->second, w) << it;
+          }
+          fragments += tight.size();
         }
-        fragments += tight.size();
-      }
+    }
   }
   EXPECT_GT(checked, 20000u);
   EXPECT_GT(multiPiece, 10u);
   EXPECT_GT(clipped, 3u);
+  EXPECT_GT(simdChecked, 100u);
   EXPECT_LT(walkedTight, walkedBox);
   std::printf("tight spans: %zu fragments, %zu of them checked against the box walk; pixels walked %zu (box %zu); "
-              "%zu segments with several sub-segments, %zu depth-clipped\n",
-              fragments, checked, walkedTight, walkedBox, multiPiece, clipped);
+              "%zu segments with several sub-segments, %zu depth-clipped, %zu prepared by the SIMD batches too\n",
+              fragments, checked, walkedTight, walkedBox, multiPiece, clipped, simdChecked);
 }
 
 }  // namespace
