@@ -73,6 +73,7 @@ struct Renderer::Buffers {
   std::vector<TileSpan> pointTiles;   ///< tiles each point slot touches
   std::vector<PreparedSegment> segs;
   std::vector<PrimitiveStatus> segStatus;
+  std::vector<TileSpan> segTiles;     ///< tiles each visible segment touches (dense: binning reads no record)
   std::vector<uint32_t> chunkVisible;
   std::vector<double> chunkSeconds;   ///< thread CPU time per chunk (prepare, then binning)
   std::vector<PointSetupCounts> chunkCounts;
@@ -166,6 +167,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   if (buf.pointTiles.size() < pointSlots) buf.pointTiles.resize(pointSlots);
   if (buf.segs.size() < ns) buf.segs.resize(ns);
   buf.segStatus.resize(ns);
+  if (buf.segTiles.size() < ns) buf.segTiles.resize(ns);
   buf.counts.assign(chunks * tiles, 0);
   buf.chunkVisible.assign(pointChunks, 0);
   buf.chunkCounts.assign(pointChunks, PointSetupCounts{});
@@ -201,11 +203,20 @@ RenderResult Renderer::render(const Camera& cam) const {
     buf.chunkSeconds[c] = threadCpuSeconds() - t0;
   }, 1);
   PrimitiveStatus* const segStatus = buf.segStatus.data();
+  TileSpan* const segTiles = buf.segTiles.data();
   std::atomic<int64_t> segmentNs{0};
+  std::atomic<uint64_t> segmentsFallback{0};
   const detail::SegmentSetupFrame segSetup = segmentSetupFrame(frame);
   parallelForRange(0, ns, [&](size_t i0, size_t i1) {
     const double t0 = threadCpuSeconds();
     prepareSegments(model_.segments.data(), uint32_t(i0), i1 - i0, frame, segSetup, segs + i0, segStatus + i0);
+    // the tiles and the fallback flag of the visible ones while their records are in the cache:
+    // counting and binning below read only segStatus and segTiles (issue 13: a record's miss
+    // per visible segment in each of three loops, one of them serial)
+    uint64_t fallback = 0;
+    for (size_t i = i0; i < i1; ++i)
+      if (visible(segStatus[i])) segTiles[i] = tileSpan(segs[i].bounds), fallback += segs[i].fallback;
+    segmentsFallback += fallback;
     segmentNs += int64_t(1e9 * (threadCpuSeconds() - t0));
   }, 256);
   for (const PointSetupCounts& c : buf.chunkCounts) {
@@ -215,15 +226,14 @@ RenderResult Renderer::render(const Camera& cam) const {
     st.pointsOutside += c.outside;
     st.pointsDegenerate += c.degenerate;
   }
-  for (size_t i = 0; i < ns; ++i) {  // (the records of segments not drawn are not read)
+  for (size_t i = 0; i < ns; ++i)
     count(segStatus[i], st.segmentsDrawn, st.segmentsClipped, st.segmentsCulled, st.segmentsOutside,
           st.segmentsDegenerate);
-    if (visible(segStatus[i])) st.segmentsFallback += segs[i].fallback;
-  }
+  st.segmentsFallback = segmentsFallback.load();
   parallelFor(0, segChunks, [&](size_t c) {
     uint32_t* cnt = buf.counts.data() + (pointChunks + c) * tiles;
     for (size_t i = c * segChunkSize, e = std::min(ns, i + segChunkSize); i < e; ++i)
-      if (visible(segStatus[i])) countSpan(cnt, tileSpan(segs[i].bounds));
+      if (visible(segStatus[i])) countSpan(cnt, segTiles[i]);
   }, 1);
   st.prepareThreadSeconds = 1e-9 * double(segmentNs.load());
   for (double s : buf.chunkSeconds) st.prepareThreadSeconds += s;
@@ -259,7 +269,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     } else {
       const size_t c0 = (c - pointChunks) * segChunkSize;
       for (size_t i = c0, e = std::min(ns, c0 + segChunkSize); i < e; ++i)
-        if (visible(segStatus[i])) fillSpan(off, tileSpan(segs[i].bounds), uint32_t(pointSlots + i));
+        if (visible(segStatus[i])) fillSpan(off, segTiles[i], uint32_t(pointSlots + i));
     }
     buf.chunkSeconds[c] = threadCpuSeconds() - t0;
   }, 1);

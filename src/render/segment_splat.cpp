@@ -568,6 +568,11 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
       shade.stations = sp.extra->stations;
       shade.stationColour = sp.extra->colour.data();
     }
+    if (given && givenCount <= detail::kBlock) {  // the batch's spans as they are (no copy)
+      if (givenCount > 0) inserted = detail::segmentRowsZ3(sp.raster, shade, given, givenCount, ctx.tile);
+      ctx.tile.addFragments(inserted);
+      return;
+    }
     auto flush = [&] {
       inserted += detail::segmentRowsZ3(sp.raster, shade, spans, spanCount, ctx.tile);
       spanCount = 0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "render/splat_rows.cpp"
@@ -128,6 +129,14 @@ HWY_INLINE int expandSpans(DF d, const RowSpan* spans, int count, float* px, flo
   return n;
 }
 
+// exp(-R^2 / 2) in every lane, as hn::Exp gives it; R^2 is the frame's cutoff, so the last value
+// is kept per thread (the rows build a kernel per segment and tile: issue 13, fixed costs).
+HWY_INLINE VF cutoffExp(DF d, float R2) {
+  thread_local float lastR2 = std::numeric_limits<float>::quiet_NaN(), lastG = 0;
+  if (!(R2 == lastR2)) lastG = hn::GetLane(hn::Exp(d, hn::Set(d, R2 * -0.5f))), lastR2 = R2;
+  return hn::Set(d, lastG);
+}
+
 // A segment's weight, depth and along-axis parameter u at the pixels (px, py) of the lanes in
 // `valid`: the closed form of segment_methods.cpp (screenSpaceWeight), summed over the
 // sub-segments that can reach the lanes. Returns the lanes with a fragment (w > 0).
@@ -139,7 +148,7 @@ struct SegmentKernel {
   V one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
   V a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f),
     R2 = hn::Set(d, S.R2);
-  V gcut = hn::Exp(d, hn::Mul(R2, mhalf));  ///< exp(-R^2 / 2): the slope term's ends where the cutoff bounds
+  V gcut = cutoffExp(DF(), S.R2);  ///< exp(-R^2 / 2): the slope term's ends where the cutoff bounds
   V aMin = hn::Set(d, S.aMin), aMax = hn::Set(d, S.aMax), bMax = hn::Set(d, S.bMax);
   V depthNum = hn::Set(d, S.depthNum), nearD = hn::Set(d, S.nearD), farD = hn::Set(d, S.farD);
   V Ndx = hn::Set(d, S.N.dx), Ndy = hn::Set(d, S.N.dy), N0 = hn::Set(d, S.N.c);
@@ -375,26 +384,37 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
       hiY[c] = hn::IfThenElseZero(upper, by), hi0[c] = hn::IfThenElse(upper, b0, big);
       finite = hn::And(finite, hn::Lt(hn::Abs(hn::Add(by, b0)), hn::Set(d, INFINITY)));
     }
-    HWY_ALIGN int32_t okLane[kMaxLanes], xb[kMaxLanes], xe[kMaxLanes];
+    HWY_ALIGN int32_t okLane[kMaxLanes];
     hn::Store(hn::VecFromMask(di, hn::RebindMask(di, finite)), di, okLane);
     for (int j = 0; j < m; ++j) counts[g0 + j] = okLane[j] ? 0 : -1;
     const auto X0 = hn::Load(di, rx0), X1 = hn::Load(di, rx1);
     const VF half = hn::Set(d, 0.5f);
     VF py = hn::Add(hn::ConvertTo(d, hn::Load(di, ry0)), half);
-    for (int t = 0; t < maxRows; ++t, py = hn::Add(py, one)) {
-      VF lo = hn::Neg(big), hi = big;
-      for (int c = 0; c < kC; ++c) {
-        lo = hn::Max(lo, hn::MulAdd(loY[c], py, lo0[c]));
-        hi = hn::Min(hi, hn::MulAdd(hiY[c], py, hi0[c]));
+    // the rows' bounds in vectors (row t of lane j at [t][j]), kRows rows at a time, then each
+    // lane's spans in a run of its own rows (no per-row test of the other lanes' heights)
+    constexpr int kRows = 32;
+    HWY_ALIGN int32_t xb[kRows][kMaxLanes], xe[kRows][kMaxLanes];
+    for (int t0 = 0; t0 < maxRows; t0 += kRows) {
+      const int rows = std::min(kRows, maxRows - t0);
+      for (int t = 0; t < rows; ++t, py = hn::Add(py, one)) {
+        VF lo = hn::Neg(big), hi = big;
+        for (int c = 0; c < kC; ++c) {
+          lo = hn::Max(lo, hn::MulAdd(loY[c], py, lo0[c]));
+          hi = hn::Min(hi, hn::MulAdd(hiY[c], py, hi0[c]));
+        }
+        lo = hn::Min(lo, big), hi = hn::Max(hi, hn::Neg(big));
+        hn::Store(hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0), di, xb[t]);
+        hn::Store(hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1), di, xe[t]);
       }
-      lo = hn::Min(lo, big), hi = hn::Max(hi, hn::Neg(big));
-      hn::Store(hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0), di, xb);
-      hn::Store(hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1), di, xe);
       for (int j = 0; j < m; ++j) {
-        int& c = counts[g0 + j];
-        if (t >= rh[j] || c < 0) continue;
-        out[size_t(g0 + j) * size_t(stride) + size_t(c)] = {ry0[j] + t, xb[j], xe[j]};
-        c += xe[j] > xb[j];
+        int c = counts[g0 + j];
+        if (c < 0) continue;
+        RowSpan* o = out + size_t(g0 + j) * size_t(stride);
+        for (int t = 0, te = std::min(rows, rh[j] - t0); t < te; ++t) {
+          o[c] = {ry0[j] + t0 + t, xb[t][j], xe[t][j]};
+          c += xe[t][j] > xb[t][j];
+        }
+        counts[g0 + j] = c;
       }
     }
   }
