@@ -205,18 +205,21 @@ RenderResult Renderer::render(const Camera& cam) const {
   PrimitiveStatus* const segStatus = buf.segStatus.data();
   TileSpan* const segTiles = buf.segTiles.data();
   std::atomic<int64_t> segmentNs{0};
-  std::atomic<uint64_t> segmentsFallback{0};
+  // drawn (clipped included), clipped, culled, outside, degenerate, approx fallbacks
+  std::atomic<uint64_t> segCounts[6] = {};
   const detail::SegmentSetupFrame segSetup = segmentSetupFrame(frame);
   parallelForRange(0, ns, [&](size_t i0, size_t i1) {
     const double t0 = threadCpuSeconds();
     prepareSegments(model_.segments.data(), uint32_t(i0), i1 - i0, frame, segSetup, segs + i0, segStatus + i0);
-    // the tiles and the fallback flag of the visible ones while their records are in the cache:
-    // counting and binning below read only segStatus and segTiles (issue 13: a record's miss
-    // per visible segment in each of three loops, one of them serial)
-    uint64_t fallback = 0;
-    for (size_t i = i0; i < i1; ++i)
-      if (visible(segStatus[i])) segTiles[i] = tileSpan(segs[i].bounds), fallback += segs[i].fallback;
-    segmentsFallback += fallback;
+    // the statuses counted, the tiles and fallback flags of the visible ones taken while their
+    // records are in the cache: counting and binning below read only segStatus and segTiles
+    // (issue 13: a record's miss per visible segment in each of three loops, one of them serial)
+    uint64_t n[6] = {};
+    for (size_t i = i0; i < i1; ++i) {
+      count(segStatus[i], n[0], n[1], n[2], n[3], n[4]);
+      if (visible(segStatus[i])) segTiles[i] = tileSpan(segs[i].bounds), n[5] += segs[i].fallback;
+    }
+    for (int k = 0; k < 6; ++k) segCounts[k] += n[k];
     segmentNs += int64_t(1e9 * (threadCpuSeconds() - t0));
   }, 256);
   for (const PointSetupCounts& c : buf.chunkCounts) {
@@ -226,10 +229,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     st.pointsOutside += c.outside;
     st.pointsDegenerate += c.degenerate;
   }
-  for (size_t i = 0; i < ns; ++i)
-    count(segStatus[i], st.segmentsDrawn, st.segmentsClipped, st.segmentsCulled, st.segmentsOutside,
-          st.segmentsDegenerate);
-  st.segmentsFallback = segmentsFallback.load();
+  st.segmentsDrawn = segCounts[0], st.segmentsClipped = segCounts[1], st.segmentsCulled = segCounts[2];
+  st.segmentsOutside = segCounts[3], st.segmentsDegenerate = segCounts[4], st.segmentsFallback = segCounts[5];
   parallelFor(0, segChunks, [&](size_t c) {
     uint32_t* cnt = buf.counts.data() + (pointChunks + c) * tiles;
     for (size_t i = c * segChunkSize, e = std::min(ns, i + segChunkSize); i < e; ++i)
