@@ -251,6 +251,55 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
   }
 }
 
+// preparePoints' first step for the whole vectors among points[0 .. count): the early back-face
+// test (clearlyBackFacing below, the same expressions) and the AoS -> SoA copy of the points it
+// keeps into B (lane = their place), packed. Returns how many points it looked at (a multiple
+// of the vector length); `kept` gets how many it kept.
+int PointGather(const PointSetupFrame& F, const Point* points, int count, int pos, int nrm, int rad,
+                PointSetupBatch& B, int& kept) {
+  using DF = hn::ScalableTag<float>;
+  using VF = hn::Vec<DF>;
+  const DF d;
+  const hn::RebindToSigned<DF> di;
+  const int L = int(hn::Lanes(d));
+  const float* base = reinterpret_cast<const float*>(points);
+  constexpr int kStride = int(sizeof(Point) / sizeof(float));
+  const auto iota = hn::Mul(hn::Iota(di, 0), hn::Set(di, kStride));
+  const VF zero = hn::Zero(d), inf = hn::Set(d, INFINITY);
+  const VF ex = hn::Set(d, F.eye[0]), ey = hn::Set(d, F.eye[1]), ez = hn::Set(d, F.eye[2]);
+  const VF eye2 = hn::Set(d, F.eye[0] * F.eye[0] + F.eye[1] * F.eye[1] + F.eye[2] * F.eye[2]);
+  int m = 0, j = 0;
+  for (; j + L <= count; j += L) {
+    // the next batch's points, a batch of work ahead (a hint: an address past the model is harmless)
+    for (int k = 0; k < L; ++k)
+      __builtin_prefetch(reinterpret_cast<const void*>(reinterpret_cast<uintptr_t>(points + j + k) + kSetupBatch * sizeof(Point)));
+    const float* at = base + size_t(j) * kStride;
+    auto g = [&](int field) { return hn::GatherIndex(d, at + field, iota); };
+    const VF px = g(pos), py = g(pos + 1), pz = g(pos + 2), nx = g(nrm), ny = g(nrm + 1), nz = g(nrm + 2), r = g(rad);
+    auto keep = hn::FirstN(d, size_t(L));
+    if (F.backfaceCulling) {
+      const VF dx = hn::Sub(px, ex), dy = hn::Sub(py, ey), dz = hn::Sub(pz, ez);
+      const VF w = hn::Add(hn::Add(hn::Mul(nx, dx), hn::Mul(ny, dy)), hn::Mul(nz, dz));
+      const VF nn2 = hn::Add(hn::Add(hn::Mul(nx, nx), hn::Mul(ny, ny)), hn::Mul(nz, nz));
+      const VF d2 = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+      const VF p2 = hn::Add(hn::Add(hn::Mul(px, px), hn::Mul(py, py)), hn::Mul(pz, pz));
+      const VF scale2 = hn::Add(hn::Add(d2, p2), eye2), w2 = hn::Mul(w, w);
+      auto back = hn::And(hn::Gt(w, zero), hn::Gt(w2, hn::Mul(hn::Mul(hn::Set(d, 3e-8f), nn2), scale2)));
+      back = hn::And(back, hn::And(hn::Lt(w2, inf), hn::And(hn::Lt(nn2, inf), hn::Lt(scale2, inf))));
+      back = hn::And(back, hn::And(hn::Gt(r, zero), hn::Lt(r, inf)));
+      keep = hn::Not(back);
+    }
+    hn::StoreU(hn::Compress(hn::Add(hn::Iota(di, 0), hn::Set(di, j)), hn::RebindMask(di, keep)), di, B.lane + m);
+    hn::StoreU(hn::Compress(px, keep), d, B.px + m), hn::StoreU(hn::Compress(py, keep), d, B.py + m);
+    hn::StoreU(hn::Compress(pz, keep), d, B.pz + m), hn::StoreU(hn::Compress(nx, keep), d, B.nx + m);
+    hn::StoreU(hn::Compress(ny, keep), d, B.ny + m), hn::StoreU(hn::Compress(nz, keep), d, B.nz + m);
+    hn::StoreU(hn::Compress(r, keep), d, B.radius + m);
+    m += int(hn::CountTrue(d, keep));
+  }
+  kept = m;
+  return j;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace linesurf::detail
 HWY_AFTER_NAMESPACE();
@@ -258,8 +307,13 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace linesurf::detail {
 HWY_EXPORT(PointSetup);
+HWY_EXPORT(PointGather);
 void pointSetup(const PointSetupFrame& frame, PointSetupBatch& batch, int n) {
   HWY_DYNAMIC_DISPATCH(PointSetup)(frame, batch, n);
+}
+static int pointGather(const PointSetupFrame& frame, const Point* points, int count, int pos, int nrm, int rad,
+                       PointSetupBatch& batch, int& kept) {
+  return HWY_DYNAMIC_DISPATCH(PointGather)(frame, points, count, pos, nrm, rad, batch, kept);
 }
 }  // namespace linesurf::detail
 
@@ -310,6 +364,9 @@ bool clearlyBackFacing(const detail::PointSetupFrame& F, const Point& p) {
          (p.radius > 0) & (p.radius < INFINITY);
 }
 
+// how many output slots ahead preparePoints fetches the slot it will write
+constexpr int kWriteAhead = 6;
+
 }  // namespace
 
 int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
@@ -318,8 +375,14 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
   const Camera& cam = frame.cam();
   const RenderOptions& opt = frame.opt();
   detail::PointSetupBatch b;
+  static_assert(sizeof(Point) % sizeof(float) == 0 && alignof(Point) >= alignof(float));
+  // the fields' places in a Point, in floats (the SIMD gather's offsets)
+  const Point& p0 = points[first];
+  auto field = [&](const float* f) { return int(f - reinterpret_cast<const float*>(&p0)); };
   int m = 0;
-  for (int j = 0; j < count; ++j) {  // early culling; AoS -> SoA of the rest
+  const int j0 = detail::pointGather(setup, points + first, count, field(p0.position.data()), field(p0.normal.data()),
+                                     field(&p0.radius), b, m);
+  for (int j = j0; j < count; ++j) {  // the rest (past the whole vectors): early culling; AoS -> SoA
     const Point& p = points[first + uint32_t(j)];
     // the next batch's point, a batch of work ahead (a hint: an address past the model is harmless)
     __builtin_prefetch(reinterpret_cast<const void*>(reinterpret_cast<uintptr_t>(&p) + detail::kSetupBatch * sizeof(Point)));
@@ -337,6 +400,10 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
   detail::pointSetup(setup, b, m);
   int k = 0;
   for (int j = 0; j < m; ++j) {
+    // the output slots a few points ahead (two cache lines each; written, not read): their lines
+    // are fetched meanwhile (a hint: an address past the storage is harmless)
+    const char* ahead = reinterpret_cast<const char*>(out + k + kWriteAhead);
+    __builtin_prefetch(ahead, 1), __builtin_prefetch(ahead + 64, 1);
     const uint32_t index = first + uint32_t(b.lane[j]);
     const Point& point = points[index];
     if (b.status[j] == 1.0f) {

@@ -280,7 +280,10 @@ RenderResult Renderer::render(const Camera& cam) const {
 
   // 3. rasterise + resolve, tiles in parallel; each tile writes only its own pixels
   t.reset();
-  res.color = Image(cam.width(), cam.height(), opt.background);
+  // the colour image is not filled here (4 MB at 512^2, one thread): each tile writes every pixel
+  // of its own, the background where nothing was drawn (Color() leaves the pixels uninitialised)
+  res.color.width = cam.width(), res.color.height = cam.height();
+  res.color.pixels.resize(size_t(cam.width()) * size_t(cam.height()));
   if (opt.depthBuffer) res.depth = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
   if (opt.alphaBuffer) res.alpha = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
   if (opt.normalBuffer) res.normal = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
@@ -327,13 +330,18 @@ RenderResult Renderer::render(const Camera& cam) const {
     const float bgRGBA[4] = {bg.x(), bg.y(), bg.z(), bg.w()};
     const int32_t* layerCounts = z3.counts();
     for (int y = rect.y0; y < rect.y1; ++y) {
+      bool others = true;  // pixels with several layers before `done`
       const int done = simdResolve ? detail::resolveSingleLayerRow(z3, y, rect.x0, rect.width(), bgRGBA,
-                                                                   res.color.at(rect.x0, y).data())
+                                                                   res.color.at(rect.x0, y).data(), others)
                                    : 0;
       const int32_t* rowCounts = layerCounts + z3.index(rect.x0, y);
-      for (int x = rect.x0; x < rect.x1; ++x) {
+      for (int x = others ? rect.x0 : rect.x0 + done; x < rect.x1; ++x) {
         const int layers = rowCounts[x - rect.x0];
-        if (layers == 0 || (layers == 1 && x - rect.x0 < done)) continue;
+        if (x - rect.x0 < done && layers <= 1) continue;  // written by the SIMD row
+        if (layers == 0) {
+          res.color.at(x, y) = bg;
+          continue;
+        }
         // per-pixel lighting is deferred: each layer lit once, with its blended normal, at this
         // pixel's ray and the layer's depth; otherwise the fragments carry Gouraud colours
         const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);

@@ -479,9 +479,10 @@ struct Z3Rows {
 //     layer next to others, compression) through Z3Tile::insert.
 inline constexpr int kRowChunk = 1024;  // pixels (Wp x rows) per chunk
 
-template <class DZ>
-HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+template <class DZ, int kWp>  // kWp > 0: Wp known at compile time
+HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
   const DF d;
+  const int Wp = kWp > 0 ? kWp : WpRun;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
   const int W = r.width(), H = r.height();
   const VF cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
@@ -538,6 +539,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const Poin
         const int k = row * Wp + c;
         const VZ w = hn::LoadU(dz, bw + k), z = hn::LoadU(dz, bz + k);
         const auto inside = hn::Gt(w, zeroZ);
+        if (hn::AllFalse(dz, inside)) continue;  // a corner of the bounds the splat misses
         const size_t p = rowBase + size_t(c);
         VZ s = zeroZ, t = zeroZ;
         if (A.gouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
@@ -571,15 +573,16 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int Wp, const PointRaster& P, const Poin
 uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
   // rows Wp lanes apart in the weight buffer; the Z^3 pass runs on vectors of at most Wp lanes
   const int W = r.width();
-  if (W <= 4) return PointRowsT(hn::CappedTag<float, 4>(), 4, P, A, r, z3);
-  if (W <= 8) return PointRowsT(hn::CappedTag<float, 8>(), 8, P, A, r, z3);
-  return PointRowsT(hn::CappedTag<float, 16>(), (W + 15) / 16 * 16, P, A, r, z3);
+  if (W <= 4) return PointRowsT<hn::CappedTag<float, 4>, 4>(hn::CappedTag<float, 4>(), 4, P, A, r, z3);
+  if (W <= 8) return PointRowsT<hn::CappedTag<float, 8>, 8>(hn::CappedTag<float, 8>(), 8, P, A, r, z3);
+  return PointRowsT<hn::CappedTag<float, 16>, 0>(hn::CappedTag<float, 16>(), (W + 15) / 16 * 16, P, A, r, z3);
 }
 
 // One row of the resolve, pixels with one layer (detail/splat_rows.h): the formula of
 // Z3Tile::resolve for n = 1 (keep the two alike), then the renderer's compositing over the
-// background. Loads and stores of whole vectors only, so no other tile's pixels are touched.
-int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, float* out) {
+// background; every other pixel of the whole vectors gets the background itself. Stores of whole
+// vectors only, so no other tile's pixels are touched; out is never read (it may be uninitialised).
+int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, float* out, bool& others) {
   const DF d;
   const hn::RebindToSigned<DF> di;
   const int L = int(hn::Lanes(d));
@@ -590,9 +593,15 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
   const VF bgR = hn::Set(d, bg[0]), bgG = hn::Set(d, bg[1]), bgB = hn::Set(d, bg[2]), bgW = hn::Set(d, bg[3]);
   const int whole = n / L * L;
+  auto several = hn::Lt(hn::Set(di, 1), hn::Zero(di));  // none yet
   for (int i = 0; i < whole; i += L) {
-    const auto single = hn::RebindMask(d, hn::Eq(hn::LoadU(di, cnt + i), hn::Set(di, 1)));
-    if (hn::AllFalse(d, single)) continue;
+    const auto count = hn::LoadU(di, cnt + i);
+    several = hn::Or(several, hn::Gt(count, hn::Set(di, 1)));
+    const auto single = hn::RebindMask(d, hn::Eq(count, hn::Set(di, 1)));
+    if (hn::AllFalse(d, single)) {
+      hn::StoreInterleaved4(bgR, bgG, bgB, bgW, d, out + 4 * i);
+      continue;
+    }
     const VF iw = hn::Div(one, hn::LoadU(d, Wt + i));
     const VF a = hn::Min(hn::Max(hn::Mul(hn::LoadU(d, A + i), iw), zero), one);
     VF r = hn::Mul(a, hn::Mul(hn::LoadU(d, R + i), iw));
@@ -609,12 +618,11 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
       const auto covered = hn::Gt(a, zero);
       r = hn::IfThenElse(covered, hn::Div(r, a), r), g = hn::IfThenElse(covered, hn::Div(g, a), g), b = hn::IfThenElse(covered, hn::Div(b, a), b);
     }
-    // keep the other pixels as they are (whole vectors of this row only)
-    VF r0, g0, b0, w0;
-    hn::LoadInterleaved4(d, out + 4 * i, r0, g0, b0, w0);
-    hn::StoreInterleaved4(hn::IfThenElse(single, r, r0), hn::IfThenElse(single, g, g0), hn::IfThenElse(single, b, b0),
-                          hn::IfThenElse(single, w, w0), d, out + 4 * i);
+    // the other pixels get the background (whole vectors of this row only; out is not read)
+    hn::StoreInterleaved4(hn::IfThenElse(single, r, bgR), hn::IfThenElse(single, g, bgG), hn::IfThenElse(single, b, bgB),
+                          hn::IfThenElse(single, w, bgW), d, out + 4 * i);
   }
+  others = !hn::AllFalse(di, several);
   return whole;
 }
 
@@ -794,8 +802,8 @@ int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, Fr
 uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelRect& r, Z3Tile& tile) {
   return HWY_DYNAMIC_DISPATCH(PointRowsZ3)(p, shade, r, tile);
 }
-int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out) {
-  return HWY_DYNAMIC_DISPATCH(ResolveSingleLayerRow)(tile, y, x0, n, bg, out);
+int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out, bool& others) {
+  return HWY_DYNAMIC_DISPATCH(ResolveSingleLayerRow)(tile, y, x0, n, bg, out, others);
 }
 uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
                        Z3Tile& tile) {

@@ -60,8 +60,10 @@ uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelR
 /// of the pixels x0 .. x0 + n - 1 of row y, the first `returned` ones (whole vectors) that hold
 /// exactly one layer get Z3Tile::resolve's colour composited over the background bg (r, g, b, a)
 /// the way the renderer does, written to out (straight RGBA, 4 floats per pixel from x0); the
-/// others (empty, several layers, and the pixels from `returned` on) are left to the caller.
-int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out);
+/// other pixels before `returned` (empty, or several layers) get bg itself, the pixels from
+/// `returned` on are left to the caller. out is only written (it may be uninitialised). `others`:
+/// whether any of the pixels before `returned` holds several layers.
+int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out, bool& others);
 
 /// One sub-segment of the ScreenSpace method: plane coordinates (a along the segment from p0,
 /// b across) with the resampling covariance held constant.
