@@ -479,7 +479,9 @@ struct Z3Rows {
 //     layer next to others, compression) through Z3Tile::insert.
 inline constexpr int kRowChunk = 1024;  // pixels (Wp x rows) per chunk
 
-template <class DZ, int kWp>  // kWp > 0: Wp known at compile time
+// kWp > 0: Wp known at compile time; kGouraud == A.gouraud (the flat splats, nearly all small
+// ones, hold no Gouraud constants in registers)
+template <class DZ, int kWp, bool kGouraud>
 HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
   const DF d;
   const int Wp = kWp > 0 ? kWp : WpRun;
@@ -504,8 +506,8 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
   VZ attr[Z3Tile::kAttrs], c0[3], cs[3], ct[3], cst[3];
   for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, A.attr[k]);
   for (int k = 0; k < 3; ++k) {
-    c0[k] = hn::Set(dz, A.gouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(dz, A.gouraud ? A.Cs[k] : 0.0f);
-    ct[k] = hn::Set(dz, A.gouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(dz, A.gouraud ? A.Cst[k] : 0.0f);
+    c0[k] = hn::Set(dz, kGouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(dz, kGouraud ? A.Cs[k] : 0.0f);
+    ct[k] = hn::Set(dz, kGouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(dz, kGouraud ? A.Cst[k] : 0.0f);
   }
   Z3Rows<DZ> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
   uint64_t inserted = 0;
@@ -529,7 +531,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
       inside = hn::And(inside, hn::Le(q, cutoff));
       hn::Store(hn::IfThenElseZero(inside, hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale)), d, bw + k);
       hn::Store(z, d, bz + k);
-      if (A.gouraud) hn::Store(s, d, bs + k), hn::Store(t, d, bt + k);
+      if (kGouraud) hn::Store(s, d, bs + k), hn::Store(t, d, bt + k);
     }
     // 2. into the Z^3 tile
     for (int row = 0; row < rows; ++row) {
@@ -542,9 +544,9 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
         if (hn::AllFalse(dz, inside)) continue;  // a corner of the bounds the splat misses
         const size_t p = rowBase + size_t(c);
         VZ s = zeroZ, t = zeroZ;
-        if (A.gouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
+        if (kGouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
         const auto rest = z3rows(p, inside, w, z, thr, [&](int a) {
-          if (A.gouraud && a < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
+          if (kGouraud && a < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
             return hn::Add(hn::Add(hn::Add(c0[a], hn::Mul(s, cs[a])), hn::Mul(t, ct[a])), hn::Mul(hn::Mul(s, t), cst[a]));
           return attr[a];
         });
@@ -557,7 +559,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
         for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
         for (int i = 0; i < LZ; ++i) {
           if (mk[i] == 0) continue;
-          if (A.gouraud) {
+          if (kGouraud) {
             const float si = bs[k + i], ti = bt[k + i];
             for (int a = 0; a < 3; ++a) fa[a] = A.C0[a] + si * A.Cs[a] + ti * A.Ct[a] + (si * ti) * A.Cst[a];
           }
@@ -570,12 +572,20 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
   return inserted;
 }
 
-uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+template <bool kGouraud>
+uint64_t PointRowsG(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
   // rows Wp lanes apart in the weight buffer; the Z^3 pass runs on vectors of at most Wp lanes
   const int W = r.width();
-  if (W <= 4) return PointRowsT<hn::CappedTag<float, 4>, 4>(hn::CappedTag<float, 4>(), 4, P, A, r, z3);
-  if (W <= 8) return PointRowsT<hn::CappedTag<float, 8>, 8>(hn::CappedTag<float, 8>(), 8, P, A, r, z3);
-  return PointRowsT<hn::CappedTag<float, 16>, 0>(hn::CappedTag<float, 16>(), (W + 15) / 16 * 16, P, A, r, z3);
+  using D4 = hn::CappedTag<float, 4>;
+  using D8 = hn::CappedTag<float, 8>;
+  using D16 = hn::CappedTag<float, 16>;
+  if (W <= 4) return PointRowsT<D4, 4, kGouraud>(D4(), 4, P, A, r, z3);
+  if (W <= 8) return PointRowsT<D8, 8, kGouraud>(D8(), 8, P, A, r, z3);
+  return PointRowsT<D16, 0, kGouraud>(D16(), (W + 15) / 16 * 16, P, A, r, z3);
+}
+
+uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+  return A.gouraud ? PointRowsG<true>(P, A, r, z3) : PointRowsG<false>(P, A, r, z3);
 }
 
 // One row of the resolve, pixels with one layer (detail/splat_rows.h): the formula of
