@@ -223,6 +223,8 @@ void BM_ContourPrepare(benchmark::State& state) {
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   std::vector<PreparedPoint> pts(m->points.size());
+  std::vector<PixelRect> bounds(m->points.size());
+  std::vector<PointCold> cold(m->points.size());
   std::vector<PointGouraud> gouraud(m->points.size());
   std::vector<PreparedSegment> segs(m->segments.size());
   std::vector<PrimitiveStatus> status(std::max(pts.size(), segs.size()));
@@ -235,7 +237,7 @@ void BM_ContourPrepare(benchmark::State& state) {
       PointSetupCounts counts;
       for (size_t i = 0; i < pts.size(); i += detail::kSetupBatch)
         preparePoints(m->points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, pts.size() - i)), frame,
-                      setup, pts.data() + i, gouraud.data() + i, counts);
+                      setup, PointSlots{pts.data(), bounds.data(), cold.data(), gouraud.data()} + i, counts);
     }
     if (state.range(1) == 0)  // as the renderer runs them: SIMD batches, the exact path for the lanes they leave
       prepareSegments(m->segments.data(), 0, segs.size(), frame, segmentSetupFrame(frame), segs.data(), status.data());

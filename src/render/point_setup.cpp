@@ -370,9 +370,7 @@ constexpr int kWriteAhead = 6;
 }  // namespace
 
 int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
-                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointGouraud* gouraud,
-                  PointSetupCounts& counts) {
-  const Camera& cam = frame.cam();
+                  const detail::PointSetupFrame& setup, const PointSlots& out, PointSetupCounts& counts) {
   const RenderOptions& opt = frame.opt();
   detail::PointSetupBatch b;
   static_assert(sizeof(Point) % sizeof(float) == 0 && alignof(Point) >= alignof(float));
@@ -400,10 +398,9 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
   detail::pointSetup(setup, b, m);
   int k = 0;
   for (int j = 0; j < m; ++j) {
-    // the output slots a few points ahead (two cache lines each; written, not read): their lines
-    // are fetched meanwhile (a hint: an address past the storage is harmless)
-    const char* ahead = reinterpret_cast<const char*>(out + k + kWriteAhead);
-    __builtin_prefetch(ahead, 1), __builtin_prefetch(ahead + 64, 1);
+    // the hot record a few points ahead (one cache line; written, not read): its line is fetched
+    // meanwhile (a hint: an address past the storage is harmless)
+    __builtin_prefetch(out.hot + k + kWriteAhead, 1);
     const uint32_t index = first + uint32_t(b.lane[j]);
     const Point& point = points[index];
     if (b.status[j] == 1.0f) {
@@ -412,39 +409,35 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     }
     PrimitiveStatus status;
     if (b.status[j] == 2.0f) {  // the exact path
-      status = preparePoint(point, index, frame, *new (out + k) PreparedPoint, *new (gouraud + k) PointGouraud);
+      status = preparePoint(point, index, frame, out + k);
     } else if (b.status[j] == 4.0f) {
       ++counts.outside;
       continue;
     } else {
       const bool cut = b.status[j] == 3.0f;
-      PreparedPoint& o = *new (out + k) PreparedPoint;
-      o.index = index;
-      o.bounds = PixelRect{b.x0[j], b.y0[j], b.x1[j], b.y1[j]};
-      o.raster.N = {b.Nx[j], b.Ny[j], b.N0[j]};
-      o.raster.S = {b.Sx[j], b.Sy[j], b.S0[j]};
-      o.raster.T = {b.Tx[j], b.Ty[j], b.T0[j]};
-      o.raster.depthNum = b.depthNum[j];
-      o.raster.weightScale = b.weightScale[j];
-      o.raster.cutoffQ = frame.cutoffQ;
-      o.raster.clipDepth = false;
-      o.raster.nearD = cam.nearDepth();
-      o.raster.farD = cam.farDepth();
+      PreparedPoint& o = *new (out.hot + k) PreparedPoint;
+      const PixelRect bounds{b.x0[j], b.y0[j], b.x1[j], b.y1[j]};
+      out.bounds[k] = bounds;
+      PointCold& cold = *new (out.cold + k) PointCold;
+      cold.index = index;
+      cold.normal[0] = b.onx[j], cold.normal[1] = b.ony[j], cold.normal[2] = b.onz[j];
+      o.N = {b.Nx[j], b.Ny[j], b.N0[j]};
+      o.S = {b.Sx[j], b.Sy[j], b.S0[j]};
+      o.T = {b.Tx[j], b.Ty[j], b.T0[j]};
+      o.depthNum = b.depthNum[j];
+      o.weightScaleSigned = b.weightScale[j];  // no depth clipping here
       o.zThreshold = frame.zThreshold(b.depthExtent[j] + point.radius);
       const Color col = frame.primitiveColor(point.color);
       Vec3f c = col.head<3>();
-      o.gouraud = nullptr;
       if (!opt.perPixelLighting) {  // Phong, as preparePoint's light() does: flat at the centre or Gouraud
         const Vec3f& lc = opt.light.color;
         const Vec3f base = c * b.diffuseFactor[j];
-        const bool flat = o.bounds.width() <= PreparedPoint::kFlatShadeSpan && o.bounds.height() <= PreparedPoint::kFlatShadeSpan;
-        if (flat) {
+        if (!PreparedPoint::gouraud(bounds, false)) {
           c = (base + Vec3f::Constant(b.specular[0][j])).cwiseProduct(lc);
         } else {
           const float s00 = b.specular[1][j], s10 = b.specular[2][j], s01 = b.specular[3][j], s11 = b.specular[4][j];
           const float inv2R = 0.5f / opt.cutoffRadius;
-          PointGouraud& g = *new (gouraud + k) PointGouraud;
-          o.gouraud = &g;
+          PointGouraud& g = *new (out.gouraud + k) PointGouraud;
           g.C0 = (base + Vec3f::Constant(0.25f * (s00 + s10 + s01 + s11))).cwiseProduct(lc);
           g.Cs = (0.5f * inv2R * (s10 - s00 + s11 - s01)) * lc;
           g.Ct = (0.5f * inv2R * (s01 - s00 + s11 - s10)) * lc;
@@ -453,8 +446,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
       }
       // element by element: a local array copied out costs a store-forwarding stall per point
       static_assert(Z3Tile::kAttrs == 8);
-      o.attr[0] = c.x(), o.attr[1] = c.y(), o.attr[2] = c.z(), o.attr[3] = std::clamp(col.w(), 0.0f, 1.0f);
-      o.attr[4] = 1.0f, o.attr[5] = b.onx[j], o.attr[6] = b.ony[j], o.attr[7] = b.onz[j];
+      o.color[0] = c.x(), o.color[1] = c.y(), o.color[2] = c.z(), o.color[3] = std::clamp(col.w(), 0.0f, 1.0f);
       status = cut ? PrimitiveStatus::Clipped : PrimitiveStatus::Drawn;
     }
     switch (status) {

@@ -25,12 +25,11 @@ struct PointSetupCounts {
 detail::PointSetupFrame pointSetupFrame(const FrameContext& frame);
 
 /// Prepares points [first, first + count) of `points` (count <= detail::kSetupBatch): constructs
-/// the visible ones (Drawn or Clipped) in out[0 .. k) (storage for `count` PreparedPoints, not
+/// the visible ones (Drawn or Clipped) in slots 0 .. k of `out` (storage for `count` slots, not
 /// necessarily constructed: untouched slots stay untouched) in index order and returns k; adds
 /// every point's status to `counts`. Same results as preparePoint for each point up to float
-/// rounding. gouraud[j] (storage as out's) holds the colour polynomial of out[j] when Gouraud-shaded.
+/// rounding; out.gouraud[j] is written only when PreparedPoint::gouraud(out.bounds[j], ...).
 int preparePoints(const Point* points, uint32_t first, int count, const FrameContext& frame,
-                  const detail::PointSetupFrame& setup, PreparedPoint* out, PointGouraud* gouraud,
-                  PointSetupCounts& counts);
+                  const detail::PointSetupFrame& setup, const PointSlots& out, PointSetupCounts& counts);
 
 }  // namespace linesurf

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include "detail/splat_math.h"
 
@@ -165,13 +166,11 @@ PrimitiveStatus warpExact(const FrameContext& frame, float sigmaR, const Vec3f& 
 
 // Gouraud lighting (§6.2.2) at the corners (s, t) = (+-R, +-R) of the bounding quadrilateral,
 // as the bilinear polynomial C0 + Cs s + Ct t + Cst s t; small splats are lit once.
-void light(const FrameContext& frame, const Warped& s, PreparedPoint& out, PointGouraud& g) {
-  const Vec3f albedo(out.attr[0], out.attr[1], out.attr[2]);
-  const bool flat = out.bounds.width() <= PreparedPoint::kFlatShadeSpan && out.bounds.height() <= PreparedPoint::kFlatShadeSpan;
-  out.gouraud = flat ? nullptr : &g;
-  if (flat) {
+void light(const FrameContext& frame, const Warped& s, const PixelRect& bounds, PreparedPoint& out, PointGouraud* g) {
+  const Vec3f albedo(out.color[0], out.color[1], out.color[2]);
+  if (!PreparedPoint::gouraud(bounds, false)) {
     const Vec3f c = frame.shade(albedo, s.n, s.c);
-    out.attr[0] = c.x(), out.attr[1] = c.y(), out.attr[2] = c.z();
+    out.color[0] = c.x(), out.color[1] = c.y(), out.color[2] = c.z();
     return;
   }
   const float R = frame.opt().cutoffRadius;
@@ -179,20 +178,22 @@ void light(const FrameContext& frame, const Warped& s, PreparedPoint& out, Point
               k01 = frame.shade(albedo, s.n, s.c - R * s.B0 + R * s.B1), k11 = frame.shade(albedo, s.n, s.c + R * s.B0 + R * s.B1);
   // bilinear in u = s/2R + 1/2, v = t/2R + 1/2; inside the cutoff |s|, |t| <= R (no clamping)
   const float inv2R = 0.5f / R;
-  g.C0 = 0.25f * (k00 + k10 + k01 + k11);
-  g.Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
-  g.Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
-  g.Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
+  g->C0 = 0.25f * (k00 + k10 + k01 + k11);
+  g->Cs = 0.5f * inv2R * (k10 - k00 + k11 - k01);
+  g->Ct = 0.5f * inv2R * (k01 - k00 + k11 - k10);
+  g->Cst = inv2R * inv2R * (k00 - k10 - k01 + k11);
 }
 
 }  // namespace
 
-PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out,
-                             PointGouraud& gouraud) {
+PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, const PointSlots& slot) {
   const Camera& cam = frame.cam();
   const RenderOptions& opt = frame.opt();
-  out.index = index;
-  out.bounds = {};
+  PreparedPoint& out = *new (slot.hot) PreparedPoint;
+  PixelRect& bounds = *new (slot.bounds) PixelRect{};
+  PointCold& cold = *new (slot.cold) PointCold;
+  cold.index = index;
+  detail::PointRaster raster;
   if (!(point.radius > 0) || !std::isfinite(point.radius) || !point.position.allFinite() || !point.normal.allFinite())
     return PrimitiveStatus::Degenerate;
 
@@ -233,51 +234,59 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   PrimitiveStatus status = PrimitiveStatus::Drawn;
   bool clipped = false, degenerate = false, exact = true;
   if (warpClosedForm(cam, opt, sigmaR, u, v, s, degenerate)) {
-    planeRaster(cam, s, out.raster);
+    planeRaster(cam, s, raster);
     double x0, y0, x1, y1;
     bool cut = false;
-    if (conicBounds(out.raster, double(frame.cutoffQ), x0, y0, x1, y1)) {
+    if (conicBounds(raster, double(frame.cutoffQ), x0, y0, x1, y1)) {
       exact = false;
-      out.bounds = pixelBounds(cam, x0, y0, x1, y1, cut);
-      if (out.bounds.empty()) return PrimitiveStatus::Outside;
+      bounds = pixelBounds(cam, x0, y0, x1, y1, cut);
+      if (bounds.empty()) return PrimitiveStatus::Outside;
       if (cut) status = PrimitiveStatus::Clipped;
     }
   } else if (degenerate) {
     return PrimitiveStatus::Culled;
   }
   if (exact) {
-    status = warpExact(frame, sigmaR, u, v, s, out.bounds, clipped);
+    status = warpExact(frame, sigmaR, u, v, s, bounds, clipped);
     if (status != PrimitiveStatus::Drawn && status != PrimitiveStatus::Clipped) {
-      out.bounds = {};
+      bounds = {};
       return status;
     }
-    planeRaster(cam, s, out.raster);
+    planeRaster(cam, s, raster);
   }
-  out.raster.cutoffQ = frame.cutoffQ;
-  out.raster.clipDepth = clipped;
-  out.raster.nearD = cam.nearDepth();
-  out.raster.farD = cam.farDepth();
+  out.N = raster.N, out.S = raster.S, out.T = raster.T;
+  out.depthNum = raster.depthNum;
+  out.setWeightScale(raster.weightScale, clipped);
   // depth half-extent of the cutoff ellipse plus the primitive radius (delta-z, §6.2.3.2)
   out.zThreshold = frame.zThreshold(s.depthExtent + point.radius);
   const Color col = frame.primitiveColor(point.color);
-  const float attr[Z3Tile::kAttrs] = {col.x(), col.y(), col.z(), std::clamp(col.w(), 0.0f, 1.0f), 1.0f, n.x(), n.y(), n.z()};
-  std::copy(attr, attr + Z3Tile::kAttrs, out.attr);
-  out.gouraud = nullptr;
-  if (!opt.perPixelLighting) light(frame, s, out, gouraud);
+  out.color[0] = col.x(), out.color[1] = col.y(), out.color[2] = col.z(), out.color[3] = std::clamp(col.w(), 0.0f, 1.0f);
+  cold.normal[0] = n.x(), cold.normal[1] = n.y(), cold.normal[2] = n.z();
+  if (!opt.perPixelLighting)
+    light(frame, s, bounds, out, PreparedPoint::gouraud(bounds, false) ? new (slot.gouraud) PointGouraud : nullptr);
   return status;
 }
 
-void rasterizePoint(const PreparedPoint& sp, const SplatContext& ctx) {
-  const PixelRect r = sp.bounds.intersect(ctx.rect);
-  if (r.empty()) return;
-  detail::PointShade shade;
-  shade.attr = sp.attr;
-  shade.zThreshold = sp.zThreshold;
-  shade.gouraud = sp.gouraud != nullptr;
-  if (sp.gouraud)
-    shade.C0 = sp.gouraud->C0.data(), shade.Cs = sp.gouraud->Cs.data(), shade.Ct = sp.gouraud->Ct.data(),
-    shade.Cst = sp.gouraud->Cst.data();
-  ctx.tile.addFragments(detail::pointRowsZ3(sp.raster, shade, r, ctx.tile));
+detail::PointRaster pointRaster(const PreparedPoint& sp, const FrameContext& frame) {
+  detail::PointRaster p;
+  p.N = sp.N, p.S = sp.S, p.T = sp.T;
+  p.depthNum = sp.depthNum;
+  p.weightScale = sp.weightScale();
+  p.clipDepth = sp.clipDepth();
+  p.cutoffQ = frame.cutoffQ;
+  p.nearD = frame.cam().nearDepth();
+  p.farD = frame.cam().farDepth();
+  return p;
+}
+
+void rasterizePoints(const PointSlots& slots, const uint32_t* refs, int n, const SplatContext& ctx) {
+  static_assert(sizeof(PointGouraud) == 12 * sizeof(float) && sizeof(PointCold) == 4 * sizeof(float));
+  const detail::PointRowsFrame F{ctx.frame.cutoffQ, ctx.frame.cam().nearDepth(), ctx.frame.cam().farDepth()};
+  detail::PointRunSlots s;
+  s.hot = slots.hot, s.bounds = slots.bounds;
+  s.normals = slots.cold->normal, s.normalStride = 4;
+  s.gouraud = ctx.frame.opt().perPixelLighting ? nullptr : slots.gouraud->C0.data(), s.gouraudStride = 12;
+  ctx.tile.addFragments(detail::pointRunZ3(F, s, refs, n, ctx.tile));
 }
 
 }  // namespace linesurf

@@ -23,6 +23,7 @@
 /// texture coordinates); the plane coordinates give the weight exp(-q/2) / sqrt(det V), q <=
 /// cutoff^2, and the depth. Rows of pixels are evaluated in SIMD and go straight into the Z^3
 /// tile with its fast path in SIMD too (detail/splat_rows.h, pointRowsZ3).
+#include <cmath>
 #include <cstdint>
 
 #include "detail/splat_rows.h"
@@ -37,29 +38,57 @@ struct PointGouraud {
   Vec3f C0 = Vec3f::Zero(), Cs = Vec3f::Zero(), Ct = Vec3f::Zero(), Cst = Vec3f::Zero();
 };
 
-/// One prepared splat: 128 bytes, two cache lines (prepare writes, and every tile it touches
-/// reads, one per visible point).
-struct alignas(64) PreparedPoint {
-  PixelRect bounds;              ///< screen bounds of the cutoff ellipse (clamped to the viewport)
-  detail::PointRaster raster;    ///< per-pixel weight and depth
-  float zThreshold = 0;          ///< Z^3 merge tolerance
-  /// The blended attributes (Z3Tile::Attr): colour (lit, or the albedo when lighting is
-  /// deferred), alpha, 1, camera-space unit normal facing the viewer.
-  float attr[Z3Tile::kAttrs] = {};
-  uint32_t index = 0;            ///< primitive index in the model
-  /// Gouraud-shaded: its colour polynomial (storage of the preparer's); null: attr's colour.
-  const PointGouraud* gouraud = nullptr;
-  static constexpr int kFlatShadeSpan = 6;
+/// One prepared splat's hot record, 64 bytes (one cache line): all that the rows read in the
+/// common case (prepare writes one, and every tile it touches reads it, per visible point; the
+/// dragon's 206 k of them stream through memory every frame). The rest of a prepared point lies
+/// in PointSlots' side arrays under the same slot: its bounds (read by binning and the tile
+/// loop), its normal and index (read only when the tile blends normals), its Gouraud colours
+/// (only when gouraud(), which follows from the bounds).
+/// Fields (detail::PointHot): N, S, T, depthNum (ray/plane constants, detail::PointRaster);
+/// weightScaleSigned: 1/sqrt(det V), its sign bit set when the fragments' depths are clipped to
+/// [near, far] (the few splats crossing a depth plane); zThreshold: the Z^3 merge tolerance;
+/// color: the blended colour (lit, or the albedo when lighting is deferred) and alpha (the
+/// normal is PointCold's).
+struct alignas(64) PreparedPoint : detail::PointHot {
+  static constexpr int kFlatShadeSpan = detail::kPointFlatShadeSpan;
+  float weightScale() const { return std::fabs(weightScaleSigned); }
+  bool clipDepth() const { return std::signbit(weightScaleSigned); }
+  void setWeightScale(float w, bool clip) { weightScaleSigned = clip ? -w : w; }
+  /// Gouraud-shaded (PointGouraud beside it) when lighting is not deferred and the splat spans
+  /// more than kFlatShadeSpan pixels either way.
+  static bool gouraud(const PixelRect& bounds, bool perPixelLighting) {
+    return !perPixelLighting && (bounds.width() > kFlatShadeSpan || bounds.height() > kFlatShadeSpan);
+  }
 };
-static_assert(sizeof(PreparedPoint) == 128);
+static_assert(sizeof(PreparedPoint) == 64);
+
+/// The cold part of a prepared point: camera-space unit normal facing the viewer, and the
+/// primitive index in the model.
+struct PointCold {
+  float normal[3] = {};
+  uint32_t index = 0;
+};
+
+/// Where a prepared point's parts go: slot j of each array (the arrays may be uninitialised
+/// storage; prepare constructs what it writes).
+struct PointSlots {
+  PreparedPoint* hot = nullptr;
+  PixelRect* bounds = nullptr;   ///< screen bounds of the cutoff ellipse (clamped to the viewport)
+  PointCold* cold = nullptr;
+  PointGouraud* gouraud = nullptr;
+  PointSlots operator+(size_t k) const { return {hot + k, bounds + k, cold + k, gouraud + k}; }
+};
 
 /// Prepare stage (see splat_context.h); colour through frame.primitiveColor. Radius <= 0 or
-/// non-finite, or zero normal: Degenerate. A Gouraud-shaded splat's colour polynomial goes to
-/// `gouraud`, and out.gouraud points to it.
-PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, PreparedPoint& out,
-                             PointGouraud& gouraud);
+/// non-finite, or zero normal: Degenerate. Writes slot 0 of `out` (constructs all four parts;
+/// the Gouraud colours only when gouraud()).
+PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameContext& frame, const PointSlots& out);
 
-/// Rasterise stage: writes the splat's fragments inside ctx.rect into ctx.tile.
-void rasterizePoint(const PreparedPoint& splat, const SplatContext& ctx);
+/// The per-pixel constants of a prepared splat (the frame's cutoff and depth range).
+detail::PointRaster pointRaster(const PreparedPoint& splat, const FrameContext& frame);
+
+/// Rasterise stage: writes the fragments of the splats in slots refs[0 .. n) of `slots` (each
+/// one's bounds touch ctx.rect) inside ctx.rect into ctx.tile, in that order.
+void rasterizePoints(const PointSlots& slots, const uint32_t* refs, int n, const SplatContext& ctx);
 
 }  // namespace linesurf

@@ -68,7 +68,9 @@ class SlotBuffer {
 /// the prepared primitives per frame); one render() at a time uses them, a concurrent one its own.
 struct Renderer::Buffers {
   std::mutex mutex;
-  SlotBuffer<PreparedPoint> pts;      ///< point slots: per chunk, its visible points first
+  SlotBuffer<PreparedPoint> pts;      ///< point slots' hot records: per chunk, its visible points first
+  SlotBuffer<PixelRect> pointBounds;  ///< the point slots' screen bounds
+  SlotBuffer<PointCold> pointCold;    ///< the point slots' normals and indices
   SlotBuffer<PointGouraud> gouraud;   ///< the Gouraud colours of the point slots that need them
   std::vector<TileSpan> pointTiles;   ///< tiles each point slot touches
   std::vector<PreparedSegment> segs;
@@ -163,6 +165,8 @@ RenderResult Renderer::render(const Camera& cam) const {
   const size_t chunks = pointChunks + segChunks;
   const size_t pointSlots = pointChunks * chunkPoints;  // refs below pointSlots are points
   buf.pts.reserve(pointSlots);
+  buf.pointBounds.reserve(pointSlots);
+  buf.pointCold.reserve(pointSlots);
   buf.gouraud.reserve(pointSlots);
   if (buf.pointTiles.size() < pointSlots) buf.pointTiles.resize(pointSlots);
   if (buf.segs.size() < ns) buf.segs.resize(ns);
@@ -173,6 +177,8 @@ RenderResult Renderer::render(const Camera& cam) const {
   buf.chunkCounts.assign(pointChunks, PointSetupCounts{});
   buf.chunkSeconds.assign(chunks, 0.0);
   PreparedPoint* const pts = buf.pts.data();
+  const PixelRect* const pointBounds = buf.pointBounds.data();
+  const PointSlots pointOut{pts, buf.pointBounds.data(), buf.pointCold.data(), buf.gouraud.data()};
   PreparedSegment* const segs = buf.segs.data();
   TileSpan* const spans = buf.pointTiles.data();
   // bounds are clamped to the view (non-negative): a shift for power-of-two tiles (the default)
@@ -195,8 +201,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     size_t k = base;
     for (size_t i = base, e = std::min(np, base + chunkPoints); i < e; i += detail::kSetupBatch) {
       const int n = preparePoints(model_.points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, e - i)),
-                                  frame, setup, pts + k, buf.gouraud.data() + k, buf.chunkCounts[c]);
-      for (size_t j = k; j < k + size_t(n); ++j) countSpan(cnt, spans[j] = tileSpan(pts[j].bounds));
+                                  frame, setup, pointOut + k, buf.chunkCounts[c]);
+      for (size_t j = k; j < k + size_t(n); ++j) countSpan(cnt, spans[j] = tileSpan(pointBounds[j]));
       k += size_t(n);
     }
     buf.chunkVisible[c] = uint32_t(k - base);
@@ -306,10 +312,11 @@ RenderResult Renderer::render(const Camera& cam) const {
       // the bins visit primitives in index order with gaps: their prepared records are cold
       // (a PreparedSegment spans several cache lines), so fetch the record kPrefetchAhead on
       const uint32_t p = refs[k];
-      if (p < pointSlots) {
-        if (k + kPrefetchAhead < kEnd) prefetchPrimitive(refs[k + kPrefetchAhead], pointSlots, pts, segs);
-        rasterizePoint(pts[p], ctx);
-        ++k;
+      if (p < pointSlots) {  // a run of points: one call (their records fetched ahead there)
+        size_t e = k + 1;
+        while (e < kEnd && refs[e] < pointSlots) ++e;
+        rasterizePoints(pointOut, refs + k, int(e - k), ctx);
+        k = e;
         continue;
       }
       // segments in batches of consecutive references (their rows' spans found together), the

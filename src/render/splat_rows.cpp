@@ -482,17 +482,19 @@ inline constexpr int kRowChunk = 1024;  // pixels (Wp x rows) per chunk
 // kWp > 0: Wp known at compile time; kGouraud == A.gouraud (the flat splats, nearly all small
 // ones, hold no Gouraud constants in registers)
 template <class DZ, int kWp, bool kGouraud>
-HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const PointRowsFrame& F, const float* normal,
+                                 const float* G, const PixelRect& r, Z3Tile& z3) {
   const DF d;
   const int Wp = kWp > 0 ? kWp : WpRun;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
   const int W = r.width(), H = r.height();
-  const VF cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
+  const VF cutoff = hn::Set(d, F.cutoffQ), scale = hn::Set(d, std::fabs(P.weightScaleSigned)), mhalf = hn::Set(d, -0.5f);
+  const bool clipDepth = std::signbit(P.weightScaleSigned);
   const VF zero = hn::Zero(d), oneF = hn::Set(d, 1.0f);
   const VF Ndx = hn::Set(d, P.N.dx), Ndy = hn::Set(d, P.N.dy), N0 = hn::Set(d, P.N.c);
   const VF Sdx = hn::Set(d, P.S.dx), Sdy = hn::Set(d, P.S.dy), S0 = hn::Set(d, P.S.c);
   const VF Tdx = hn::Set(d, P.T.dx), Tdy = hn::Set(d, P.T.dy), T0 = hn::Set(d, P.T.c);
-  const VF depthNum = hn::Set(d, P.depthNum), nearD = hn::Set(d, P.nearD), farD = hn::Set(d, P.farD);
+  const VF depthNum = hn::Set(d, P.depthNum), nearD = hn::Set(d, F.nearD), farD = hn::Set(d, F.farD);
   // lane offsets within a vector: several rows of Wp lanes when Wp < L, else a run of one row
   const int rowsPerVec = Wp < L ? L / Wp : 1;
   const hn::RebindToSigned<DF> di;
@@ -502,14 +504,17 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
   HWY_ALIGN float bw[kRowChunk + kMaxLanes], bz[kRowChunk + kMaxLanes], bs[kRowChunk + kMaxLanes], bt[kRowChunk + kMaxLanes];
   // Z^3 pass constants
   using VZ = hn::Vec<DZ>;
-  const VZ zeroZ = hn::Zero(dz), thr = hn::Set(dz, A.zThreshold);
+  const VZ zeroZ = hn::Zero(dz), thr = hn::Set(dz, P.zThreshold);
+  // the blended attributes (Z3Tile::Attr): colour, alpha, 1, normal (when the tile blends them)
+  float fa[Z3Tile::kAttrs] = {P.color[0], P.color[1], P.color[2], P.color[3], 1.0f, 0.0f, 0.0f, 0.0f};
+  if (normal) fa[Z3Tile::kNx] = normal[0], fa[Z3Tile::kNy] = normal[1], fa[Z3Tile::kNz] = normal[2];
   VZ attr[Z3Tile::kAttrs], c0[3], cs[3], ct[3], cst[3];
-  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, A.attr[k]);
+  for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, fa[k]);
   for (int k = 0; k < 3; ++k) {
-    c0[k] = hn::Set(dz, kGouraud ? A.C0[k] : 0.0f), cs[k] = hn::Set(dz, kGouraud ? A.Cs[k] : 0.0f);
-    ct[k] = hn::Set(dz, kGouraud ? A.Ct[k] : 0.0f), cst[k] = hn::Set(dz, kGouraud ? A.Cst[k] : 0.0f);
+    c0[k] = hn::Set(dz, kGouraud ? G[k] : 0.0f), cs[k] = hn::Set(dz, kGouraud ? G[3 + k] : 0.0f);
+    ct[k] = hn::Set(dz, kGouraud ? G[6 + k] : 0.0f), cst[k] = hn::Set(dz, kGouraud ? G[9 + k] : 0.0f);
   }
-  Z3Rows<DZ> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
+  Z3Rows<DZ> z3rows(z3, P.color[3] >= 1.0f);
   uint64_t inserted = 0;
   const int chunkRows = std::max(rowsPerVec, (kRowChunk / Wp) / rowsPerVec * rowsPerVec);
   const VF Wv = hn::Set(d, float(W));
@@ -524,7 +529,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
       const VF iN = hn::Div(oneF, n);
       const VF z = hn::Mul(depthNum, iN);
       auto inside = hn::And(hn::Lt(n, zero), hn::And(hn::Lt(cx, Wv), hn::Lt(ry, hn::Set(d, float(H)))));
-      if (P.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
+      if (clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
       const VF s = hn::Mul(hn::MulAdd(Sdx, px, hn::MulAdd(Sdy, py, S0)), iN);
       const VF t = hn::Mul(hn::MulAdd(Tdx, px, hn::MulAdd(Tdy, py, T0)), iN);
       const VF q = hn::MulAdd(s, s, hn::Mul(t, t));
@@ -555,15 +560,13 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
         // the other fragments (a new layer in front of or behind others, compression, occlusion)
         HWY_ALIGN float mk[kMaxLanes];
         hn::StoreU(hn::VecFromMask(dz, rest), dz, mk);
-        float fa[Z3Tile::kAttrs];
-        for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
         for (int i = 0; i < LZ; ++i) {
           if (mk[i] == 0) continue;
           if (kGouraud) {
             const float si = bs[k + i], ti = bt[k + i];
-            for (int a = 0; a < 3; ++a) fa[a] = A.C0[a] + si * A.Cs[a] + ti * A.Ct[a] + (si * ti) * A.Cst[a];
+            for (int a = 0; a < 3; ++a) fa[a] = G[a] + si * G[3 + a] + ti * G[6 + a] + (si * ti) * G[9 + a];
           }
-          z3.insert(r.x0 + c + i, y, bz[k + i], A.zThreshold, bw[k + i], fa);
+          z3.insert(r.x0 + c + i, y, bz[k + i], P.zThreshold, bw[k + i], fa);
         }
       }
     }
@@ -573,19 +576,51 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointRaster& P, const P
 }
 
 template <bool kGouraud>
-uint64_t PointRowsG(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
+HWY_INLINE uint64_t PointRowsG(const PointHot& P, const PointRowsFrame& F, const float* normal, const float* G,
+                               const PixelRect& r, Z3Tile& z3) {
   // rows Wp lanes apart in the weight buffer; the Z^3 pass runs on vectors of at most Wp lanes
   const int W = r.width();
   using D4 = hn::CappedTag<float, 4>;
   using D8 = hn::CappedTag<float, 8>;
   using D16 = hn::CappedTag<float, 16>;
-  if (W <= 4) return PointRowsT<D4, 4, kGouraud>(D4(), 4, P, A, r, z3);
-  if (W <= 8) return PointRowsT<D8, 8, kGouraud>(D8(), 8, P, A, r, z3);
-  return PointRowsT<D16, 0, kGouraud>(D16(), (W + 15) / 16 * 16, P, A, r, z3);
+  if (W <= 4) return PointRowsT<D4, 4, kGouraud>(D4(), 4, P, F, normal, G, r, z3);
+  if (W <= 8) return PointRowsT<D8, 8, kGouraud>(D8(), 8, P, F, normal, G, r, z3);
+  return PointRowsT<D16, 0, kGouraud>(D16(), (W + 15) / 16 * 16, P, F, normal, G, r, z3);
 }
 
 uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
-  return A.gouraud ? PointRowsG<true>(P, A, r, z3) : PointRowsG<false>(P, A, r, z3);
+  PointHot h;
+  h.N = P.N, h.S = P.S, h.T = P.T, h.depthNum = P.depthNum;
+  h.weightScaleSigned = P.clipDepth ? -P.weightScale : P.weightScale;
+  h.zThreshold = A.zThreshold;
+  for (int k = 0; k < 4; ++k) h.color[k] = A.attr[k];
+  const PointRowsFrame F{P.cutoffQ, P.nearD, P.farD};
+  float G[12] = {};
+  if (A.gouraud)
+    for (int k = 0; k < 3; ++k) G[k] = A.C0[k], G[3 + k] = A.Cs[k], G[6 + k] = A.Ct[k], G[9 + k] = A.Cst[k];
+  return A.gouraud ? PointRowsG<true>(h, F, A.attr + Z3Tile::kNx, G, r, z3)
+                   : PointRowsG<false>(h, F, A.attr + Z3Tile::kNx, nullptr, r, z3);
+}
+
+// A run of point splats (detail/splat_rows.h): one dispatch for the run; each splat's hot record
+// is fetched kRunAhead splats ahead (the bins visit slots in order with gaps: cold lines).
+uint64_t PointRunZ3(const PointRowsFrame& F, const PointRunSlots& S, const uint32_t* refs, int n, Z3Tile& z3) {
+  constexpr int kRunAhead = 4;
+  const PixelRect tile = z3.rect();
+  const bool blend = z3.blendNormals();
+  uint64_t inserted = 0;
+  for (int i = 0; i < n; ++i) {
+    if (i + kRunAhead < n) __builtin_prefetch(S.hot + refs[i + kRunAhead]);
+    const uint32_t j = refs[i];
+    const PixelRect& b = S.bounds[j];
+    const PixelRect r = b.intersect(tile);  // not empty: the bins hold the splats touching the tile
+    const float* normal = blend ? S.normals + size_t(j) * S.normalStride : nullptr;
+    if (S.gouraud && (b.width() > kPointFlatShadeSpan || b.height() > kPointFlatShadeSpan))
+      inserted += PointRowsG<true>(S.hot[j], F, normal, S.gouraud + size_t(j) * S.gouraudStride, r, z3);
+    else
+      inserted += PointRowsG<false>(S.hot[j], F, normal, nullptr, r, z3);
+  }
+  return inserted;
 }
 
 // One row of the resolve, pixels with one layer (detail/splat_rows.h): the formula of
@@ -800,6 +835,7 @@ HWY_EXPORT(SegmentSpans);
 HWY_EXPORT(SegmentSpansBatch);
 HWY_EXPORT(Target);
 HWY_EXPORT(PointRowsZ3);
+HWY_EXPORT(PointRunZ3);
 HWY_EXPORT(ResolveSingleLayerRow);
 
 int pointFragments(const PointRaster& p, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
@@ -811,6 +847,9 @@ int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, Fr
 }
 uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelRect& r, Z3Tile& tile) {
   return HWY_DYNAMIC_DISPATCH(PointRowsZ3)(p, shade, r, tile);
+}
+uint64_t pointRunZ3(const PointRowsFrame& frame, const PointRunSlots& slots, const uint32_t* refs, int n, Z3Tile& tile) {
+  return HWY_DYNAMIC_DISPATCH(PointRunZ3)(frame, slots, refs, n, tile);
 }
 int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out, bool& others) {
   return HWY_DYNAMIC_DISPATCH(ResolveSingleLayerRow)(tile, y, x0, n, bg, out, others);

@@ -17,6 +17,16 @@ namespace {
 
 bool sameImage(const Image& a, const Image& b) { return a.width == b.width && a.height == b.height && a.pixels == b.pixels; }
 
+// Storage for n prepared points (PointSlots' four arrays).
+struct Slots {
+  std::vector<PreparedPoint> hot;
+  std::vector<PixelRect> bounds;
+  std::vector<PointCold> cold;
+  std::vector<PointGouraud> gouraud;
+  explicit Slots(size_t n) : hot(n), bounds(n), cold(n), gouraud(n) {}
+  PointSlots at(size_t k) { return PointSlots{hot.data(), bounds.data(), cold.data(), gouraud.data()} + k; }
+};
+
 // A noisy sphere seen from outside, plus points the set-up must hand to the exact path or count
 // as degenerate: grazing normals, no normal, zero and infinite radius, NaN, behind the eye.
 HybridModel noisySphere() {
@@ -56,21 +66,19 @@ TEST(PointSetup, BatchesGiveTheReferenceStatusOfEveryPoint) {
     const detail::PointSetupFrame setup = pointSetupFrame(frame);
     PointSetupCounts batched, reference;
     std::vector<uint32_t> visible, visibleRef;
-    std::vector<PreparedPoint> out(detail::kSetupBatch);
-    std::vector<PointGouraud> gouraud(detail::kSetupBatch);
+    Slots out(detail::kSetupBatch);
     for (size_t i = 0; i < m.points.size(); i += detail::kSetupBatch) {
       const int n = int(std::min<size_t>(detail::kSetupBatch, m.points.size() - i));
-      const int k = preparePoints(m.points.data(), uint32_t(i), n, frame, setup, out.data(), gouraud.data(), batched);
+      const int k = preparePoints(m.points.data(), uint32_t(i), n, frame, setup, out.at(0), batched);
       ASSERT_LE(k, n);
       for (int j = 0; j < k; ++j) {
-        visible.push_back(out[j].index);
-        EXPECT_FALSE(out[j].bounds.empty());
+        visible.push_back(out.cold[j].index);
+        EXPECT_FALSE(out.bounds[j].empty());
       }
     }
     for (size_t i = 0; i < m.points.size(); ++i) {
-      PreparedPoint p;
-      PointGouraud g;
-      switch (preparePoint(m.points[i], uint32_t(i), frame, p, g)) {
+      Slots p(1);
+      switch (preparePoint(m.points[i], uint32_t(i), frame, p.at(0))) {
         case PrimitiveStatus::Drawn: ++reference.drawn, visibleRef.push_back(uint32_t(i)); break;
         case PrimitiveStatus::Clipped: ++reference.clipped, visibleRef.push_back(uint32_t(i)); break;
         case PrimitiveStatus::Culled: ++reference.culled; break;
@@ -103,29 +111,33 @@ TEST(PointSetup, SimdLanesMatchTheScalarReference) {
     const Camera cam = Camera::lookAt(Vec3f(0, 0.5f, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 200, 150);
     FrameContext frame = FrameContext::make(cam, o, boundingSphere(m));
     const detail::PointSetupFrame setup = pointSetupFrame(frame);
-    std::vector<PreparedPoint> out(detail::kSetupBatch);
-    std::vector<PointGouraud> gouraud(detail::kSetupBatch);
+    Slots out(detail::kSetupBatch);
     PointSetupCounts counts;
     int compared = 0, shaded = 0, stretched = 0;
     for (size_t i = 0; i < m.points.size(); i += detail::kSetupBatch) {
       const int n = int(std::min<size_t>(detail::kSetupBatch, m.points.size() - i));
-      const int k = preparePoints(m.points.data(), uint32_t(i), n, frame, setup, out.data(), gouraud.data(), counts);
+      const int k = preparePoints(m.points.data(), uint32_t(i), n, frame, setup, out.at(0), counts);
       for (int j = 0; j < k; ++j) {
-        const PreparedPoint& a = out[j];
-        PreparedPoint r;
-        PointGouraud rg;
-        ASSERT_EQ(preparePoint(m.points[a.index], a.index, frame, r, rg), PrimitiveStatus::Drawn);
-        const Point& p = m.points[a.index];
+        const PreparedPoint& a = out.hot[j];
+        const PixelRect& ab = out.bounds[j];
+        const uint32_t index = out.cold[j].index;
+        Slots ref(1);
+        ASSERT_EQ(preparePoint(m.points[index], index, frame, ref.at(0)), PrimitiveStatus::Drawn);
+        const PreparedPoint& r = ref.hot[0];
+        const PixelRect& rb = ref.bounds[0];
+        const Point& p = m.points[index];
         const Vec3f nc = cam.rotation() * p.normal;
         stretched += std::abs(nc.dot(cam.toCamera(p.position).normalized())) < 0.1f;
-        EXPECT_NEAR(a.bounds.x0, r.bounds.x0, 1);
-        EXPECT_NEAR(a.bounds.x1, r.bounds.x1, 1);
-        EXPECT_NEAR(a.bounds.y0, r.bounds.y0, 1);
-        EXPECT_NEAR(a.bounds.y1, r.bounds.y1, 1);
+        EXPECT_NEAR(ab.x0, rb.x0, 1);
+        EXPECT_NEAR(ab.x1, rb.x1, 1);
+        EXPECT_NEAR(ab.y0, rb.y0, 1);
+        EXPECT_NEAR(ab.y1, rb.y1, 1);
+        EXPECT_FALSE(a.clipDepth());
+        EXPECT_FALSE(r.clipDepth());
         // the splat's weight and depth at its pixels: the plane constants agree relative to their size
-        const detail::PointRaster &x = a.raster, &y = r.raster;
-        for (int px = a.bounds.x0; px < a.bounds.x1; ++px)
-          for (int py = a.bounds.y0; py < a.bounds.y1; ++py) {
+        const detail::PointRaster x = pointRaster(a, frame), y = pointRaster(r, frame);
+        for (int px = ab.x0; px < ab.x1; ++px)
+          for (int py = ab.y0; py < ab.y1; ++py) {
             const float fx = float(px) + 0.5f, fy = float(py) + 0.5f;
             const float Na = x.N.at(fx, fy), Nr = y.N.at(fx, fy);
             const float sa = x.S.at(fx, fy) / Na, ta = x.T.at(fx, fy) / Na, sr = y.S.at(fx, fy) / Nr, tr = y.T.at(fx, fy) / Nr;
@@ -137,16 +149,18 @@ TEST(PointSetup, SimdLanesMatchTheScalarReference) {
             }
           }
         EXPECT_NEAR(a.zThreshold, r.zThreshold, 1e-3f * r.zThreshold);
-        EXPECT_EQ(a.gouraud != nullptr, r.gouraud != nullptr);
-        EXPECT_TRUE(!a.gouraud || a.gouraud == &gouraud[j]);
-        shaded += a.gouraud != nullptr;
-        for (int c = 0; c < Z3Tile::kAttrs; ++c) EXPECT_NEAR(a.attr[c], r.attr[c], 1e-3f) << c;
-        if (a.gouraud && r.gouraud)
+        const bool ag = PreparedPoint::gouraud(ab, o.perPixelLighting), rg = PreparedPoint::gouraud(rb, o.perPixelLighting);
+        EXPECT_EQ(ag, rg);
+        shaded += ag;
+        for (int c = 0; c < 4; ++c) EXPECT_NEAR(a.color[c], r.color[c], 1e-3f) << c;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(out.cold[j].normal[c], ref.cold[0].normal[c], 1e-3f) << c;
+        if (ag && rg)
           for (int c = 0; c < 3; ++c) {
-            EXPECT_NEAR(a.gouraud->C0[c], r.gouraud->C0[c], 1e-3f);
-            EXPECT_NEAR(a.gouraud->Cs[c], r.gouraud->Cs[c], 1e-3f);
-            EXPECT_NEAR(a.gouraud->Ct[c], r.gouraud->Ct[c], 1e-3f);
-            EXPECT_NEAR(a.gouraud->Cst[c], r.gouraud->Cst[c], 1e-3f);
+            const PointGouraud &ga = out.gouraud[j], &gr = ref.gouraud[0];
+            EXPECT_NEAR(ga.C0[c], gr.C0[c], 1e-3f);
+            EXPECT_NEAR(ga.Cs[c], gr.Cs[c], 1e-3f);
+            EXPECT_NEAR(ga.Ct[c], gr.Ct[c], 1e-3f);
+            EXPECT_NEAR(ga.Cst[c], gr.Cst[c], 1e-3f);
           }
         ++compared;
       }

@@ -146,6 +146,42 @@ struct SegmentShadeRows {
 uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
                        Z3Tile& tile);
 
+/// A prepared point splat's hot record (PreparedPoint, point_splat.h; 64 bytes): PointRaster
+/// without the frame's constants, the z threshold and the colour.
+struct PointHot {
+  Affine2 N, S, T;
+  float depthNum = 0;
+  /// PointRaster::weightScale, with the sign bit set for PointRaster::clipDepth
+  float weightScaleSigned = 0;
+  float zThreshold = 0;
+  /// the blended colour and alpha (Z3Tile::Attr kR .. kA; kW is 1)
+  float color[4] = {};
+};
+/// A point splat spanning at most this many pixels each way is lit once (flat); a wider one is
+/// Gouraud-shaded when lighting is not deferred (point_splat.h).
+inline constexpr int kPointFlatShadeSpan = 6;
+
+/// The frame's constants of the point rows (PointRaster's cutoffQ, nearD, farD).
+struct PointRowsFrame {
+  float cutoffQ = 0, nearD = 0, farD = 0;
+};
+
+/// The per-slot arrays of the prepared points: hot records, bounds, normals (3 floats every
+/// normalStride), Gouraud colours (C0, Cs, Ct, Cst: 12 floats every gouraudStride; null when
+/// lighting is deferred: no splat is Gouraud-shaded).
+struct PointRunSlots {
+  const PointHot* hot = nullptr;
+  const PixelRect* bounds = nullptr;
+  const float* normals = nullptr;
+  const float* gouraud = nullptr;
+  size_t normalStride = 0, gouraudStride = 0;
+};
+
+/// pointRowsZ3 for the splats in slots refs[0 .. n) in turn (each one's bounds touch the tile),
+/// with one dispatch for them all; a splat is Gouraud-shaded when slots.gouraud and its bounds
+/// span more than kPointFlatShadeSpan pixels either way. Returns how many fragments it inserted.
+uint64_t pointRunZ3(const PointRowsFrame& frame, const PointRunSlots& slots, const uint32_t* refs, int n, Z3Tile& tile);
+
 /// Name of the target the functions above dispatch to (Highway's TargetName).
 const char* simdTargetName();
 
