@@ -22,7 +22,8 @@
 /// tangent plane (perspective-exact, equivalent to the thesis's perspective-correct weight
 /// texture coordinates); the plane coordinates give the weight exp(-q/2) / sqrt(det V), q <=
 /// cutoff^2, and the depth. Rows of pixels are evaluated in SIMD and go straight into the Z^3
-/// tile with its fast path in SIMD too (detail/splat_rows.h, pointRowsZ3).
+/// tile with its fast path in SIMD too (detail/splat_rows.h, pointRunZ3: a tile's run of splats
+/// in one call).
 #include <cmath>
 #include <cstdint>
 

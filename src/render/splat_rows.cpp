@@ -479,7 +479,7 @@ struct Z3Rows {
 //     layer next to others, compression) through Z3Tile::insert.
 inline constexpr int kRowChunk = 1024;  // pixels (Wp x rows) per chunk
 
-// kWp > 0: Wp known at compile time; kGouraud == A.gouraud (the flat splats, nearly all small
+// kWp > 0: Wp known at compile time; kGouraud: Gouraud-shaded (the flat splats, nearly all small
 // ones, hold no Gouraud constants in registers)
 template <class DZ, int kWp, bool kGouraud>
 HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const PointRowsFrame& F, const float* normal,
