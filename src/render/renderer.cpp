@@ -105,7 +105,7 @@ void prefetchPrimitive(uint32_t ref, size_t pointSlots, const PreparedPoint* pts
   const char* a;
   size_t bytes;
   if (ref < pointSlots) a = reinterpret_cast<const char*>(pts + ref), bytes = sizeof(PreparedPoint);
-  else a = reinterpret_cast<const char*>(segs + (ref - pointSlots)), bytes = sizeof(PreparedSegment);
+  else a = reinterpret_cast<const char*>(segs + (ref - pointSlots)), bytes = kSegmentHotBytes;  // its hot lines
   for (size_t o = 0; o < bytes; o += 64) __builtin_prefetch(a + o);
 }
 

@@ -291,7 +291,7 @@ void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_
           const detail::SegmentSetupFrame& F, PreparedSegment& out) {
   out.index = index;
   out.fallback = false;
-  out.extra.reset();
+  resetExtra(out.extra);
   out.bounds = {b.x0[j], b.y0[j], b.x1[j], b.y1[j]};
   out.method = SegmentMethod::ScreenSpace;
   out.useSpans = true;

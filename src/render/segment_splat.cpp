@@ -341,7 +341,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   out.bounds = {};
   out.fallback = false;
   out.smooth = false;
-  out.extra.reset();
+  resetExtra(out.extra);
   Strip st;
   const PrimitiveStatus culled = stripFrame(seg, frame, st);
   if (culled != PrimitiveStatus::Drawn) return culled;

@@ -14,7 +14,8 @@
 ///  6. shading: Gouraud colours, smooth normals.
 /// The common case (ScreenSpace, one sub-segment, untextured, colour linear along the segment)
 /// allocates nothing and is rasterised by the SIMD rows; everything else keeps its state in
-/// PreparedSegment::extra.
+/// PreparedSegment::extra (allocated once per record slot, reused across frames).
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -82,7 +83,32 @@ struct SegmentExtra {
   int stations = 0;
   bool textured = false;
   Vec2f uv0 = Vec2f::Zero(), uv1 = Vec2f::Zero();
+
+  /// Back to a default-constructed SegmentExtra's state, keeping the vectors' capacity (the
+  /// renderer's record slots keep their SegmentExtra from frame to frame: issue 13, i13hot).
+  /// Every member above must be reset here.
+  void reset() {
+    pieces.clear();
+    pieceInvLength = pieceMaxReach = 0;
+    nodes.clear();
+    nodeStep = nodeReach = 0;
+    quads.clear();
+    longCase = true;
+    textures = nullptr;
+    diffuse.clear();
+    specular.clear();
+    colour.clear();
+    stations = 0;
+    textured = false;
+    uv0 = uv1 = Vec2f::Zero();
+  }
 };
+
+/// Resets a record slot's SegmentExtra (if it has one) for the next segment, keeping the
+/// allocation: only a segment that needs it reads it (method, pieceCount, shade say which).
+inline void resetExtra(std::unique_ptr<SegmentExtra>& extra) {
+  if (extra) extra->reset();
+}
 
 /// How a segment's fragments get their blended attributes (Z3Tile::Attr) from the
 /// along-axis parameter u in [0, 1].
@@ -93,9 +119,15 @@ enum class SegmentShade : uint8_t {
   Stations,  ///< several stations (SIMD rows, untextured) or a texture (per fragment): SegmentExtra
 };
 
-struct PreparedSegment {
-  /// null in the common case. First, with the fields below up to `shade`: for a segment it does
-  /// not draw prepareSegment writes (and reads) only the record's first cache line or two.
+/// The record is aligned to cache lines and ordered hot first (issue 13, i13hot): what the rows of
+/// the common case read (extra, bounds, flags, raster, attr, dc, n0, dn) fills its first
+/// kSegmentHotBytes; screenQuad (only the box walk reads it) comes last. Stage 3 prefetches only
+/// the hot lines (4 instead of the 5-6 a 280-byte unaligned record spans).
+struct alignas(64) PreparedSegment {
+  /// null in the common case, or a SegmentExtra kept from an earlier use of the slot, reset
+  /// (empty: read only where method, pieceCount or shade say the segment needs it). First, with
+  /// the fields below up to `shade`: for a segment it does not draw prepareSegment writes (and
+  /// reads) only the record's first cache line.
   std::unique_ptr<SegmentExtra> extra;
   PixelRect bounds;      ///< screen bounding box (clamped to the viewport); bins the segment
   uint32_t index = 0;    ///< index in model.segments
@@ -107,18 +139,21 @@ struct PreparedSegment {
   /// The strip's plane, footprint box, first sub-segment and z thresholds as per-pixel
   /// constants (what the SIMD rows evaluate; the scalar paths intersect the plane with it too).
   detail::SegmentRaster raster;
-  /// The footprint box projected to the screen (pixels): rasterisation visits only each row's
-  /// span inside it.
-  Vec2f screenQuad[4];
   /// Attributes at u = 0 (colour, alpha, 1, normal); the colour's change to u = 1 (Linear,
   /// Smooth) and the smooth normal n0 + u dn (unit at both ends, facing the viewer).
   float attr[Z3Tile::kAttrs] = {};
   Vec3f dc = Vec3f::Zero(), n0 = Vec3f::Zero(), dn = Vec3f::Zero();
+  /// The footprint box projected to the screen (pixels): rasterisation visits only each row's
+  /// span inside it (the box walk; cold: the common case's tight spans do not read it).
+  Vec2f screenQuad[4];
 
   /// Number of ScreenSpace sub-segments.
   int pieceCount() const { return extra && !extra->pieces.empty() ? int(extra->pieces.size()) : 1; }
   float length() const { return raster.length; }
 };
+/// The bytes of a PreparedSegment the common case's rows read (its first lines).
+inline constexpr size_t kSegmentHotBytes = offsetof(PreparedSegment, screenQuad);
+static_assert(kSegmentHotBytes <= 256, "the hot part of a segment record: at most four cache lines");
 
 /// Prepare stage for one segment (see linesurf/render/segment_splat.h and splat_context.h): the
 /// exact path, in double. The renderer prepares segments in batches (segment_setup.h: the common
