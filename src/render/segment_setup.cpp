@@ -318,12 +318,8 @@ void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_
   const Vec3f n0(b.n0x[j], b.n0y[j], b.n0z[j]), n1(b.n1x[j], b.n1y[j], b.n1z[j]);
   if (smooth) out.n0 = n0, out.dn = n1 - n0;
   const Color col = frame.primitiveColor(seg.color);
+  setBaseAttributes(out, col, n0);
   float* a = out.attr;
-  a[Z3Tile::kR] = col.x(), a[Z3Tile::kG] = col.y(), a[Z3Tile::kB] = col.z();
-  a[Z3Tile::kA] = std::clamp(col.w(), 0.0f, 1.0f);
-  a[Z3Tile::kW] = 1.0f;
-  a[Z3Tile::kNx] = n0.x(), a[Z3Tile::kNy] = n0.y(), a[Z3Tile::kNz] = n0.z();
-  out.dc = Vec3f::Zero();
   if (F.perPixelLighting) {
     out.shade = smooth ? SegmentShade::Smooth : SegmentShade::Constant;
     return;

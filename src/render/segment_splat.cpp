@@ -286,12 +286,8 @@ void shading(const Segment& seg, const Strip& st, int K, const FrameContext& fra
   const Color col = frame.primitiveColor(seg.color);
   const Vec3f albedo = col.head<3>();
   const Vec3f n0 = normalAt(0);
+  setBaseAttributes(out, col, n0);
   float* a = out.attr;
-  a[Z3Tile::kR] = albedo.x(), a[Z3Tile::kG] = albedo.y(), a[Z3Tile::kB] = albedo.z();
-  a[Z3Tile::kA] = std::clamp(col.w(), 0.0f, 1.0f);
-  a[Z3Tile::kW] = 1.0f;
-  a[Z3Tile::kNx] = n0.x(), a[Z3Tile::kNy] = n0.y(), a[Z3Tile::kNz] = n0.z();
-  out.dc = Vec3f::Zero();
   const bool textured = frame.texture != nullptr;
   int S = 0;  // stations - 1 (Gouraud)
   const float cosTurn = st.smooth ? normalAt(0).dot(normalAt(1)) : 1.0f;

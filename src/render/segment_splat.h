@@ -16,6 +16,7 @@
 /// allocates nothing and is rasterised by the SIMD rows; everything else keeps its state in
 /// PreparedSegment::extra (allocated once per record slot, reused across frames).
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -154,6 +155,18 @@ struct alignas(64) PreparedSegment {
 /// The bytes of a PreparedSegment the common case's rows read (its first lines).
 inline constexpr size_t kSegmentHotBytes = offsetof(PreparedSegment, screenQuad);
 static_assert(kSegmentHotBytes <= 256, "the hot part of a segment record: at most four cache lines");
+
+/// The blended attributes at u = 0 of an unshaded segment: colour (albedo, or the lit colour
+/// the caller writes over it), alpha, weight 1 and the shading normal n0; dc cleared. Shared by
+/// the exact path (prepareSegment) and the SIMD batches (prepareSegments), which must agree.
+inline void setBaseAttributes(PreparedSegment& out, const Color& col, const Vec3f& n0) {
+  float* a = out.attr;
+  a[Z3Tile::kR] = col.x(), a[Z3Tile::kG] = col.y(), a[Z3Tile::kB] = col.z();
+  a[Z3Tile::kA] = std::clamp(col.w(), 0.0f, 1.0f);
+  a[Z3Tile::kW] = 1.0f;
+  a[Z3Tile::kNx] = n0.x(), a[Z3Tile::kNy] = n0.y(), a[Z3Tile::kNz] = n0.z();
+  out.dc = Vec3f::Zero();
+}
 
 /// Prepare stage for one segment (see linesurf/render/segment_splat.h and splat_context.h): the
 /// exact path, in double. The renderer prepares segments in batches (segment_setup.h: the common
