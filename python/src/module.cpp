@@ -210,8 +210,9 @@ void setPoints(HybridModel& m, py::handle obj) {
   if (a.n) copyVec3(a.array, "points", points[0].position.data(), sizeof(Point), size_t(a.n));
   if (points.size() != m.points.size()) {
     m.points = std::move(points);
-    m.attributes.normals = m.attributes.colors = m.attributes.radii = false;
+    m.attributes.normals = m.attributes.colors = m.attributes.radii = m.attributes.shadingNormals = false;
     m.pointProperties.clear();
+    m.pointShadingNormals.clear();
   } else {
     for (size_t i = 0; i < points.size(); ++i) m.points[i].position = points[i].position;
   }
@@ -326,6 +327,7 @@ std::string modelRepr(const HybridModel& m) {
   add(m.attributes.radii, "radii");
   add(m.attributes.texcoords, "uv");
   add(m.attributes.endpointNormals, "endpoint normals");
+  add(m.attributes.shadingNormals, "shading normals");
   add(!m.provenance.empty(), "provenance");
   return "<linesurf.Model: " + std::to_string(m.points.size()) + " points, " + std::to_string(m.segments.size()) +
          " segments" + (attrs.empty() ? "" : "; " + attrs) + ">";

@@ -564,6 +564,7 @@ Color clusterColor(size_t id) {
 HybridModel colorByCluster(const HybridModel& cloud, const PointGeometry& geometry, const Clustering& clustering) {
   HybridModel out;
   out.points = cloud.points;
+  out.pointShadingNormals = cloud.pointShadingNormals;  // with attributes.shadingNormals
   out.attributes = cloud.attributes;
   out.attributes.texcoords = false;
   for (size_t i = 0; i < out.points.size(); ++i) {

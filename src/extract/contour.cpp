@@ -336,6 +336,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   // Unit vertex normals: the mesh's own, or area-weighted ones for smooth line models.
   const bool useVertexNormals = options.vertexNormals && mesh.normals.size() == nv && nv > 0;
   const bool smooth = options.endpointNormals && nv > 0;
+  const bool shading = smooth && options.shadingNormals;  // full normals for lighting (issue 14)
   std::vector<Vec3f> unitVertexNormals;
   if (useVertexNormals || smooth) unitVertexNormals = meshVertexNormals(mesh);
 
@@ -419,6 +420,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   const float radius = float(stats.radius);
   model.segments.resize(stats.segments);
   model.points.resize(stats.points);
+  if (shading) model.pointShadingNormals.resize(stats.points);
   if (options.recordFaces) {
     stats.segmentFaces.resize(stats.segments);
     stats.pointFaces.resize(stats.points);
@@ -461,6 +463,10 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
               }
               if (vn.norm() > 1e-6) p.normal = limitTilt(vn.normalized(), fn.cast<double>()).cast<float>();
             }
+            if (shading) {  // the full interpolated vertex normal lights the point (issue 14)
+              const Vec3d vn = interp.vertexNormal(f, w);
+              model.pointShadingNormals[pi] = vn != Vec3d::Zero() ? Vec3f(vn.cast<float>()) : p.normal;
+            }
             p.color = interp.color(f, w);
             p.radius = radius;
             if (options.recordFaces) stats.pointFaces[pi] = uint32_t(f);
@@ -479,11 +485,12 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
           vn -= vn.dot(dir) * dir;  // a segment's normal is perpendicular to it
           if (vn.norm() > 1e-6) s.normal = (smooth ? limitTilt(vn.normalized(), fn.cast<double>()) : Vec3d(vn.normalized())).cast<float>();
         }
-        if (smooth) {  // interpolated vertex normals at the endpoints, perpendicular to the segment
+        if (smooth) {  // interpolated vertex normals at the endpoints (perpendicular to the
+                       // segment unless shading normals keep their component along it)
           const Vec3d dir = (p1 - p0).cast<double>().normalized();
           auto endNormal = [&](const double w[3]) {
             Vec3d vn = interp.vertexNormal(f, w);
-            vn -= vn.dot(dir) * dir;
+            if (!shading) vn -= vn.dot(dir) * dir;
             return vn.norm() > 1e-6 ? Vec3f(vn.normalized().cast<float>()) : s.normal;
           };
           s.normal0 = endNormal(w0);
@@ -521,6 +528,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
       lim.uvTolerance = 0.5 / double(std::max(mesh.texture->width, mesh.texture->height));
     lim.colorTolerance = kMergeColorTolerance;
     lim.smooth = smooth;
+    lim.alongNormals = shading;
     const detail::ContourMergeCounts c = detail::mergeContourPolylines(
         model.segments, endKeys, endNormals, lim, options.recordFaces ? &stats.segmentFaces : nullptr);
     stats.segments = model.segments.size();
@@ -532,6 +540,8 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   model.attributes.colors = interp.textured || interp.vertexColors;
   model.attributes.texcoords = texcoords && !model.segments.empty();
   model.attributes.endpointNormals = smooth && !model.segments.empty();
+  model.attributes.shadingNormals = shading && !model.points.empty();
+  if (!model.attributes.shadingNormals) model.pointShadingNormals.clear();
   if (texcoords) model.texture = mesh.texture;
   model.comments.push_back(fmt::format("linesurf extract contour (thesis §3.3): spacing d = {:.9g}, radius = {:.9g}, "
                                        "planes n0 = ({:.6f}, {:.6f}, {:.6f}), n1 = ({:.6f}, {:.6f}, {:.6f})",

@@ -107,6 +107,7 @@ ModelSummary summarizeFile(const std::filesystem::path& path) {
   if (m.attributes.colors) s.properties.push_back("colors");
   if (m.attributes.radii) s.properties.push_back("radii");
   if (m.attributes.texcoords) s.properties.push_back("texcoords");
+  if (m.attributes.shadingNormals) s.properties.push_back("shading normals");
   if (!m.provenance.empty()) s.properties.push_back("provenance");
   for (const auto& kv : m.pointProperties) s.properties.push_back(kv.first);
   std::vector<Vec3f> pos(m.points.size());

@@ -11,6 +11,8 @@ namespace linesurf {
 namespace {
 
 constexpr float kMax = std::numeric_limits<float>::max();
+/// Shading normals must be unit within this (ascii files with 4 digits are within 1e-3).
+constexpr float kUnitTolerance = 0.01f;
 
 struct Checker {
   const std::string& name;
@@ -51,6 +53,17 @@ void validateModel(const HybridModel& m, const std::string& name, Error::Kind ki
     c.unit(p.color, "vertex", i);
     c.radius(p.radius, "vertex", i);
     anyPointRadius = anyPointRadius || p.radius > 0;
+  }
+  if (m.attributes.shadingNormals) {  // issue 14: unit shading normals, one per point
+    if (m.pointShadingNormals.size() != m.points.size())
+      c.fail("shading normals", fmt::format("{} shading normals for {} points", m.pointShadingNormals.size(), m.points.size()));
+    for (size_t i = 0; i < m.points.size(); ++i) {
+      const Vec3f& n = m.pointShadingNormals[i];
+      c.finiteVec(n, "vertex", i, "shading normal");
+      if (const float len = n.norm(); !(std::abs(len - 1.0f) <= kUnitTolerance))
+        c.fail(fmt::format("element vertex {}", i),
+               fmt::format("shading normal ({:g}, {:g}, {:g}) is not unit length (|n| = {:g})", n.x(), n.y(), n.z(), len));
+    }
   }
   for (size_t i = 0; i < m.segments.size(); ++i) {
     const Segment& s = m.segments[i];

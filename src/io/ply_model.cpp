@@ -22,7 +22,8 @@ using namespace linesurf::ply;
 
 namespace {
 
-const std::set<std::string_view> kPointNames = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "radius"};
+const std::set<std::string_view> kPointNames = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "radius",
+                                                "snx", "sny", "snz"};
 const std::set<std::string_view> kSegmentNames = {"x0", "y0", "z0", "x1", "y1", "z1", "nx", "ny", "nz", "red",
                                                   "green", "blue", "alpha", "radius", "u0", "v0", "u1", "v1",
                                                   "nx0", "ny0", "nz0", "nx1", "ny1", "nz1"};
@@ -146,7 +147,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
   const int vi = h.find("vertex"), si = h.find("segment");
   if (vi < 0 && si < 0)
     throwBadInput(path, lineAt(h.bodyLine - 1), "no 'vertex' or 'segment' element (nothing to read as points)");
-  bool vNormals = false, vColors = false, vAlpha = false, vRadius = false;
+  bool vNormals = false, vColors = false, vAlpha = false, vRadius = false, vShading = false;
   if (vi >= 0) {
     const Element& e = h.elements[size_t(vi)];
     requireGroup(e, {"x", "y", "z"}, path);
@@ -154,6 +155,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     vColors = group(e, {"red", "green", "blue"}, path);
     vAlpha = group(e, {"alpha"}, path);
     vRadius = group(e, {"radius"}, path);
+    vShading = group(e, {"snx", "sny", "snz"}, path);
   }
   bool sNormals = false, sColors = false, sAlpha = false, sRadius = false, sUV = false, sEndNormals = false;
   if (si >= 0) {
@@ -214,6 +216,11 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
         if (r[i] < 0) throwBadInput(path, d->where(i), fmt::format("vertex {}: radius {:g} is negative (0 = unknown)", i, r[i]));
         m.points[i].radius = float(r[i]);
       }
+    }
+    if (vShading) {  // shading normals (issue 14); checked by validateModel
+      const double *a = col("snx"), *b = col("sny"), *c = col("snz");
+      m.pointShadingNormals.resize(n);
+      for (size_t i = 0; i < n; ++i) m.pointShadingNormals[i] = Vec3f(float(a[i]), float(b[i]), float(c[i]));
     }
     for (const Property& p : e.properties) {
       if (p.isList || kPointNames.count(p.name)) continue;
@@ -288,6 +295,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
   m.attributes.radii = (vRadius || sRadius);
   m.attributes.texcoords = sUV;
   m.attributes.endpointNormals = sEndNormals;
+  m.attributes.shadingNormals = vShading;
   m.comments = keptComments(h);
   m.texture = loadTexture(h, path, textureDir);
   return m;
@@ -492,6 +500,9 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
   if (!m.provenance.empty() && m.provenance.size() != m.segments.size())
     throwBadParameter("provenance", "has " + std::to_string(m.provenance.size()) + " lists for " +
                                         std::to_string(m.segments.size()) + " segments");
+  if (a.shadingNormals && m.pointShadingNormals.size() != m.points.size())
+    throwBadParameter("pointShadingNormals", "has " + std::to_string(m.pointShadingNormals.size()) + " normals for " +
+                                                 std::to_string(m.points.size()) + " points");
   std::string texture;
   if (m.texture && !m.texture->empty() && a.texcoords) texture = writeTextureBeside(path, *m.texture);
   std::string h = headerStart(o, m.comments, texture);
@@ -500,6 +511,7 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
   if (a.normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
   if (a.colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
   if (a.radii) h += "property float radius\n";
+  if (a.shadingNormals) h += "property float snx\nproperty float sny\nproperty float snz\n";
   for (const auto& kv : m.pointProperties) h += "property float " + kv.first + "\n";
   if (!m.segments.empty()) {
     h += "element segment " + std::to_string(m.segments.size()) + "\n";
@@ -525,6 +537,10 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
     if (a.colors)
       for (int c = 0; c < 4; ++c) b.u8(toByte(p.color[c]));
     if (a.radii) b.f(p.radius);
+    if (a.shadingNormals) {
+      const Vec3f& sn = m.pointShadingNormals[i];
+      b.f(sn.x()), b.f(sn.y()), b.f(sn.z());
+    }
     for (const auto* e : extra) b.f((*e)[i]);
     b.endRow();
   }

@@ -63,6 +63,17 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     nz = hn::IfThenElse(flip, hn::Neg(nz), nz);
     facing = hn::Abs(facing);
     slow = hn::Or(slow, hn::Not(hn::Ge(facing, S(kMinFacing))));
+    // the lighting normal: the plane's, or the point's shading normal flipped with the plane (issue 14)
+    VF lx = nx, ly = ny, lz = nz;
+    if (F.shadingNormals) {
+      const VF sx = hn::LoadU(d, B.snx + i), sy = hn::LoadU(d, B.sny + i), sz = hn::LoadU(d, B.snz + i);
+      const VF mx = mat(sx, sy, sz, 0), my = mat(sx, sy, sz, 1), mz = mat(sx, sy, sz, 2);
+      const VF m2 = hn::MulAdd(mx, mx, hn::MulAdd(my, my, hn::Mul(mz, mz)));
+      const auto ok = hn::And(hn::Gt(m2, zero), hn::Lt(m2, inf));
+      const VF im = hn::Div(one, hn::Sqrt(m2)), sg = hn::IfThenElse(flip, hn::Neg(im), im);
+      lx = hn::IfThenElse(ok, hn::Mul(mx, sg), nx), ly = hn::IfThenElse(ok, hn::Mul(my, sg), ny),
+      lz = hn::IfThenElse(ok, hn::Mul(mz, sg), nz);
+    }
     const VF dd = hn::Neg(cz);
     slow = hn::Or(slow, hn::Not(hn::Gt(dd, zero)));
     // tangent frame u = normalize(X x n) (or Y x n), v = n x u
@@ -213,7 +224,7 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     // Phong factors (FrameContext::shade): n.l is the same over the splat, the specular term is
     // taken at the centre and at the Gouraud corners c +- R B0 +- R B1
     if (F.light) {
-      const VF ndl = hn::Max(zero, dot3(nx, ny, nz, S(F.lightDir[0]), S(F.lightDir[1]), S(F.lightDir[2])));
+      const VF ndl = hn::Max(zero, dot3(lx, ly, lz, S(F.lightDir[0]), S(F.lightDir[1]), S(F.lightDir[2])));
       hn::StoreU(hn::MulAdd(S(F.diffuse), ndl, S(F.ambient)), d, B.diffuseFactor + i);
       const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
       // the corners only matter for Gouraud splats, wider or taller than kFlatShadeSpan pixels;
@@ -233,7 +244,7 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
           const VF hx3 = hn::MulAdd(qx, iq, S(F.lightDir[0])), hy3 = hn::MulAdd(qy, iq, S(F.lightDir[1])),
                    hz3 = hn::MulAdd(qz, iq, S(F.lightDir[2]));
           const VF hn2 = dot3(hx3, hy3, hz3, hx3, hy3, hz3);
-          const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(nx, ny, nz, hx3, hy3, hz3), hn::Sqrt(hn2))));
+          const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(lx, ly, lz, hx3, hy3, hz3), hn::Sqrt(hn2))));
           const VF pw = hn::Exp(d, hn::Mul(S(F.shininess), hn::Log(d, hn::Max(ndh, S(1e-30f)))));
           spec = hn::IfThenElseZero(hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(hn2, zero)), hn::Gt(qn2, zero)),
                                     hn::Mul(S(F.specular), pw));
@@ -247,7 +258,7 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     hn::StoreU(Sx, d, B.Sx + i), hn::StoreU(Sy, d, B.Sy + i), hn::StoreU(S0, d, B.S0 + i);
     hn::StoreU(Tx, d, B.Tx + i), hn::StoreU(Ty, d, B.Ty + i), hn::StoreU(T0, d, B.T0 + i);
     hn::StoreU(nc, d, B.depthNum + i), hn::StoreU(wscale, d, B.weightScale + i), hn::StoreU(ext, d, B.depthExtent + i);
-    hn::StoreU(nx, d, B.onx + i), hn::StoreU(ny, d, B.ony + i), hn::StoreU(nz, d, B.onz + i);
+    hn::StoreU(lx, d, B.onx + i), hn::StoreU(ly, d, B.ony + i), hn::StoreU(lz, d, B.onz + i);
   }
 }
 
@@ -345,6 +356,7 @@ detail::PointSetupFrame pointSetupFrame(const FrameContext& frame) {
   for (int k = 0; k < 3; ++k) f.lightDir[k] = frame.lightDirCamera[k];
   f.ambient = opt.material.ambient, f.diffuse = opt.material.diffuse, f.specular = opt.material.specular;
   f.shininess = opt.material.shininess;
+  f.shadingNormals = frame.pointShadingNormals != nullptr;
   return f;
 }
 
@@ -391,9 +403,16 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     m += !(setup.backfaceCulling & clearlyBackFacing(setup, p));
   }
   counts.culled += uint32_t(count - m);
+  if (setup.shadingNormals) {  // the kept points' shading normals (issue 14)
+    for (int j = 0; j < m; ++j) {
+      const Vec3f& sn = frame.pointShadingNormals[first + uint32_t(b.lane[j])];
+      b.snx[j] = sn.x(), b.sny[j] = sn.y(), b.snz[j] = sn.z();
+    }
+  }
   for (int j = m; j < std::min(detail::kSetupBatch, (m + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes); ++j) {
     // the last vector's spare lanes: defined values (radius 0 marks them degenerate), not stale ones
     b.px[j] = b.py[j] = b.pz[j] = b.nx[j] = b.ny[j] = b.nz[j] = b.radius[j] = 0;
+    b.snx[j] = b.sny[j] = b.snz[j] = 0;
   }
   detail::pointSetup(setup, b, m);
   int k = 0;

@@ -165,17 +165,19 @@ PrimitiveStatus warpExact(const FrameContext& frame, float sigmaR, const Vec3f& 
 }
 
 // Gouraud lighting (§6.2.2) at the corners (s, t) = (+-R, +-R) of the bounding quadrilateral,
-// as the bilinear polynomial C0 + Cs s + Ct t + Cst s t; small splats are lit once.
-void light(const FrameContext& frame, const Warped& s, const PixelRect& bounds, PreparedPoint& out, PointGouraud* g) {
+// as the bilinear polynomial C0 + Cs s + Ct t + Cst s t; small splats are lit once. `ln`: the
+// shading normal (camera space, unit, on the viewer's side of the plane): s.n or the point's own.
+void light(const FrameContext& frame, const Warped& s, const Vec3f& ln, const PixelRect& bounds, PreparedPoint& out,
+           PointGouraud* g) {
   const Vec3f albedo(out.color[0], out.color[1], out.color[2]);
   if (!PreparedPoint::gouraud(bounds, false)) {
-    const Vec3f c = frame.shade(albedo, s.n, s.c);
+    const Vec3f c = frame.shade(albedo, ln, s.c);
     out.color[0] = c.x(), out.color[1] = c.y(), out.color[2] = c.z();
     return;
   }
   const float R = frame.opt().cutoffRadius;
-  const Vec3f k00 = frame.shade(albedo, s.n, s.c - R * s.B0 - R * s.B1), k10 = frame.shade(albedo, s.n, s.c + R * s.B0 - R * s.B1),
-              k01 = frame.shade(albedo, s.n, s.c - R * s.B0 + R * s.B1), k11 = frame.shade(albedo, s.n, s.c + R * s.B0 + R * s.B1);
+  const Vec3f k00 = frame.shade(albedo, ln, s.c - R * s.B0 - R * s.B1), k10 = frame.shade(albedo, ln, s.c + R * s.B0 - R * s.B1),
+              k01 = frame.shade(albedo, ln, s.c - R * s.B0 + R * s.B1), k11 = frame.shade(albedo, ln, s.c + R * s.B0 + R * s.B1);
   // bilinear in u = s/2R + 1/2, v = t/2R + 1/2; inside the cutoff |s|, |t| <= R (no clamping)
   const float inv2R = 0.5f / R;
   g->C0 = 0.25f * (k00 + k10 + k01 + k11);
@@ -207,6 +209,7 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   if (!(cn > 0)) return PrimitiveStatus::Outside;
   // no normal: a disc facing the viewer (raw scans; the CLI computes normals first)
   float facing = 1;
+  bool flipped = false;
   if (nn2 > 0) {
     const float inv = 1.0f / std::sqrt(nn2);
     n *= inv;
@@ -214,6 +217,7 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
     if (facing < 0) {  // two-sided: lit from the viewer's side
       n = -n;
       facing = -facing;
+      flipped = true;
     }
   } else {
     n = -s.c / cn;
@@ -261,9 +265,19 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   out.zThreshold = frame.zThreshold(s.depthExtent + point.radius);
   const Color col = frame.primitiveColor(point.color);
   out.color[0] = col.x(), out.color[1] = col.y(), out.color[2] = col.z(), out.color[3] = std::clamp(col.w(), 0.0f, 1.0f);
-  cold.normal[0] = n.x(), cold.normal[1] = n.y(), cold.normal[2] = n.z();
+  // shading normal (issue 14): the point's own when the model has them, flipped with the plane
+  Vec3f ln = n;
+  if (frame.pointShadingNormals) {
+    Vec3f m = cam.rotation() * frame.pointShadingNormals[index];
+    const float ml = m.norm();
+    if (ml > 0 && std::isfinite(ml)) {
+      m /= ml;
+      ln = (nn2 > 0 ? flipped : m.dot(s.c) > 0) ? Vec3f(-m) : m;
+    }
+  }
+  cold.normal[0] = ln.x(), cold.normal[1] = ln.y(), cold.normal[2] = ln.z();
   if (!opt.perPixelLighting)
-    light(frame, s, bounds, out, PreparedPoint::gouraud(bounds, false) ? new (slot.gouraud) PointGouraud : nullptr);
+    light(frame, s, ln, bounds, out, PreparedPoint::gouraud(bounds, false) ? new (slot.gouraud) PointGouraud : nullptr);
   return status;
 }
 

@@ -141,6 +141,8 @@ RenderResult Renderer::render(const Camera& cam) const {
       FrameContext::make(cam, opt, sphere_, model_.attributes.colors,
                          model_.attributes.texcoords ? model_.texture.get() : nullptr);
   frame.endpointNormals = model_.attributes.endpointNormals;
+  if (model_.attributes.shadingNormals && model_.pointShadingNormals.size() == model_.points.size())
+    frame.pointShadingNormals = model_.pointShadingNormals.data();
 
   // 1. prepare (parallel) and count the tile bins. Points go in chunks of kChunkBatches batches
   // of detail::kSetupBatch; a chunk writes its visible points densely into its own range of

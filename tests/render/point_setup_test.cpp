@@ -103,13 +103,20 @@ TEST(PointSetup, BatchesGiveTheReferenceStatusOfEveryPoint) {
 
 // The SIMD set-up (closed form, and the thesis's construction for splats stretched past
 // kMaxStretch) computes what preparePoint computes, up to float rounding.
+// With shading normals (issue 14) both light with them and put them in the normal buffer.
 TEST(PointSetup, SimdLanesMatchTheScalarReference) {
-  for (float radiusScale : {1.0f, 0.03f}) {  // small radii: the prefilter stretches grazing splats
+  for (int variant = 0; variant < 4; ++variant) {
+    const float radiusScale = variant % 2 ? 0.03f : 1.0f;  // small radii: the prefilter stretches grazing splats
+    const bool shading = variant >= 2;
     HybridModel m = noisySphere();
     for (Point& p : m.points) p.radius *= radiusScale;
+    // shading normals: the exact sphere normal (the plane normals are noisy)
+    std::vector<Vec3f> sn;
+    for (const Point& p : m.points) sn.push_back(p.position.normalized());
     RenderOptions o;
     const Camera cam = Camera::lookAt(Vec3f(0, 0.5f, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 200, 150);
     FrameContext frame = FrameContext::make(cam, o, boundingSphere(m));
+    if (shading) frame.pointShadingNormals = sn.data();
     const detail::PointSetupFrame setup = pointSetupFrame(frame);
     Slots out(detail::kSetupBatch);
     PointSetupCounts counts;
@@ -154,6 +161,12 @@ TEST(PointSetup, SimdLanesMatchTheScalarReference) {
         shaded += ag;
         for (int c = 0; c < 4; ++c) EXPECT_NEAR(a.color[c], r.color[c], 1e-3f) << c;
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(out.cold[j].normal[c], ref.cold[0].normal[c], 1e-3f) << c;
+        {  // the normal lit with: the shading normal (flipped with the plane), else the plane's
+          Vec3f want = cam.rotation() * (shading ? sn[index] : p.normal.normalized());
+          const Vec3f plane = cam.rotation() * p.normal;
+          if (plane.dot(cam.toCamera(p.position)) > 0) want = -want;
+          for (int c = 0; c < 3; ++c) EXPECT_NEAR(out.cold[j].normal[c], want[c], 1e-4f) << c;
+        }
         if (ag && rg)
           for (int c = 0; c < 3; ++c) {
             const PointGouraud &ga = out.gouraud[j], &gr = ref.gouraud[0];

@@ -27,9 +27,11 @@ struct Point {
 struct Segment {
   Vec3f p0 = Vec3f::Zero(), p1 = Vec3f::Zero();  ///< endpoints, object space
   Vec3f normal = Vec3f::Zero();                  ///< unit, perpendicular to p1 - p0
-  /// Optional normals at p0 and p1 (smooth line models, beyond the thesis): unit, each
-  /// perpendicular to p1 - p0, interpolated along the segment by the renderer. Zero when the
-  /// segment carries only `normal` (the thesis's one-normal segment); see Attributes.
+  /// Optional shading normals at p0 and p1 (smooth line models, beyond the thesis): unit, on
+  /// the side of `normal`; the surface normal there, so they may lean along the segment (issue
+  /// 14: extractors that make them perpendicular stay valid). The renderer shades with
+  /// normalize(normal0 + u (normal1 - normal0)). Zero when the segment carries only `normal`
+  /// (the thesis's one-normal segment); see Attributes.
   Vec3f normal0 = Vec3f::Zero(), normal1 = Vec3f::Zero();
   Color color = Color(1, 1, 1, 1);               ///< linear RGBA in [0,1]
   float radius = 0;                              ///< half-width of the strip, object space
@@ -45,6 +47,8 @@ struct Attributes {
   bool radii = false;
   bool texcoords = false;  ///< segments carry uv0/uv1
   bool endpointNormals = false;  ///< segments carry normal0/normal1 (PLY nx0..nz0, nx1..nz1)
+  /// points carry HybridModel::pointShadingNormals (PLY snx sny snz)
+  bool shadingNormals = false;
 };
 
 /// A hybrid point + line-segment model (thesis §3). A point cloud is a HybridModel without
@@ -55,6 +59,13 @@ struct HybridModel {
   Attributes attributes;
   /// Texture image sampled by segment uv (§5.2.4); null when untextured.
   std::shared_ptr<const Image> texture;
+  /// Optional per-point shading normals (beyond the thesis, issue 14), used when
+  /// attributes.shadingNormals: unit, one per point, in point order. A point's `normal` stays
+  /// its splat plane and its back-face test; the shading normal only lights it (flat and
+  /// Gouraud shading, the deferred normal buffer). Contour point models carry the interpolated
+  /// vertex normal here while their planes keep near their triangle (docs/decisions.md,
+  /// "Issue 14 (i14shade)"). Kept beside `points`, not in Point (the renderer's hot data).
+  std::vector<Vec3f> pointShadingNormals;
   /// Extra per-point scalar properties (e.g. curvature "k_min"), each of points.size().
   std::map<std::string, std::vector<float>> pointProperties;
   /// Optional per-segment list of the input point indices it replaced (--provenance).

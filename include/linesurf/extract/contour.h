@@ -62,6 +62,14 @@ struct ContourOptions {
   /// absolute difference on Al 2.95 -> 1.97). false: the thesis's one-normal model (the
   /// triangle's normal, or as vertexNormals says).
   bool endpointNormals = true;
+  /// Shading normals for smooth models (beyond the thesis, issue 14; only with endpointNormals):
+  /// every point carries the interpolated vertex normal, full and unit, as its shading normal
+  /// (HybridModel::pointShadingNormals; its `normal` stays the plane above), and the segments'
+  /// endpoint normals keep their component along the segment (the interpolated vertex normals
+  /// themselves), so that lines and points both shade with the mesh's smooth normal. false: the
+  /// endpoint normals are made perpendicular to the segment and points carry no shading normal
+  /// (the model of "Issue 14 (i14)"). Measured in docs/decisions.md, "Issue 14 (i14shade)".
+  bool shadingNormals = true;
   /// Polyline merging (beyond the thesis, issue 13): consecutive segments of one contour polyline
   /// (one plane, chained through shared mesh edges; never across a break, a family or a plane)
   /// become one segment while every original vertex in between stays within

@@ -62,6 +62,9 @@ struct FrameContext {
   /// The model's segments carry normal0/normal1 (Attributes::endpointNormals): shading normals
   /// are interpolated along segments (segment_splat.h).
   bool endpointNormals = false;
+  /// Per-point shading normals (HybridModel::pointShadingNormals, by point index; null when the
+  /// model has none): they light the points, whose own normals stay their planes (issue 14).
+  const Vec3f* pointShadingNormals = nullptr;
 
   const Camera& cam() const { return *camera; }
 

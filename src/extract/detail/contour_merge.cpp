@@ -36,9 +36,10 @@ struct Piece {
 Vec3d startOf(const Segment& s, bool rev) { return (rev ? s.p1 : s.p0).cast<double>(); }
 Vec3d endOf(const Segment& s, bool rev) { return (rev ? s.p0 : s.p1).cast<double>(); }
 
-// `n` made perpendicular to `dir` (unit), unit, on the side of `side`; zero when nothing is left.
-Vec3d perpendicular(const Vec3d& n, const Vec3d& dir, const Vec3d& side) {
-  Vec3d m = n - n.dot(dir) * dir;
+// `n` made perpendicular to `dir` (unit; unless `along` keeps that component), unit, on the side
+// of `side`; zero when nothing is left.
+Vec3d perpendicular(const Vec3d& n, const Vec3d& dir, const Vec3d& side, bool along = false) {
+  Vec3d m = along ? n : Vec3d(n - n.dot(dir) * dir);
   const double l = m.norm();
   if (!(l > 1e-6)) return Vec3d::Zero();
   m /= l;
@@ -88,8 +89,8 @@ class ChainMerger {
     // Shading normals at the merged ends (smooth models).
     Vec3d n0 = m, n1 = m;
     if (lim_.smooth) {
-      n0 = perpendicular(startNormal(pc[i]), dir, m);
-      n1 = perpendicular(endNormal(pc[j - 1]), dir, m);
+      n0 = perpendicular(startNormal(pc[i]), dir, m, lim_.alongNormals);
+      n1 = perpendicular(endNormal(pc[j - 1]), dir, m, lim_.alongNormals);
       if (n0 == Vec3d::Zero() || n1 == Vec3d::Zero()) return false;
     }
     const Vec2f uvA = startUv(pc[i]), uvB = endUv(pc[j - 1]);
@@ -104,7 +105,7 @@ class ChainMerger {
       const double en = e.dot(nk);
       if (std::abs(en) > lim_.normalDeviation || (e - en * nk).norm() > lim_.tangentDeviation) return false;
       if (lim_.smooth) {
-        const Vec3d target = perpendicular(nk, dir, m);
+        const Vec3d target = perpendicular(nk, dir, m, lim_.alongNormals);
         const Vec3d interp = (n0 + t * (n1 - n0)).normalized();
         if (target == Vec3d::Zero() || interp.dot(target) < lim_.cosAngle) return false;
       }

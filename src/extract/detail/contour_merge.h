@@ -34,6 +34,7 @@ struct ContourMergeLimits {
   double uvTolerance = 0;       ///< textured models: largest uv deviation from linear (0: no texture)
   float colorTolerance = 0;     ///< largest colour channel deviation from the merged colour
   bool smooth = false;          ///< segments carry normal0/normal1
+  bool alongNormals = false;    ///< normal0/normal1 keep their component along the segment (issue 14)
 };
 
 struct ContourMergeCounts {

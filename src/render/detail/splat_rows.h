@@ -199,6 +199,7 @@ struct PointSetupFrame {
   bool backfaceCulling = true;
   bool light = false;                ///< compute the Phong factors (flat shading)
   float lightDir[3] = {}, ambient = 0, diffuse = 0, specular = 0, shininess = 1;
+  bool shadingNormals = false;       ///< light with PointSetupBatch::snx.. (issue 14), not the plane normal
 };
 
 /// SoA input and output of a batch of at most kSetupBatch points.
@@ -208,6 +209,8 @@ struct PointSetupBatch {
   // input
   alignas(64) float px[kSetupBatch], py[kSetupBatch], pz[kSetupBatch], nx[kSetupBatch], ny[kSetupBatch],
       nz[kSetupBatch], radius[kSetupBatch];
+  /// shading normals, world space (read only with PointSetupFrame::shadingNormals)
+  alignas(64) float snx[kSetupBatch], sny[kSetupBatch], snz[kSetupBatch];
   // output: 0 = set up here; 1 = culled (back-facing); 2 = needs the exact scalar path; 3 = set
   // up here, bounds cut by the viewport (Clipped); 4 = outside the viewport
   alignas(64) float status[kSetupBatch];
@@ -216,7 +219,8 @@ struct PointSetupBatch {
   alignas(64) float depthNum[kSetupBatch], weightScale[kSetupBatch], depthExtent[kSetupBatch];
   /// pixel bounds (pixelBounds: centres inside the splat's screen bounds, within the viewport)
   alignas(64) int32_t x0[kSetupBatch], y0[kSetupBatch], x1[kSetupBatch], y1[kSetupBatch];
-  alignas(64) float onx[kSetupBatch], ony[kSetupBatch], onz[kSetupBatch];  ///< unit normal facing the viewer
+  /// unit shading normal on the viewer's side (the plane normal, or the shading normal)
+  alignas(64) float onx[kSetupBatch], ony[kSetupBatch], onz[kSetupBatch];
   /// Phong (FrameContext::shade without the albedo): ambient + diffuse n.l, and the specular term
   /// at the centre and at the Gouraud corners (s, t) = (-R,-R), (R,-R), (-R,R), (R,R).
   alignas(64) float diffuseFactor[kSetupBatch], specular[5][kSetupBatch];
