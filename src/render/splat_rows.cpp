@@ -37,19 +37,57 @@ HWY_INLINE VF affine(DF d, const Affine2& f, VF px, VF py) {
   return hn::MulAdd(hn::Set(d, f.dx), px, hn::MulAdd(hn::Set(d, f.dy), py, hn::Set(d, f.c)));
 }
 
-// The rays through lanes k.. meet a primitive's plane: pixel centres, 1 / N, depth, and the mask
-// of the lanes where the plane is hit in front of the eye (and within [near, far] when clipDepth).
-struct PlaneHit {
-  VF px, py, iN, z;
-  hn::Mask<DF> front;
-  PlaneHit(const BlockWalker& walk, int k, const Affine2& N, float depthNum, bool clipDepth, float nearD, float farD) {
-    const DF d;
-    walk.at(k, px, py);
-    const VF n = affine(d, N, px, py);
-    iN = hn::Div(hn::Set(d, 1.0f), n);
-    z = hn::Mul(hn::Set(d, depthNum), iN);
-    front = hn::Lt(n, hn::Zero(d));
-    if (clipDepth) front = hn::And(front, hn::And(hn::Ge(z, hn::Set(d, nearD)), hn::Le(z, hn::Set(d, farD))));
+// --- points (§4.2.2: the object-space EWA kernel, evaluated per pixel through the tangent plane) --
+
+// 1 / n by the reciprocal estimate and one Newton step (beyond the thesis): within about an ulp of
+// the division (AVX-512's estimate has 14 bits, AVX2's 12; the step squares the error) at a third
+// of its latency: the point kernel's only division.
+HWY_INLINE VF reciprocalNewton(DF d, VF n) {
+  const VF r = hn::ApproximateReciprocal(n);
+  return hn::MulAdd(r, hn::NegMulAdd(n, r, hn::Set(d, 1.0f)), r);
+}
+
+// exp(-q/2) for 0 <= q <= kPolyExpMaxQ (the default cutoff of 2 standard deviations gives q <= 4)
+// by a polynomial of degree 6 in Estrin's scheme (beyond the thesis: Chebyshev interpolation on
+// [0, 4], absolute error 1.4e-6, relative 9e-6 in float, far below the 8-bit output), about half
+// of hn::Exp's instructions and latency; wider cutoffs keep hn::Exp (kPoly false).
+inline constexpr float kPolyExpMaxQ = 4.0f;
+template <bool kPoly>
+HWY_INLINE VF expHalfNeg(DF d, VF q) {
+  if (!kPoly) return hn::Exp(d, hn::Mul(q, hn::Set(d, -0.5f)));
+  const VF q2 = hn::Mul(q, q), q4 = hn::Mul(q2, q2);
+  const VF a = hn::MulAdd(hn::Set(d, -0.4999672770500183f), q, hn::Set(d, 0.9999986886978149f));
+  const VF b = hn::MulAdd(hn::Set(d, -0.020628463476896286f), q, hn::Set(d, 0.12486723810434341f));
+  const VF c = hn::MulAdd(hn::Set(d, -0.00019870136748068035f), q, hn::Set(d, 0.002450336469337344f));
+  return hn::MulAdd(q4, hn::MulAdd(hn::Set(d, 8.236473149736412e-06f), q2, c), hn::MulAdd(q2, b, a));
+}
+
+// One point splat's per-pixel constants in vectors (PointRaster / PointHot) and its kernel at the
+// pixel centres (px, py) of the lanes: the ray meets the splat's plane at depth z = depthNum / N
+// with plane coordinates (s, t) = (S, T) / N, q = s^2 + t^2, weight exp(-q/2) * scale; `hit`: in
+// front of the eye (N < 0) and q <= cutoffQ. Shared by pointFragments and the rows (they agree).
+struct PointKernel {
+  VF Ndx, Ndy, N0, Sdx, Sdy, S0, Tdx, Tdy, T0, depthNum, scale;
+  PointKernel(DF d, const Affine2& N, const Affine2& S, const Affine2& T, float dn, float sc)
+      : Ndx(hn::Set(d, N.dx)), Ndy(hn::Set(d, N.dy)), N0(hn::Set(d, N.c)), Sdx(hn::Set(d, S.dx)),
+        Sdy(hn::Set(d, S.dy)), S0(hn::Set(d, S.c)), Tdx(hn::Set(d, T.dx)), Tdy(hn::Set(d, T.dy)),
+        T0(hn::Set(d, T.c)), depthNum(hn::Set(d, dn)), scale(hn::Set(d, sc)) {}
+  struct At {
+    VF z, s, t, w;
+    hn::Mask<DF> hit;
+  };
+  template <bool kPoly>
+  HWY_INLINE At at(DF d, VF px, VF py, VF cutoff) const {
+    const VF n = hn::MulAdd(Ndx, px, hn::MulAdd(Ndy, py, N0));
+    const VF iN = reciprocalNewton(d, n);
+    At a;
+    a.z = hn::Mul(depthNum, iN);
+    a.s = hn::Mul(hn::MulAdd(Sdx, px, hn::MulAdd(Sdy, py, S0)), iN);
+    a.t = hn::Mul(hn::MulAdd(Tdx, px, hn::MulAdd(Tdy, py, T0)), iN);
+    const VF q = hn::MulAdd(a.s, a.s, hn::Mul(a.t, a.t));
+    a.hit = hn::And(hn::Lt(n, hn::Zero(d)), hn::Le(q, cutoff));
+    a.w = hn::Mul(expHalfNeg<kPoly>(d, hn::Min(q, cutoff)), scale);
+    return a;
   }
 };
 
@@ -68,24 +106,32 @@ HWY_INLINE int pack(DF d, hn::Mask<DF> keep, VF x, VF y, VF w, VF z, VF p, VF q,
   return int(hn::CountTrue(d, keep));
 }
 
-int PointFragments(const PointRaster& P, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
-                   FragmentBlock& out) {
+template <bool kPoly>
+int PointFragmentsT(const PointRaster& P, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
+                    FragmentBlock& out) {
   const BlockWalker walk(width, x0, y0);
   const DF d;
   const int L = int(hn::Lanes(d));
-  const VF cutoff = hn::Set(d, P.cutoffQ), scale = hn::Set(d, P.weightScale), mhalf = hn::Set(d, -0.5f);
+  const PointKernel K(d, P.N, P.S, P.T, P.depthNum, P.weightScale);
+  const VF cutoff = hn::Set(d, P.cutoffQ), nearD = hn::Set(d, P.nearD), farD = hn::Set(d, P.farD);
   const VF lane = hn::Iota(d, 0.0f), count = hn::Set(d, float(n));
   int m = 0;
   for (int i = 0; i < n; i += L) {
-    const PlaneHit h(walk, k0 + i, P.N, P.depthNum, P.clipDepth, P.nearD, P.farD);
-    const VF s = hn::Mul(affine(d, P.S, h.px, h.py), h.iN), t = hn::Mul(affine(d, P.T, h.px, h.py), h.iN);
-    const VF q = hn::MulAdd(s, s, hn::Mul(t, t));
-    auto inside = hn::And(hn::And(h.front, hn::Le(q, cutoff)), hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
-    const VF w = hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale);
-    inside = hn::And(inside, hn::Gt(w, hn::Zero(d)));
-    m += pack(d, inside, h.px, h.py, w, h.z, s, t, withPlaneCoords, out, m);
+    VF px, py;
+    walk.at(k0 + i, px, py);
+    const auto a = K.at<kPoly>(d, px, py, cutoff);
+    auto inside = hn::And(a.hit, hn::Lt(hn::Add(lane, hn::Set(d, float(i))), count));
+    if (P.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(a.z, nearD), hn::Le(a.z, farD)));
+    inside = hn::And(inside, hn::Gt(a.w, hn::Zero(d)));
+    m += pack(d, inside, px, py, a.w, a.z, a.s, a.t, withPlaneCoords, out, m);
   }
   return m;
+}
+
+int PointFragments(const PointRaster& P, int x0, int y0, int width, int k0, int n, bool withPlaneCoords,
+                   FragmentBlock& out) {
+  return P.cutoffQ <= kPolyExpMaxQ ? PointFragmentsT<true>(P, x0, y0, width, k0, n, withPlaneCoords, out)
+                                   : PointFragmentsT<false>(P, x0, y0, width, k0, n, withPlaneCoords, out);
 }
 
 // --- segments (§5: the ScreenSpace closed form of segment_methods.cpp) ----------------------
@@ -488,13 +534,11 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
   const int Wp = kWp > 0 ? kWp : WpRun;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
   const int W = r.width(), H = r.height();
-  const VF cutoff = hn::Set(d, F.cutoffQ), scale = hn::Set(d, std::fabs(P.weightScaleSigned)), mhalf = hn::Set(d, -0.5f);
-  const bool clipDepth = std::signbit(P.weightScaleSigned);
-  const VF zero = hn::Zero(d), oneF = hn::Set(d, 1.0f);
-  const VF Ndx = hn::Set(d, P.N.dx), Ndy = hn::Set(d, P.N.dy), N0 = hn::Set(d, P.N.c);
-  const VF Sdx = hn::Set(d, P.S.dx), Sdy = hn::Set(d, P.S.dy), S0 = hn::Set(d, P.S.c);
-  const VF Tdx = hn::Set(d, P.T.dx), Tdy = hn::Set(d, P.T.dy), T0 = hn::Set(d, P.T.c);
-  const VF depthNum = hn::Set(d, P.depthNum), nearD = hn::Set(d, F.nearD), farD = hn::Set(d, F.farD);
+  const VF cutoff = hn::Set(d, F.cutoffQ);
+  const bool clipDepth = std::signbit(P.weightScaleSigned), poly = F.cutoffQ <= kPolyExpMaxQ;
+  const VF zero = hn::Zero(d);
+  const PointKernel K(d, P.N, P.S, P.T, P.depthNum, std::fabs(P.weightScaleSigned));
+  const VF nearD = hn::Set(d, F.nearD), farD = hn::Set(d, F.farD);
   // lane offsets within a vector: several rows of Wp lanes when Wp < L, else a run of one row
   const int rowsPerVec = Wp < L ? L / Wp : 1;
   const hn::RebindToSigned<DF> di;
@@ -525,18 +569,12 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
       const int row = k / Wp, col = k - row * Wp;  // of the vector's first lane
       const VF cx = hn::Add(colLane, hn::Set(d, float(col))), ry = hn::Add(rowLane, hn::Set(d, float(cy + row)));
       const VF px = hn::Add(cx, hn::Set(d, float(r.x0) + 0.5f)), py = hn::Add(ry, hn::Set(d, float(r.y0) + 0.5f));
-      const VF n = hn::MulAdd(Ndx, px, hn::MulAdd(Ndy, py, N0));
-      const VF iN = hn::Div(oneF, n);
-      const VF z = hn::Mul(depthNum, iN);
-      auto inside = hn::And(hn::Lt(n, zero), hn::And(hn::Lt(cx, Wv), hn::Lt(ry, hn::Set(d, float(H)))));
-      if (clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
-      const VF s = hn::Mul(hn::MulAdd(Sdx, px, hn::MulAdd(Sdy, py, S0)), iN);
-      const VF t = hn::Mul(hn::MulAdd(Tdx, px, hn::MulAdd(Tdy, py, T0)), iN);
-      const VF q = hn::MulAdd(s, s, hn::Mul(t, t));
-      inside = hn::And(inside, hn::Le(q, cutoff));
-      hn::Store(hn::IfThenElseZero(inside, hn::Mul(hn::Exp(d, hn::Mul(hn::Min(q, cutoff), mhalf)), scale)), d, bw + k);
-      hn::Store(z, d, bz + k);
-      if (kGouraud) hn::Store(s, d, bs + k), hn::Store(t, d, bt + k);
+      const auto a = poly ? K.at<true>(d, px, py, cutoff) : K.at<false>(d, px, py, cutoff);
+      auto inside = hn::And(a.hit, hn::And(hn::Lt(cx, Wv), hn::Lt(ry, hn::Set(d, float(H)))));
+      if (clipDepth) inside = hn::And(inside, hn::And(hn::Ge(a.z, nearD), hn::Le(a.z, farD)));
+      hn::Store(hn::IfThenElseZero(inside, a.w), d, bw + k);
+      hn::Store(a.z, d, bz + k);
+      if (kGouraud) hn::Store(a.s, d, bs + k), hn::Store(a.t, d, bt + k);
     }
     // 2. into the Z^3 tile
     for (int row = 0; row < rows; ++row) {
