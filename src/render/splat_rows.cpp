@@ -626,6 +626,101 @@ HWY_INLINE uint64_t PointRowsG(const PointHot& P, const PointRowsFrame& F, const
   return PointRowsT<D16, 0, kGouraud>(D16(), (W + 15) / 16 * 16, P, F, normal, G, r, z3);
 }
 
+// A small flat point splat: its rect r at most kWp pixels wide and kSmallRows tall (beyond the
+// thesis; nearly every splat of a dense model: the dragon's rects are 4x4 to 5x5 pixels). The two
+// passes of PointRowsT without its chunk loop and with the run's constants (PointRun): the kernel
+// of all rows at once (rows kWp lanes apart, several per vector) into a small buffer, then the
+// Z^3 fast path per row in kWp lanes.
+inline constexpr int kSmallRows = 8;
+
+// The constants of a run of point splats in one tile (PointRunZ3), set once per run, not per
+// splat: the frame's, the lane layouts of the small rows, the Z^3 planes for 4 and 8 lanes.
+template <bool kPoly>
+struct PointRun {
+  using D4 = hn::CappedTag<float, 4>;
+  using D8 = hn::CappedTag<float, 8>;
+  DF d;
+  const PointRowsFrame& F;
+  Z3Tile& z3;
+  VF cutoff = hn::Set(d, F.cutoffQ), nearD = hn::Set(d, F.nearD), farD = hn::Set(d, F.farD);
+  VF col4, row4, col8, row8;  ///< a lane's column and row in rows 4 (8) lanes apart
+  Z3Rows<D4> z4{z3, true};
+  Z3Rows<D8> z8{z3, true};
+  uint64_t inserted = 0;
+
+  PointRun(const PointRowsFrame& frame, Z3Tile& tile) : F(frame), z3(tile) {
+    layout(4, col4, row4);
+    layout(8, col8, row8);
+  }
+  void layout(int Wp, VF& col, VF& row) const {
+    const hn::RebindToSigned<DF> di;
+    const auto iota = hn::Iota(di, 0);
+    const bool several = Wp < int(hn::Lanes(d));
+    col = hn::ConvertTo(d, several ? hn::And(iota, hn::Set(di, Wp - 1)) : iota);
+    row = several ? hn::Floor(hn::Mul(hn::ConvertTo(d, iota), hn::Set(d, 1.0f / float(Wp)))) : hn::Zero(d);
+  }
+  ~PointRun() { z3.addFastCounts(z4.opened + z8.opened, z4.occluded + z8.occluded); }
+
+  // one splat; G: its Gouraud colours (C0, Cs, Ct, Cst), or null for a flat splat
+  HWY_INLINE void splat(const PointHot& P, const float* normal, const float* G, const PixelRect& r) {
+    const int W = r.width(), H = r.height();
+    if (!G && H <= kSmallRows) {
+      if (W <= 4) return small<4>(P, normal, r, col4, row4, z4);
+      if (W <= 8) return small<8>(P, normal, r, col8, row8, z8);
+    }
+    inserted += G ? PointRowsG<true>(P, F, normal, G, r, z3) : PointRowsG<false>(P, F, normal, nullptr, r, z3);
+  }
+
+  template <int kWp, class DZ>
+  HWY_INLINE void small(const PointHot& P, const float* normal, const PixelRect& r, VF colLane, VF rowLane,
+                        Z3Rows<DZ>& zr) {
+    const DZ dz;
+    using VZ = hn::Vec<DZ>;
+    const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
+    const int W = r.width(), H = r.height();
+    const PointKernel K(d, P.N, P.S, P.T, P.depthNum, std::fabs(P.weightScaleSigned));
+    const VF Wv = hn::Set(d, float(W)), Hv = hn::Set(d, float(H));
+    const VF x0 = hn::Set(d, float(r.x0) + 0.5f), y0 = hn::Set(d, float(r.y0) + 0.5f);
+    const bool clipDepth = std::signbit(P.weightScaleSigned);
+    HWY_ALIGN float bw[kSmallRows * kWp + kMaxLanes], bz[kSmallRows * kWp + kMaxLanes];
+    // 1. the kernel of all rows
+    for (int k = 0; k < H * kWp; k += L) {
+      const int row = k / kWp, col = k - row * kWp;  // of the vector's first lane
+      const VF cx = hn::Add(colLane, hn::Set(d, float(col))), ry = hn::Add(rowLane, hn::Set(d, float(row)));
+      const auto a = K.at<kPoly>(d, hn::Add(cx, x0), hn::Add(ry, y0), cutoff);
+      auto inside = hn::And(a.hit, hn::And(hn::Lt(cx, Wv), hn::Lt(ry, Hv)));
+      if (clipDepth) inside = hn::And(inside, hn::And(hn::Ge(a.z, nearD), hn::Le(a.z, farD)));
+      const VF w = hn::IfThenElseZero(inside, a.w);
+      hn::Store(w, d, bw + k);
+      hn::Store(a.z, d, bz + k);
+      inserted += hn::CountTrue(d, hn::Gt(w, hn::Zero(d)));
+    }
+    // 2. into the Z^3 tile, row by row
+    float fa[Z3Tile::kAttrs] = {P.color[0], P.color[1], P.color[2], P.color[3], 1.0f, 0.0f, 0.0f, 0.0f};
+    if (normal) fa[Z3Tile::kNx] = normal[0], fa[Z3Tile::kNy] = normal[1], fa[Z3Tile::kNz] = normal[2];
+    VZ attr[Z3Tile::kAttrs];
+    for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, fa[k]);
+    const VZ thr = hn::Set(dz, P.zThreshold), zeroZ = hn::Zero(dz);
+    zr.opaque = P.color[3] >= 1.0f;
+    for (int row = 0; row < H; ++row) {
+      const size_t rowBase = z3.index(r.x0, r.y0 + row);
+      for (int c = 0; c < W; c += LZ) {
+        const int k = row * kWp + c;
+        const VZ w = hn::Load(dz, bw + k), z = hn::Load(dz, bz + k);
+        const auto inside = hn::Gt(w, zeroZ);
+        if (hn::AllFalse(dz, inside)) continue;  // a corner of the bounds the splat misses
+        const auto rest = zr(rowBase + size_t(c), inside, w, z, thr, [&](int a) { return attr[a]; });
+        if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
+        // the other fragments (a new layer in front of or behind others, compression, occlusion)
+        HWY_ALIGN float mk[kMaxLanes];
+        hn::Store(hn::VecFromMask(dz, rest), dz, mk);
+        for (int i = 0; i < LZ; ++i)
+          if (mk[i] != 0) z3.insert(r.x0 + c + i, r.y0 + row, bz[k + i], P.zThreshold, bw[k + i], fa);
+      }
+    }
+  }
+};
+
 uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect& r, Z3Tile& z3) {
   PointHot h;
   h.N = P.N, h.S = P.S, h.T = P.T, h.depthNum = P.depthNum;
@@ -636,29 +731,40 @@ uint64_t PointRowsZ3(const PointRaster& P, const PointShade& A, const PixelRect&
   float G[12] = {};
   if (A.gouraud)
     for (int k = 0; k < 3; ++k) G[k] = A.C0[k], G[3 + k] = A.Cs[k], G[6 + k] = A.Ct[k], G[9 + k] = A.Cst[k];
-  return A.gouraud ? PointRowsG<true>(h, F, A.attr + Z3Tile::kNx, G, r, z3)
-                   : PointRowsG<false>(h, F, A.attr + Z3Tile::kNx, nullptr, r, z3);
+  auto one = [&](auto& run) {
+    run.splat(h, A.attr + Z3Tile::kNx, A.gouraud ? G : nullptr, r);
+    return run.inserted;
+  };
+  if (F.cutoffQ <= kPolyExpMaxQ) {
+    PointRun<true> run(F, z3);
+    return one(run);
+  }
+  PointRun<false> run(F, z3);
+  return one(run);
 }
 
 // A run of point splats (detail/splat_rows.h): one dispatch for the run; each splat's hot record
 // is fetched kRunAhead splats ahead (the bins visit slots in order with gaps: cold lines).
-uint64_t PointRunZ3(const PointRowsFrame& F, const PointRunSlots& S, const uint32_t* refs, int n, Z3Tile& z3) {
+template <bool kPoly>
+uint64_t PointRunT(const PointRowsFrame& F, const PointRunSlots& S, const uint32_t* refs, int n, Z3Tile& z3) {
   constexpr int kRunAhead = 4;
   const PixelRect tile = z3.rect();
   const bool blend = z3.blendNormals();
-  uint64_t inserted = 0;
+  PointRun<kPoly> run(F, z3);
   for (int i = 0; i < n; ++i) {
     if (i + kRunAhead < n) __builtin_prefetch(S.hot + refs[i + kRunAhead]);
     const uint32_t j = refs[i];
     const PixelRect& b = S.bounds[j];
     const PixelRect r = b.intersect(tile);  // not empty: the bins hold the splats touching the tile
     const float* normal = blend ? S.normals + size_t(j) * S.normalStride : nullptr;
-    if (S.gouraud && (b.width() > kPointFlatShadeSpan || b.height() > kPointFlatShadeSpan))
-      inserted += PointRowsG<true>(S.hot[j], F, normal, S.gouraud + size_t(j) * S.gouraudStride, r, z3);
-    else
-      inserted += PointRowsG<false>(S.hot[j], F, normal, nullptr, r, z3);
+    const bool gouraud = S.gouraud && (b.width() > kPointFlatShadeSpan || b.height() > kPointFlatShadeSpan);
+    run.splat(S.hot[j], normal, gouraud ? S.gouraud + size_t(j) * S.gouraudStride : nullptr, r);
   }
-  return inserted;
+  return run.inserted;
+}
+
+uint64_t PointRunZ3(const PointRowsFrame& F, const PointRunSlots& S, const uint32_t* refs, int n, Z3Tile& z3) {
+  return F.cutoffQ <= kPolyExpMaxQ ? PointRunT<true>(F, S, refs, n, z3) : PointRunT<false>(F, S, refs, n, z3);
 }
 
 // One row of the resolve, pixels with one layer (detail/splat_rows.h): the formula of
