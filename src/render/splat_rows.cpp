@@ -753,6 +753,7 @@ uint64_t PointRunT(const PointRowsFrame& F, const PointRunSlots& S, const uint32
   PointRun<kPoly> run(F, z3);
   for (int i = 0; i < n; ++i) {
     if (i + kRunAhead < n) __builtin_prefetch(S.hot + refs[i + kRunAhead]);
+    if (i + 2 * kRunAhead < n) __builtin_prefetch(S.bounds + refs[i + 2 * kRunAhead]);
     const uint32_t j = refs[i];
     const PixelRect& b = S.bounds[j];
     const PixelRect r = b.intersect(tile);  // not empty: the bins hold the splats touching the tile
