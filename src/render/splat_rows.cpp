@@ -476,40 +476,49 @@ struct Z3Rows {
   using V = hn::Vec<D>;
   D d;
   hn::RebindToSigned<D> di;
-  float* pl[Z3Tile::kFields];
+  // field f of layer 0 at pixel index p: base[f * stride + p] (one base and a stride, not a
+  // pointer per field: fewer registers in the rows)
+  float* base;
+  size_t stride;
   int32_t* cnt;
   bool opaque;
   int nAttr;
-  uint64_t opened = 0, occluded = 0;
+  // per-lane counts of the lanes opened and of those dropped behind (a vector subtract of the
+  // mask per row, not a popcount); opened() / occluded() sum them
+  hn::Vec<hn::RebindToSigned<D>> openedV = hn::Zero(di), occludedV = hn::Zero(di);
+  uint64_t opened() const { return uint64_t(hn::GetLane(hn::SumOfLanes(di, openedV))); }
+  uint64_t occluded() const { return uint64_t(hn::GetLane(hn::SumOfLanes(di, occludedV))); }
   Z3Rows(Z3Tile& z3, bool opaqueFragments)
-      : cnt(z3.counts()), opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1) {
-    for (int f = 0; f < Z3Tile::kFields; ++f) pl[f] = z3.plane(0, f);
-  }
+      : base(z3.plane(0, 0)), stride(size_t(z3.plane(0, 1) - z3.plane(0, 0))), cnt(z3.counts()),
+        opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1) {}
+  HWY_INLINE float* field(int f, size_t p) const { return base + size_t(f) * stride + p; }
   template <class AttrAt>
   HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
     const V zero = hn::Zero(d);
     const auto count = hn::LoadU(di, cnt + p);
     const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Zero(di))));
     const auto single = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Set(di, 1))));
-    const V z0 = hn::LoadU(d, pl[Z3Tile::kZ] + p);
-    const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, pl[Z3Tile::kThr] + p)));
+    const V z0 = hn::LoadU(d, field(Z3Tile::kZ, p));
+    const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, field(Z3Tile::kThr, p))));
     const auto fast = hn::Or(open, hn::And(single, within));
     const auto behind =
-        hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(d, pl[Z3Tile::kOpaque] + p), zero))));
+        hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(d, field(Z3Tile::kOpaque, p)), zero))));
     if (!hn::AllFalse(d, fast)) {
-      for (int k = 0; k < nAttr; ++k) {
+      auto blend = [&](int k) {
         const V add = hn::Mul(w, attrAt(k));
-        const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, pl[k] + p), add));
-        hn::BlendedStore(sum, fast, d, pl[k] + p);
-      }
-      hn::BlendedStore(z, open, d, pl[Z3Tile::kZ] + p);
-      hn::BlendedStore(thr, open, d, pl[Z3Tile::kThr] + p);
-      if (opaque) hn::BlendedStore(hn::Set(d, 1.0f), open, d, pl[Z3Tile::kOpaque] + p);
-      else hn::BlendedStore(zero, fast, d, pl[Z3Tile::kOpaque] + p);
+        const V sum = hn::IfThenElse(open, add, hn::Add(hn::LoadU(d, field(k, p)), add));
+        hn::BlendedStore(sum, fast, d, field(k, p));
+      };
+      for (int k = 0; k <= Z3Tile::kW; ++k) blend(k);  // unrolled: the colour, alpha and weight sums
+      for (int k = Z3Tile::kW + 1; k < nAttr; ++k) blend(k);
+      hn::BlendedStore(z, open, d, field(Z3Tile::kZ, p));
+      hn::BlendedStore(thr, open, d, field(Z3Tile::kThr, p));
+      if (opaque) hn::BlendedStore(hn::Set(d, 1.0f), open, d, field(Z3Tile::kOpaque, p));
+      else hn::BlendedStore(zero, fast, d, field(Z3Tile::kOpaque, p));
       hn::BlendedStore(hn::Set(di, 1), hn::RebindMask(di, open), di, cnt + p);
-      opened += hn::CountTrue(d, open);
+      openedV = hn::Sub(openedV, hn::VecFromMask(di, hn::RebindMask(di, open)));
     }
-    occluded += hn::CountTrue(d, behind);
+    occludedV = hn::Sub(occludedV, hn::VecFromMask(di, hn::RebindMask(di, behind)));
     return hn::AndNot(hn::Or(fast, behind), inside);
   }
 };
@@ -609,7 +618,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
       }
     }
   }
-  z3.addFastCounts(z3rows.opened, z3rows.occluded);
+  z3.addFastCounts(z3rows.opened(), z3rows.occluded());
   return inserted;
 }
 
@@ -659,7 +668,7 @@ struct PointRun {
     col = hn::ConvertTo(d, several ? hn::And(iota, hn::Set(di, Wp - 1)) : iota);
     row = several ? hn::Floor(hn::Mul(hn::ConvertTo(d, iota), hn::Set(d, 1.0f / float(Wp)))) : hn::Zero(d);
   }
-  ~PointRun() { z3.addFastCounts(z4.opened + z8.opened, z4.occluded + z8.occluded); }
+  ~PointRun() { z3.addFastCounts(z4.opened() + z8.opened(), z4.occluded() + z8.occluded()); }
 
   // one splat; G: its Gouraud colours (C0, Cs, Ct, Cst), or null for a flat splat
   HWY_INLINE void splat(const PointHot& P, const float* normal, const float* G, const PixelRect& r) {
@@ -953,7 +962,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentS
       }
     }
   }
-  z3.addFastCounts(z3rows.opened, z3rows.occluded);
+  z3.addFastCounts(z3rows.opened(), z3rows.occluded());
   return inserted;
 }
 
