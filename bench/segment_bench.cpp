@@ -34,6 +34,13 @@ namespace {
 
 using namespace linesurf;
 
+// RenderOptions::segmentLod of the frame benchmarks: the default, or LINESURF_BENCH_SEGMENT_LOD
+// (0 = every segment exact) for A/B runs of one binary.
+float benchSegmentLod() {
+  const char* env = std::getenv("LINESURF_BENCH_SEGMENT_LOD");
+  return env ? float(std::atof(env)) : RenderOptions{}.segmentLod;
+}
+
 std::filesystem::path sharedData() {
   auto p = std::filesystem::path(LINESURF_SOURCE_DIR) / ".." / "shared" / "data";
   if (const char* env = std::getenv("LINESURF_SHARED_DATA")) p = env;
@@ -148,6 +155,7 @@ void BM_HybridFrame(benchmark::State& state) {
   ThreadLimit limit(2);
   RenderOptions o;
   o.segmentMethod = kMethods[state.range(2)];
+  o.segmentLod = benchSegmentLod();
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
@@ -187,6 +195,7 @@ void BM_ContourFrame(benchmark::State& state) {
   ThreadLimit limit(2);
   RenderOptions o;
   o.alphaBuffer = true;  // as the experiment renders meshes' models
+  o.segmentLod = benchSegmentLod();
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
@@ -209,6 +218,7 @@ void BM_ContourFrame(benchmark::State& state) {
   state.counters["new_layer"] = allocated / std::max(1.0, fragments);  // fraction of fragments opening a Z^3 layer
   state.counters["ns/frag"] = 1e9 * raster / std::max(1.0, fragments);
   state.counters["primitives"] = double(m->points.size() + m->segments.size());
+  state.counters["lod"] = double(o.segmentLod);
   state.SetLabel(std::string(kMeshes[state.range(0)]) + (state.range(1) == 0 ? " points" : " lines") +
                  " simd=" + renderSimdTarget());
 }
@@ -253,32 +263,66 @@ void BM_ContourPrepare(benchmark::State& state) {
 }
 BENCHMARK(BM_ContourPrepare)->Args({0, 0})->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
+// The bunny contour segments of one view prepared one at a time (prepareSegment), the first
+// `limit` drawn ones (their records in the cache: the arithmetic alone for the benchmarks below).
+struct DrawnSegments {
+  std::unique_ptr<Renderer> renderer;
+  FrameContext frame;
+  std::vector<PreparedSegment> segs;
+  std::vector<const PreparedSegment*> drawn;
+};
+bool drawnBunnySegments(const RenderOptions& o, size_t limit, DrawnSegments& out, std::string& error) {
+  const HybridModel* m = contourModel(0, 1, error);
+  if (!m) return false;
+  out.renderer = std::make_unique<Renderer>(*m, o);
+  const Camera cam = Camera::spreadViews(out.renderer->sphere(), 8, 512, 512)[0];
+  out.frame = FrameContext::make(cam, o, out.renderer->sphere(), m->attributes.colors);
+  out.frame.endpointNormals = m->attributes.endpointNormals;
+  out.segs.resize(m->segments.size());
+  for (size_t i = 0; i < out.segs.size() && out.drawn.size() < limit; ++i) {
+    const PrimitiveStatus st = prepareSegment(m->segments[i], uint32_t(i), out.frame, out.segs[i]);
+    if (st == PrimitiveStatus::Drawn || st == PrimitiveStatus::Clipped) out.drawn.push_back(&out.segs[i]);
+  }
+  return true;
+}
+
 // The rows' spans of the bunny contour segments' cutoff regions alone (detail::segmentSpans,
 // what the segment rows walk), 1000 of one view's, one thread: ns per drawn segment.
 void BM_SegmentSpans(benchmark::State& state) {
   std::string error;
-  const HybridModel* m = contourModel(0, 1, error);
-  if (!m) return state.SkipWithError(error.c_str());
-  RenderOptions o;
-  const Renderer r(*m, o);
-  const Camera cam = Camera::spreadViews(r.sphere(), 8, 512, 512)[0];
-  FrameContext frame = FrameContext::make(cam, o, r.sphere(), m->attributes.colors);
-  frame.endpointNormals = m->attributes.endpointNormals;
-  std::vector<PreparedSegment> segs(m->segments.size());
-  std::vector<const PreparedSegment*> drawn;
-  for (size_t i = 0; i < segs.size(); ++i) {
-    const PrimitiveStatus st = prepareSegment(m->segments[i], uint32_t(i), frame, segs[i]);
-    if (st == PrimitiveStatus::Drawn || st == PrimitiveStatus::Clipped) drawn.push_back(&segs[i]);
-  }
-  drawn.resize(std::min<size_t>(drawn.size(), 1000));  // records in the cache: the arithmetic alone
+  static const RenderOptions o;  // the frame keeps a pointer to it
+  DrawnSegments d;
+  if (!drawnBunnySegments(o, 1000, d, error)) return state.SkipWithError(error.c_str());
   std::vector<detail::RowSpan> rows(512);
   size_t spans = 0;
   for (auto _ : state)
-    for (const PreparedSegment* sp : drawn) spans += size_t(std::max(0, detail::segmentSpans(sp->raster, sp->bounds, 0.05f, rows.data())));
+    for (const PreparedSegment* sp : d.drawn) spans += size_t(std::max(0, detail::segmentSpans(sp->raster, sp->bounds, 0.05f, rows.data())));
   benchmark::DoNotOptimize(spans);
-  state.counters["ns/segment"] = benchmark::Counter(double(drawn.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  state.counters["spans/segment"] = double(spans) / double(state.iterations()) / double(std::max<size_t>(1, drawn.size()));
+  state.counters["ns/segment"] = benchmark::Counter(double(d.drawn.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["spans/segment"] = double(spans) / double(state.iterations()) / double(std::max<size_t>(1, d.drawn.size()));
 }
+// The segment level of detail's conversion alone (segmentLodPoint at segmentLod 2) of 1000 drawn
+// bunny contour segments of one view, one thread: ns per segment; the share converted.
+void BM_SegmentLodConvert(benchmark::State& state) {
+  std::string error;
+  static const RenderOptions o;
+  DrawnSegments d;
+  if (!drawnBunnySegments(o, 1000, d, error)) return state.SkipWithError(error.c_str());
+  const size_t n = d.drawn.size();
+  std::vector<PreparedPoint> hot(n);
+  std::vector<PixelRect> bounds(n);
+  std::vector<PointCold> cold(n);
+  std::vector<PointGouraud> gouraud(n);
+  const PointSlots slots{hot.data(), bounds.data(), cold.data(), gouraud.data()};
+  size_t converted = 0;
+  for (auto _ : state)
+    for (size_t i = 0; i < n; ++i) converted += segmentLodPoint(*d.drawn[i], d.frame, 2.0f, slots + i);
+  benchmark::DoNotOptimize(converted);
+  state.counters["ns/segment"] = benchmark::Counter(double(n), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["converted"] = double(converted) / double(state.iterations()) / double(std::max<size_t>(1, n));
+}
+BENCHMARK(BM_SegmentLodConvert)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
 BENCHMARK(BM_SegmentSpans)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 BENCHMARK(BM_ContourFrame)

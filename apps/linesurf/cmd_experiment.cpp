@@ -25,6 +25,7 @@ struct ExperimentArgs {
   float contourMergeNormalDeviation = ContourOptions{}.mergeNormalDeviation;
   float contourMergeAngle = ContourOptions{}.mergeAngle;
   bool noImages = false;
+  float segmentLod = RenderOptions{}.segmentLod;
 };
 
 std::vector<std::string> splitCommas(const std::vector<std::string>& in) {
@@ -59,6 +60,7 @@ void run(const ExperimentArgs& a) {
   o.contour.vertexNormals = a.contourVertexNormals;
   o.contour.mergeNormalDeviation = a.contourMergeNormalDeviation;
   o.contour.mergeAngle = a.contourMergeAngle;
+  o.render.segmentLod = a.segmentLod;
 
   ExperimentResults res = runExperiment(o, progressBar());
   endProgress();
@@ -128,6 +130,9 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--contour-merge-angle", a->contourMergeAngle,
                   "contour: polyline merging, largest normal angle in degrees (extract contour --merge-angle)")
+      ->capture_default_str();
+  sub->add_option("--segment-lod", a->segmentLod,
+                  "Draw segments at most this many kernel sigmas long as one point splat, [0, 4] (render --segment-lod)")
       ->capture_default_str();
   sub->callback([a] { run(*a); });
 });

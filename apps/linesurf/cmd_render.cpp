@@ -142,7 +142,7 @@ void run(RenderArgs& a) {
     sum.pointsOutside += s.pointsOutside; sum.pointsDegenerate += s.pointsDegenerate;
     sum.segmentsDrawn += s.segmentsDrawn; sum.segmentsClipped += s.segmentsClipped; sum.segmentsCulled += s.segmentsCulled;
     sum.segmentsOutside += s.segmentsOutside; sum.segmentsDegenerate += s.segmentsDegenerate;
-    sum.segmentsFallback += s.segmentsFallback;
+    sum.segmentsFallback += s.segmentsFallback; sum.segmentsLod += s.segmentsLod;
     sum.fragments += s.fragments; sum.merged += s.merged; sum.occluded += s.occluded; sum.compressed += s.compressed;
     sum.prepareSeconds += s.prepareSeconds; sum.binSeconds += s.binSeconds; sum.rasterSeconds += s.rasterSeconds;
     sum.totalSeconds += s.totalSeconds;
@@ -153,8 +153,9 @@ void run(RenderArgs& a) {
                     sum.pointsDrawn, sum.pointsClipped, sum.pointsCulled, sum.pointsOutside, sum.pointsDegenerate));
   if (!model.segments.empty())
     say(fmt::format("segments{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate, "
-                    "{} approx fallbacks to screen-space", per, sum.segmentsDrawn, sum.segmentsClipped, sum.segmentsCulled,
-                    sum.segmentsOutside, sum.segmentsDegenerate, sum.segmentsFallback));
+                    "{} approx fallbacks to screen-space, {} drawn as point splats (--segment-lod)", per,
+                    sum.segmentsDrawn, sum.segmentsClipped, sum.segmentsCulled, sum.segmentsOutside,
+                    sum.segmentsDegenerate, sum.segmentsFallback, sum.segmentsLod));
   if (triMesh)
     say(fmt::format("triangles{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate; "
                     "{} samples covered", per, tris[0], tris[1], tris[2], tris[3], tris[4], sum.fragments));
@@ -236,6 +237,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bindEnum(sub, "segmentMethod", o.segmentMethod,
            {{"approx", SegmentMethod::Approx}, {"screen", SegmentMethod::ScreenSpace}, {"reference", SegmentMethod::Reference}},
            "Line-segment filter: approx (§5.2.3 quads), screen (erf), reference");
+  bind(sub, "segmentLod", o.segmentLod,
+       "Draw screen segments at most this many kernel sigmas long as one moment-matched point splat, [0, 4] "
+       "(0 = every segment exact)");
   sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)");
   sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG");
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB");

@@ -104,8 +104,8 @@ def render(model: PointsLike, *, size: Tuple[int, int] = (512, 512), azimuth: fl
            backface_culling: bool = True, ambient: float = 0.25, diffuse: float = 0.75, specular: float = 0.2,
            shininess: float = 24.0, light: Optional[Sequence[float]] = None, world_light: bool = False,
            default_color: Optional[Sequence[float]] = None, per_pixel_lighting: bool = False,
-           background: Union[str, Sequence[float]] = "white", segment_method: str = "screen", k: int = 12,
-           tile_size: int = 64, depth: bool = False, alpha: bool = False,
+           background: Union[str, Sequence[float]] = "white", segment_method: str = "screen",
+           segment_lod: float = 0.0, k: int = 12, tile_size: int = 64, depth: bool = False, alpha: bool = False,
            normal: bool = False) -> Union[npt.NDArray[np.uint8], Dict[str, npt.NDArray[Any]]]: ...
 
 def compare(a: ImageLike, b: ImageLike) -> Dict[str, float]: ...

@@ -41,26 +41,9 @@ void planeRaster(const Camera& cam, const Warped& s, detail::PointRaster& r) {
   r.weightScale = s.weightScale;
 }
 
-// Screen bounding box of the conic S^2 + T^2 <= c N^2 (the projected cutoff ellipse); false when
-// it is not a bounded ellipse. Double precision: the coefficients cancel for small splats.
+// Screen bounding box of the projected cutoff ellipse (detail::conicBounds).
 bool conicBounds(const detail::PointRaster& r, double c, double& x0, double& y0, double& x1, double& y1) {
-  const Affine2 &S = r.S, &T = r.T, &N = r.N;
-  auto dot = [](double a0, double a1, double b0, double b1) { return a0 * b0 + a1 * b1; };
-  const double a00 = dot(S.dx, T.dx, S.dx, T.dx) - c * double(N.dx) * N.dx;
-  const double a01 = dot(S.dx, T.dx, S.dy, T.dy) - c * double(N.dx) * N.dy;
-  const double a11 = dot(S.dy, T.dy, S.dy, T.dy) - c * double(N.dy) * N.dy;
-  const double b0 = dot(S.dx, T.dx, S.c, T.c) - c * double(N.dx) * N.c;
-  const double b1 = dot(S.dy, T.dy, S.c, T.c) - c * double(N.dy) * N.c;
-  const double m = dot(S.c, T.c, S.c, T.c) - c * double(N.c) * N.c;
-  const double det = a00 * a11 - a01 * a01;
-  if (!(a00 > 0 && det > 0)) return false;
-  const double cx = (a01 * b1 - a11 * b0) / det, cy = (a01 * b0 - a00 * b1) / det;
-  const double k = -(m + b0 * cx + b1 * cy);  // the ellipse is (p - centre)^T A (p - centre) <= k
-  if (!(k > 0)) return false;
-  const double hx = std::sqrt(k * a11 / det), hy = std::sqrt(k * a00 / det);
-  const double slack = 0.01 + 1e-4 * (hx + hy);  // against the float rounding of the per-pixel test
-  x0 = cx - hx - slack, x1 = cx + hx + slack, y0 = cy - hy - slack, y1 = cy + hy + slack;
-  return std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1);
+  return detail::conicBounds(r.S, r.T, r.N, c, x0, y0, x1, y1);
 }
 
 // Closed-form warp (common case): V^-1 = L L^T. False when the exact path must run instead

@@ -76,6 +76,13 @@ struct Renderer::Buffers {
   std::vector<PreparedSegment> segs;
   std::vector<PrimitiveStatus> segStatus;
   std::vector<TileSpan> segTiles;     ///< tiles each visible segment touches (dense: binning reads no record)
+  /// Segment level of detail (RenderOptions::segmentLod): per segment slot, whether it is drawn as
+  /// the point splat in the lod* slots below (same slot), not as a segment
+  std::vector<uint8_t> segLod;
+  SlotBuffer<PreparedPoint> lodPts;
+  SlotBuffer<PixelRect> lodBounds;
+  SlotBuffer<PointCold> lodCold;
+  SlotBuffer<PointGouraud> lodGouraud;
   std::vector<uint32_t> chunkVisible;
   std::vector<double> chunkSeconds;   ///< thread CPU time per chunk (prepare, then binning)
   std::vector<PointSetupCounts> chunkCounts;
@@ -101,10 +108,12 @@ namespace {
 // many references ahead (issue 13: contour segments' records missed the cache on every tile).
 constexpr size_t kPrefetchAhead = 4;
 
-void prefetchPrimitive(uint32_t ref, size_t pointSlots, const PreparedPoint* pts, const PreparedSegment* segs) {
+void prefetchPrimitive(uint32_t ref, size_t pointSlots, size_t lodBase, const PreparedPoint* pts,
+                       const PreparedSegment* segs, const PreparedPoint* lodPts) {
   const char* a;
   size_t bytes;
   if (ref < pointSlots) a = reinterpret_cast<const char*>(pts + ref), bytes = sizeof(PreparedPoint);
+  else if (ref >= lodBase) a = reinterpret_cast<const char*>(lodPts + (ref - lodBase)), bytes = sizeof(PreparedPoint);
   else a = reinterpret_cast<const char*>(segs + (ref - pointSlots)), bytes = kSegmentHotBytes;  // its hot lines
   for (size_t o = 0; o < bytes; o += 64) __builtin_prefetch(a + o);
 }
@@ -166,6 +175,10 @@ RenderResult Renderer::render(const Camera& cam) const {
   const size_t segChunks = (ns + segChunkSize - 1) / segChunkSize;
   const size_t chunks = pointChunks + segChunks;
   const size_t pointSlots = pointChunks * chunkPoints;  // refs below pointSlots are points
+  // refs from lodBase on are segments drawn as point splats (RenderOptions::segmentLod; not for
+  // models too large for those refs)
+  const size_t lodBase = pointSlots + ns;
+  const bool lod = opt.segmentLod > 0 && ns > 0 && lodBase + ns <= size_t(UINT32_MAX);
   buf.pts.reserve(pointSlots);
   buf.pointBounds.reserve(pointSlots);
   buf.pointCold.reserve(pointSlots);
@@ -174,6 +187,15 @@ RenderResult Renderer::render(const Camera& cam) const {
   if (buf.segs.size() < ns) buf.segs.resize(ns);
   buf.segStatus.resize(ns);
   if (buf.segTiles.size() < ns) buf.segTiles.resize(ns);
+  if (lod) {
+    if (buf.segLod.size() < ns) buf.segLod.resize(ns);
+    buf.lodPts.reserve(ns);
+    buf.lodBounds.reserve(ns);
+    buf.lodCold.reserve(ns);
+    buf.lodGouraud.reserve(ns);
+  }
+  uint8_t* const segLod = lod ? buf.segLod.data() : nullptr;
+  const PointSlots lodOut{buf.lodPts.data(), buf.lodBounds.data(), buf.lodCold.data(), buf.lodGouraud.data()};
   buf.counts.assign(chunks * tiles, 0);
   buf.chunkVisible.assign(pointChunks, 0);
   buf.chunkCounts.assign(pointChunks, PointSetupCounts{});
@@ -213,21 +235,32 @@ RenderResult Renderer::render(const Camera& cam) const {
   PrimitiveStatus* const segStatus = buf.segStatus.data();
   TileSpan* const segTiles = buf.segTiles.data();
   std::atomic<int64_t> segmentNs{0};
-  // drawn (clipped included), clipped, culled, outside, degenerate, approx fallbacks
-  std::atomic<uint64_t> segCounts[6] = {};
+  // drawn (clipped included), clipped, culled, outside, degenerate, approx fallbacks, drawn as points
+  std::atomic<uint64_t> segCounts[7] = {};
   const detail::SegmentSetupFrame segSetup = segmentSetupFrame(frame);
-  parallelForRange(0, ns, [&](size_t i0, size_t i1) {
+  parallelForRange(0, ns, [&](size_t r0, size_t r1) {
     const double t0 = threadCpuSeconds();
-    prepareSegments(model_.segments.data(), uint32_t(i0), i1 - i0, frame, segSetup, segs + i0, segStatus + i0);
-    // the statuses counted, the tiles and fallback flags of the visible ones taken while their
-    // records are in the cache: counting and binning below read only segStatus and segTiles
-    // (issue 13: a record's miss per visible segment in each of three loops, one of them serial)
-    uint64_t n[6] = {};
-    for (size_t i = i0; i < i1; ++i) {
-      count(segStatus[i], n[0], n[1], n[2], n[3], n[4]);
-      if (visible(segStatus[i])) segTiles[i] = tileSpan(segs[i].bounds), n[5] += segs[i].fallback;
+    uint64_t n[7] = {};
+    // in pieces of kSegmentBatch: the statuses counted, the tiles and fallback flags of the visible
+    // ones taken (and short ones turned into point splats) while their records are in the cache:
+    // counting and binning below read only segStatus and segTiles (issue 13: a record's miss per
+    // visible segment in each of three loops, one of them serial)
+    for (size_t i0 = r0; i0 < r1; i0 += detail::kSegmentBatch) {
+      const size_t i1 = std::min(r1, i0 + detail::kSegmentBatch);
+      prepareSegments(model_.segments.data(), uint32_t(i0), i1 - i0, frame, segSetup, segs + i0, segStatus + i0);
+      for (size_t i = i0; i < i1; ++i) {
+        count(segStatus[i], n[0], n[1], n[2], n[3], n[4]);
+        if (!visible(segStatus[i])) continue;
+        n[5] += segs[i].fallback;
+        if (lod && (segLod[i] = segmentLodPoint(segs[i], frame, opt.segmentLod, lodOut + i))) {
+          segTiles[i] = tileSpan(lodOut.bounds[i]);
+          ++n[6];
+          continue;
+        }
+        segTiles[i] = tileSpan(segs[i].bounds);
+      }
     }
-    for (int k = 0; k < 6; ++k) segCounts[k] += n[k];
+    for (int k = 0; k < 7; ++k) segCounts[k] += n[k];
     segmentNs += int64_t(1e9 * (threadCpuSeconds() - t0));
   }, 256);
   for (const PointSetupCounts& c : buf.chunkCounts) {
@@ -239,6 +272,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   }
   st.segmentsDrawn = segCounts[0], st.segmentsClipped = segCounts[1], st.segmentsCulled = segCounts[2];
   st.segmentsOutside = segCounts[3], st.segmentsDegenerate = segCounts[4], st.segmentsFallback = segCounts[5];
+  st.segmentsLod = segCounts[6];
   parallelFor(0, segChunks, [&](size_t c) {
     uint32_t* cnt = buf.counts.data() + (pointChunks + c) * tiles;
     for (size_t i = c * segChunkSize, e = std::min(ns, i + segChunkSize); i < e; ++i)
@@ -278,7 +312,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     } else {
       const size_t c0 = (c - pointChunks) * segChunkSize;
       for (size_t i = c0, e = std::min(ns, c0 + segChunkSize); i < e; ++i)
-        if (visible(segStatus[i])) fillSpan(off, segTiles[i], uint32_t(pointSlots + i));
+        if (visible(segStatus[i])) fillSpan(off, segTiles[i], uint32_t((lod && segLod[i] ? lodBase : pointSlots) + i));
     }
     buf.chunkSeconds[c] = threadCpuSeconds() - t0;
   }, 1);
@@ -321,12 +355,20 @@ RenderResult Renderer::render(const Camera& cam) const {
         k = e;
         continue;
       }
+      if (p >= lodBase) {  // a run of segments drawn as points: their slots in the lod* arrays
+        uint32_t lodRefs[256];
+        int n = 0;
+        for (; k < kEnd && n < 256 && refs[k] >= lodBase; ++k) lodRefs[n++] = uint32_t(refs[k] - lodBase);
+        rasterizePoints(lodOut, lodRefs, n, ctx);
+        continue;
+      }
       // segments in batches of consecutive references (their rows' spans found together), the
       // next batch's records fetched meanwhile
       const PreparedSegment* batch[kRasterBatch];
       int n = 0;
-      for (; k < kEnd && n < kRasterBatch && refs[k] >= pointSlots; ++k) {
-        if (k + kRasterBatch < kEnd) prefetchPrimitive(refs[k + kRasterBatch], pointSlots, pts, segs);
+      for (; k < kEnd && n < kRasterBatch && refs[k] >= pointSlots && refs[k] < lodBase; ++k) {
+        if (k + kRasterBatch < kEnd)
+          prefetchPrimitive(refs[k + kRasterBatch], pointSlots, lodBase, pts, segs, buf.lodPts.data());
         batch[n++] = &segs[refs[k] - pointSlots];
       }
       rasterizeSegments(batch, n, ctx);

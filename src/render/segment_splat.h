@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "detail/splat_rows.h"
+#include "point_splat.h"
 #include "linesurf/core/model.h"
 #include "linesurf/render/segment_splat.h"
 #include "linesurf/render/splat_context.h"
@@ -182,6 +183,22 @@ void rasterizeSegment(const PreparedSegment& segment, const SplatContext& ctx);
 /// (SIMD lanes = segments).
 inline constexpr int kRasterBatch = 16;
 void rasterizeSegments(const PreparedSegment* const* segments, int n, const SplatContext& ctx);
+
+/// Segment level of detail (beyond the thesis, issue 13; cf. the §5.2.3 approximation). A one-piece
+/// ScreenSpace segment's weight is its kernel (covariance M in the strip's plane coordinates (a, b))
+/// integrated along it with the linear scale w(tau) = scale0 + slope tau, tau in [0, l]: a box (l)
+/// convolved with a Gaussian. When l is short against the kernel (lambda = l sqrt((M^-1)_aa) <=
+/// RenderOptions::segmentLod) that is nearly the one Gaussian of the same mass, mean a_m and
+/// covariance Sigma = M + var e_a e_a^T (var, a_m: the moments of w over [0, l]): an elliptical
+/// object-space point splat in the strip's plane, rasterised by the point rows (4-5x cheaper per
+/// fragment and per tile). Its plane coordinates (s, t) = L^T ((a, b) - (a_m, 0)), Sigma^-1 = L L^T
+/// (Sherman-Morrison: L^T = [[l00, l00 skew], [0, sqrt(across)]], l00^2 = m00 / (1 + var m00)),
+/// weightScale = w's mass / sqrt(1 + var m00), the frame's cutoff; z threshold the mean of the
+/// ends', colour attr + (a_m + a) / l dc (Gouraud when the splat is wide, as points are), normal
+/// the normalised mean of the endpoint normals. Writes slot 0 of `out` and returns true when the
+/// segment qualifies (drawn, ScreenSpace without fallback, one piece, shade Constant / Linear /
+/// Smooth, not depth-clipped, lambda <= maxLambda, finite constants); otherwise writes nothing.
+bool segmentLodPoint(const PreparedSegment& segment, const FrameContext& frame, float maxLambda, const PointSlots& out);
 
 /// The row spans rasterizeSegment walks for the segment over `rect` (a tile): with tight, those of
 /// the polygon around the cutoff region it walks (ScreenSpace), else those of the footprint box.

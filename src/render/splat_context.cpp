@@ -36,6 +36,8 @@ void validate(const RenderOptions& o) {
     throwBadOption("background", "channels must be in [0, 1]");
   if (!(std::isfinite(o.alphaOverride) && o.alphaOverride <= 1))
     throwBadOption("alphaOverride", "must be in [0, 1] (or negative to keep the model's alpha)");
+  if (!inRange(o.segmentLod, 0, 4))
+    throwBadOption("segmentLod", "must be in [0, 4] kernel standard deviations (0 = every segment exact)");
   if (o.tileSize < 8 || o.tileSize > 1024) throwBadOption("tileSize", "must be in [8, 1024] pixels");
 }
 

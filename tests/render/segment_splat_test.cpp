@@ -77,6 +77,7 @@ Pair cylinderPair(float r, int nA, int nZ, int per) {
 RenderOptions optionsFor(SegmentMethod m) {
   RenderOptions o;
   o.segmentMethod = m;
+  o.segmentLod = 0;  // the segment kernel itself, never its point-splat level of detail
   o.cutoffRadius = 2.5f;
   o.prefilterVariance = 1.0f;
   o.reconstructionScale = 0.5f;

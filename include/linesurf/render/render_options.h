@@ -96,6 +96,15 @@ struct RenderOptions {
 
   // --- line segments (§5) -------------------------------------------------------------------
   SegmentMethod segmentMethod = SegmentMethod::ScreenSpace;
+  /// Segment level of detail (beyond the thesis; cf. the §5.2.3 approximation): a ScreenSpace
+  /// segment whose length is at most segmentLod standard deviations of its resampling kernel
+  /// along it (lambda = l sqrt((M^-1)_aa), M the kernel's covariance in the strip's plane) is
+  /// drawn as the one elliptical point splat of the same mass, mean and covariance (M + var e_a
+  /// e_a^T, the moment-matched Gaussian) through the point pipeline. Untextured one-piece segments
+  /// that are not depth-clipped only. [0, 4]; 0 = off (every segment exact), the default: the
+  /// ellipse's cutoff region misses the ends of the segment's capsule, which moves Z^3 coverage
+  /// (al contour lines at 2: 0.67 grey levels mean difference; docs/segment-splatting.md).
+  float segmentLod = 0.0f;
 
   // --- outputs ------------------------------------------------------------------------------
   bool depthBuffer = false;   ///< RenderResult::depth: nearest surface depth (0 = empty)

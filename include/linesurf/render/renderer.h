@@ -21,6 +21,7 @@ struct RenderStats {
   uint64_t pointsDrawn = 0, pointsClipped = 0, pointsCulled = 0, pointsOutside = 0, pointsDegenerate = 0;
   uint64_t segmentsDrawn = 0, segmentsClipped = 0, segmentsCulled = 0, segmentsOutside = 0, segmentsDegenerate = 0;
   uint64_t segmentsFallback = 0;  ///< Approx (§5.2.3) construction failed; drawn with ScreenSpace
+  uint64_t segmentsLod = 0;  ///< drawn as one point splat (RenderOptions::segmentLod; among segmentsDrawn)
   // Z^3 (summed over tiles)
   uint64_t fragments = 0, merged = 0, allocated = 0, occluded = 0, compressed = 0;
   uint64_t tileBins = 0;  ///< (primitive, tile) pairs rasterised
