@@ -76,7 +76,7 @@
       return out;
     };
     if (np) {
-      model.points = arrays(meta.points, np, ['position', 'normal', 'radius', 'color', 'cluster'], 'point');
+      model.points = arrays(meta.points, np, ['position', 'normal', 'shadingNormal', 'radius', 'color', 'cluster'], 'point');
       if (!model.points.position || !model.points.normal || !model.points.radius)
         throw new Error('points need positions, normals and radii');
     }
@@ -129,9 +129,10 @@ layout(location = 1) in vec3 aNrm;
 layout(location = 2) in float aRad;
 layout(location = 3) in vec4 aCol;
 layout(location = 4) in float aCluster;
+layout(location = 5) in vec3 aSNrm;  // shading normal (issue 14), or zero: light by the plane normal
 out vec2 vST;          // position in the cut-off ellipse, standard deviations
 out vec3 vP;           // camera-space position
-flat out vec3 vN;
+flat out vec3 vN;      // the lighting normal
 flat out vec3 vAlbedo;
 flat out float vScale; // 1 / (r0 r1), §5.2.3.3
 flat out float vThr;
@@ -180,7 +181,16 @@ void main() {
   vec3 P = c + R * (corner.x * r0 * E0 + corner.y * r1 * E1);
   vST = R * corner;
   vP = P;
+  // lit by the point's shading normal when the model has one (its plane stays n), on the viewer's
+  // side of the plane as preparePoint flips it: a drawn plane faces the viewer (culled otherwise),
+  // a point without a plane normal takes the shading normal's side facing the eye
   vN = n;
+  vec3 m = uRot * aSNrm;
+  float ml = length(m);
+  if (ml > 0.0) {
+    m /= ml;
+    vN = nn > 0.0 || dot(m, c) <= 0.0 ? m : -m;
+  }
   vScale = 1.0 / (r0 * r1);
   // depth half-extent of the cut-off ellipse plus the radius (delta-z, §6.2.3.2)
   vThr = uZThr * (R * sqrt(r0 * r0 * E0.z * E0.z + r1 * r1 * E1.z * E1.z) + radius);
@@ -575,6 +585,8 @@ void main() {
       else { gl.disableVertexAttribArray(3); gl.vertexAttrib4f(3, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
       if (P.cluster) attrib(4, P.cluster, false);
       else { gl.disableVertexAttribArray(4); gl.vertexAttrib1f(4, -1); }
+      if (P.shadingNormal) attrib(5, P.shadingNormal, true);
+      else { gl.disableVertexAttribArray(5); gl.vertexAttrib3f(5, 0, 0, 0); }
       quadIndices(model.np);
     }
     if (model.ns) {
@@ -640,6 +652,15 @@ void main() {
     $('name').textContent = meta.name || '';
     if (meta.name) document.title = meta.name + ' - linesurf view';
     if (!model.np || !(model.points.cluster)) $('clusterOption').disabled = true;
+    {  // the optional attributes the page draws with
+      const has = [];
+      if (model.np && model.points.shadingNormal) has.push('point shading normals');
+      if (model.ns && model.segments.normal0 && model.segments.normal1) has.push('segment endpoint normals');
+      if ((model.np && model.points.color) || (model.ns && model.segments.color)) has.push('colours');
+      if (model.np && model.points.cluster) has.push('cluster ids');
+      $('attributes').textContent = has.length ? 'model carries: ' + has.join(', ') : '';
+      $('attributes').hidden = !has.length;
+    }
     if (state.colorMode === 2 && $('clusterOption').disabled) state.colorMode = 0;
 
     function defaultCamera(w, h) {

@@ -98,12 +98,14 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
   auto local = [&](const Vec3f& p) { return Vec3f((p - centre) * invR); };
   const bool clusters = model.pointProperties.count("cluster") > 0 &&
                         model.pointProperties.at("cluster").size() == model.points.size();
+  // per-point shading normals (issue 14): used exactly when `linesurf render` uses them (Renderer)
+  const bool shading = model.attributes.shadingNormals && model.pointShadingNormals.size() == model.points.size();
 
   Blob blob;
   json meta = {{"format", "linesurf-view"}, {"version", 1}, {"name", o.name}};
   {
     std::vector<float> pos, rad, cluster;
-    std::vector<int16_t> nrm;
+    std::vector<int16_t> nrm, snrm;
     std::vector<uint8_t> col;
     for (size_t i = 0; i < model.points.size(); ++i) {
       const Point& p = model.points[i];
@@ -116,6 +118,12 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
       const float nn = p.normal.norm();
       const Vec3f n = nn > 0 ? Vec3f(p.normal / nn) : Vec3f::Zero();
       nrm.insert(nrm.end(), {snorm16(n.x()), snorm16(n.y()), snorm16(n.z())});
+      if (shading) {  // unit, or zero where unusable: the page then lights by the plane (as preparePoint)
+        const Vec3f& sn = model.pointShadingNormals[i];
+        const float sl = sn.norm();
+        const Vec3f m = sl > 0 && std::isfinite(sl) ? Vec3f(sn / sl) : Vec3f::Zero();
+        snrm.insert(snrm.end(), {snorm16(m.x()), snorm16(m.y()), snorm16(m.z())});
+      }
       rad.push_back(p.radius * invR);
       if (model.attributes.colors)
         col.insert(col.end(), {unorm8(p.color.x()), unorm8(p.color.y()), unorm8(p.color.z()), unorm8(p.color.w())});
@@ -130,6 +138,7 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
                   {"position", blob.add(pos, "f32", 3)},
                   {"normal", blob.add(nrm, "i16", 3)},
                   {"radius", blob.add(rad, "f32", 1)}};
+      if (shading) pts["shadingNormal"] = blob.add(snrm, "i16", 3);
       if (model.attributes.colors) pts["color"] = blob.add(col, "u8", 4);
       if (clusters) pts["cluster"] = blob.add(cluster, "f32", 1);
       meta["points"] = pts;

@@ -151,6 +151,34 @@ TEST(ViewerPage, CarriesEndpointNormalsAndClusterIds) {
   EXPECT_TRUE(meta["points"].contains("cluster"));
 }
 
+// Issue 14: points' shading normals go into the page (unit, int16) beside their plane normals, in
+// the order of the points drawn (skipped points leave theirs out), and only when the model has them.
+TEST(ViewerPage, CarriesPointShadingNormals) {
+  HybridModel m = smallHybrid();
+  EXPECT_FALSE(json::parse(scriptText(viewerPage(m), "linesurf-meta"))["points"].contains("shadingNormal"));
+  for (size_t i = 0; i < m.points.size(); ++i)
+    m.pointShadingNormals.push_back(Vec3f(0.1f * float(i), 0.0f, 1.0f).normalized());
+  EXPECT_FALSE(json::parse(scriptText(viewerPage(m), "linesurf-meta"))["points"].contains("shadingNormal"))
+      << "without attributes.shadingNormals the renderer ignores them, and so does the page";
+  m.attributes.shadingNormals = true;
+  m.pointShadingNormals[4] = Vec3f(0, 3, 0);  // not unit: normalised
+  m.points[1].radius = 0;                     // left out with its shading normal
+  const std::string page = viewerPage(m);
+  const json meta = json::parse(scriptText(page, "linesurf-meta"));
+  const std::vector<uint8_t> data = fromBase64(scriptText(page, "linesurf-data"));
+  ASSERT_EQ(meta["points"]["count"], 4);
+  const json& sn = meta["points"]["shadingNormal"];
+  ASSERT_EQ(sn["type"], "i16");
+  ASSERT_EQ(sn["components"], 3);
+  const size_t drawn[] = {0, 2, 3, 4};
+  for (size_t k = 0; k < 4; ++k) {
+    int16_t q[3];
+    std::memcpy(q, data.data() + sn["offset"].get<size_t>() + k * 6, 6);
+    const Vec3f expect = m.pointShadingNormals[drawn[k]].normalized();
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(q[c] / 32767.0f, expect[c], 1e-4f) << "point " << drawn[k];
+  }
+}
+
 TEST(ViewCli, WritesAPageAndRefusesBadInput) {
   const auto dir = test::scratchDir("view_cli");
   auto ok = test::runCli("view " + (test::bundledData() / "rockerarm_points.ply").string() + " -o " +

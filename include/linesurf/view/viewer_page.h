@@ -8,7 +8,10 @@
 /// defaults (render_options.h): object-space EWA point splats (§4.2.2) and line-segment splats
 /// (§5, the closed form in erf of the ScreenSpace method), depth-tolerant blending with
 /// normalisation (the two-pass visibility + accumulation of Botsch et al. 2005 standing in for
-/// Z^3, §6.2.3), per-pixel Phong lighting (§6.2.2). See docs/decisions.md (issue 16).
+/// Z^3, §6.2.3), per-pixel Phong lighting (§6.2.2). Points with shading normals
+/// (HybridModel::pointShadingNormals) are lit by them, segments with endpoint normals by
+/// normalize(n0 + u (n1 - n0)), as `linesurf render` does (issue 14). See docs/decisions.md
+/// (issue 16, "Issue 14 (i14view)").
 #include <cstddef>
 #include <filesystem>
 #include <string>
