@@ -137,9 +137,9 @@ int PointFragments(const PointRaster& P, int x0, int y0, int width, int k0, int 
 // --- segments (§5: the ScreenSpace closed form of segment_methods.cpp) ----------------------
 
 // erf(x) without exp (Abramowitz & Stegun 7.1.28: 1 - (1 + a1 x + ... + a6 x^6)^-16, absolute
-// error < 3e-7; about 1e-6 in float).
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE V erfRational(D d, V x) {
+// error < 3e-7; about 1e-6 in float); 1 / p by reciprocalNewton (p >= 1), as the point kernel.
+HWY_INLINE VF erfRational(DF d, VF x) {
+  using V = VF;
   const V ax = hn::Abs(x);
   V p = hn::Set(d, 0.0000430638f);
   p = hn::MulAdd(p, ax, hn::Set(d, 0.0002765672f));
@@ -152,8 +152,26 @@ HWY_INLINE V erfRational(D d, V x) {
   p = hn::Mul(p, p);  // ^4
   p = hn::Mul(p, p);  // ^8
   p = hn::Mul(p, p);  // ^16
-  const V r = hn::Sub(hn::Set(d, 1.0f), hn::Div(hn::Set(d, 1.0f), p));
+  const V r = hn::Sub(hn::Set(d, 1.0f), reciprocalNewton(d, p));
   return hn::CopySign(r, x);
+}
+
+// erf(x) for |x| <= kPolyErfMaxX as x P(x^2), P of degree 6 in Estrin's scheme (beyond the thesis:
+// least squares on Chebyshev nodes, absolute error 3.1e-7 in float, as erfRational's; about half
+// its instructions, no reciprocal). The segment kernel's erf arguments are u = k (t - tau*) with
+// |t - tau*| <= delta, so |u| <= sqrt((R^2 - qmin) / 2) <= R / sqrt(2): within range whenever
+// the Gaussian takes expHalfNeg's polynomial (R^2 <= kPolyExpMaxQ = 4 gives |u| <= 1.42).
+inline constexpr float kPolyErfMaxX = 1.5f;
+static_assert(kPolyExpMaxQ <= 2 * kPolyErfMaxX * kPolyErfMaxX);
+template <bool kPoly>
+HWY_INLINE VF erfKernel(DF d, VF x) {
+  if (!kPoly) return erfRational(d, x);
+  const VF t = hn::Mul(x, x), t2 = hn::Mul(t, t), t4 = hn::Mul(t2, t2);
+  const VF a = hn::MulAdd(hn::Set(d, -0.37610021233558655f), t, hn::Set(d, 1.1283776760101318f));
+  const VF b = hn::MulAdd(hn::Set(d, -0.02658114954829216f), t, hn::Set(d, 0.11270857602357864f));
+  const VF c = hn::MulAdd(hn::Set(d, -0.0006430802750401199f), t, hn::Set(d, 0.004894962068647146f));
+  const VF p = hn::MulAdd(t4, hn::MulAdd(hn::Set(d, 4.422103666001931e-05f), t2, c), hn::MulAdd(t2, b, a));
+  return hn::Mul(x, p);
 }
 
 // Pixel centres of the spans, packed: lanes are filled across rows, so a segment a few pixels
@@ -175,28 +193,41 @@ HWY_INLINE int expandSpans(DF d, const RowSpan* spans, int count, float* px, flo
   return n;
 }
 
-// exp(-R^2 / 2) in every lane, as hn::Exp gives it; R^2 is the frame's cutoff, so the last value
-// is kept per thread (the rows build a kernel per segment and tile: issue 13, fixed costs).
-HWY_INLINE VF cutoffExp(DF d, float R2) {
-  thread_local float lastR2 = std::numeric_limits<float>::quiet_NaN(), lastG = 0;
-  if (!(R2 == lastR2)) lastG = hn::GetLane(hn::Exp(d, hn::Set(d, R2 * -0.5f))), lastR2 = R2;
-  return hn::Set(d, lastG);
-}
+// The frame's constants of the segment kernel (SegmentRaster's R2, nearD, farD: the same for every
+// segment of a frame), set once per run of segments and again only when they change.
+struct SegmentFrameV {
+  DF d;
+  VF one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
+  VF R2, nearD, farD;
+  VF gcut;  ///< exp(-R^2 / 2) (as expHalfNeg gives it): the slope term's ends where the cutoff bounds
+  float r2 = std::numeric_limits<float>::quiet_NaN(), nd = 0, fd = 0;
+  bool poly = false;  ///< R2 <= kPolyExpMaxQ: exp by the polynomial
+  explicit SegmentFrameV(const SegmentRaster& S) { set(S); }
+  HWY_INLINE void set(const SegmentRaster& S) {
+    if (S.R2 == r2 && S.nearD == nd && S.farD == fd) return;
+    r2 = S.R2, nd = S.nearD, fd = S.farD;
+    R2 = hn::Set(d, r2), nearD = hn::Set(d, nd), farD = hn::Set(d, fd);
+    poly = r2 <= kPolyExpMaxQ;
+    gcut = poly ? expHalfNeg<true>(d, R2) : expHalfNeg<false>(d, R2);
+  }
+};
 
 // A segment's weight, depth and along-axis parameter u at the pixels (px, py) of the lanes in
 // `valid`: the closed form of segment_methods.cpp (screenSpaceWeight), summed over the
-// sub-segments that can reach the lanes. Returns the lanes with a fragment (w > 0).
-template <class D>
+// sub-segments that can reach the lanes. Returns the lanes with a fragment (w > 0). The economies
+// of the point kernel (PointKernel): 1 / N and erf's 1 / p by reciprocalNewton, the Gaussian
+// across the line exp(-qmin / 2) and the slope term's ends by expHalfNeg (kPoly: R^2 <= 4; both
+// arguments are clamped to R^2). Shared by segmentFragments and the rows (they agree).
+template <bool kPoly>
 struct SegmentKernel {
-  using V = hn::Vec<D>;
+  using D = DF;
+  using V = VF;
   D d;
   const SegmentRaster& S;
-  V one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
-  V a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f),
-    R2 = hn::Set(d, S.R2);
-  V gcut = cutoffExp(DF(), S.R2);  ///< exp(-R^2 / 2): the slope term's ends where the cutoff bounds
+  const SegmentFrameV& F;
+  V a0 = hn::Set(d, S.a0), b0 = hn::Set(d, S.b0), invLen = hn::Set(d, S.length > 0 ? 1.0f / S.length : 0.0f);
   V aMin = hn::Set(d, S.aMin), aMax = hn::Set(d, S.aMax), bMax = hn::Set(d, S.bMax);
-  V depthNum = hn::Set(d, S.depthNum), nearD = hn::Set(d, S.nearD), farD = hn::Set(d, S.farD);
+  V depthNum = hn::Set(d, S.depthNum);
   V Ndx = hn::Set(d, S.N.dx), Ndy = hn::Set(d, S.N.dy), N0 = hn::Set(d, S.N.c);
   V Adx = hn::Set(d, S.A.dx), Ady = hn::Set(d, S.A.dy), A0 = hn::Set(d, S.A.c);
   V Bdx = hn::Set(d, S.B.dx), Bdy = hn::Set(d, S.B.dy), B0 = hn::Set(d, S.B.c);
@@ -214,48 +245,62 @@ struct SegmentKernel {
   static Piece piece(D d, const SegmentPiece& p) {
     return piece(d, p.a0, p.a1 - p.a0, p.skew, p.across, p.invM00, p.k, p.erfScale, p.scale0, p.slope);
   }
-  explicit SegmentKernel(const SegmentRaster& s)
-      : S(s), first(piece(D(), 0, s.length, s.skew, s.across, s.invM00, s.k, s.erfScale, s.scale0, s.slope)) {}
+  SegmentKernel(const SegmentRaster& s, const SegmentFrameV& f)
+      : S(s), F(f), first(piece(D(), 0, s.length, s.skew, s.across, s.invM00, s.k, s.erfScale, s.scale0, s.slope)) {}
 
   // The integral along one sub-segment at plane coordinates (a, b), zero outside `inside`.
   HWY_INLINE V pieceWeight(const Piece& p, V a, V b, hn::Mask<D> inside) const {
+    const V zero = F.zero, R2 = F.R2;
     // with x = a - a0 - tau: q(tau) = m00 (tau - tau*)^2 + qmin, kernels count where q <= R^2
     const V tauStar = hn::MulAdd(p.skew, b, hn::Sub(a, p.a0));
     const V qmin = hn::Mul(hn::Mul(b, b), p.across);
     const V delta = hn::Sqrt(hn::Mul(hn::Max(hn::Sub(R2, qmin), zero), p.invM00));
-    const V t0 = hn::Max(zero, hn::Sub(tauStar, delta)), t1 = hn::Min(p.len, hn::Add(tauStar, delta));
+    const V lo = hn::Sub(tauStar, delta), hi = hn::Add(tauStar, delta);
+    const V t0 = hn::Max(zero, lo), t1 = hn::Min(p.len, hi);
     inside = hn::And(inside, hn::And(hn::Lt(qmin, R2), hn::Gt(t1, t0)));
     if (hn::AllFalse(d, inside)) return zero;
-    const V u0 = hn::Mul(p.k, hn::Sub(t0, tauStar)), u1 = hn::Mul(p.k, hn::Sub(t1, tauStar));
-    const V halfQ = hn::Mul(hn::Min(qmin, R2), mhalf);  // -qmin / 2
-    const V g = hn::Exp(d, halfQ);
-    // integral of exp(-m00 (tau - tau*)^2 / 2) over [t0, t1]: erf without exp
-    const V i0 = hn::Mul(p.erfScale, hn::Sub(erfRational(d, u1), erfRational(d, u0)));
+    // the ends of the sub-segment that cut the kernels' interval [tau* - delta, tau* + delta]
+    const auto cut0 = hn::And(inside, hn::Gt(t0, lo)), cut1 = hn::And(inside, hn::Lt(t1, hi));
+    const V qc = hn::Min(qmin, R2);
+    const V g = expHalfNeg<kPoly>(d, qc);  // exp(-qmin / 2)
+    // integral of exp(-m00 (tau - tau*)^2 / 2) over [t0, t1] = erf(u1) - erf(u0), u_i = k (t_i -
+    // tau*): erf without exp. At an uncut end u_i = -+k delta (not the rounded difference), so a
+    // vector without cut lanes (the middle of a long segment) takes 2 erf(k delta), the same value
+    // to the bit (erfKernel is odd exactly): a pixel's weight does not depend on its lane's vector
+    V i0;
+    const V kd = hn::Mul(p.k, delta);
+    const V u0 = hn::IfThenElse(cut0, hn::Mul(p.k, hn::Sub(t0, tauStar)), hn::Neg(kd));
+    const V u1 = hn::IfThenElse(cut1, hn::Mul(p.k, hn::Sub(t1, tauStar)), kd);
+    if (hn::AllFalse(d, hn::Or(cut0, cut1))) {
+      const V e = erfKernel<kPoly>(d, kd);
+      i0 = hn::Mul(p.erfScale, hn::Add(e, e));
+    } else {
+      i0 = hn::Mul(p.erfScale, hn::Sub(erfKernel<kPoly>(d, u1), erfKernel<kPoly>(d, u0)));
+    }
     V w = hn::Mul(hn::Mul(hn::MulAdd(p.slope, tauStar, p.scale0), i0), g);
     if (!p.flat) {
       // the scale's slope adds slope / m00 (g e0 - g e1), g e_i = exp(-qmin/2 - u_i^2): at an end
       // the cutoff bounds (not the sub-segment's end) that is exp(-R^2/2) at both, so only the
       // ends the sub-segment cuts need an exp (long segments: rarely a vector)
-      const V cut = hn::Mul(R2, mhalf);
-      const auto cut0 = hn::And(inside, hn::Gt(t0, hn::Sub(tauStar, delta)));
-      const auto cut1 = hn::And(inside, hn::Lt(t1, hn::Add(tauStar, delta)));
-      V ge0 = gcut, ge1 = gcut;
+      V ge0 = F.gcut, ge1 = F.gcut;
+      const V two = hn::Add(F.one, F.one);
       if (!hn::AllFalse(d, cut0))
-        ge0 = hn::IfThenElse(cut0, hn::Exp(d, hn::Max(hn::NegMulAdd(u0, u0, halfQ), cut)), ge0);
+        ge0 = hn::IfThenElse(cut0, expHalfNeg<kPoly>(d, hn::Min(hn::MulAdd(two, hn::Mul(u0, u0), qc), R2)), ge0);
       if (!hn::AllFalse(d, cut1))
-        ge1 = hn::IfThenElse(cut1, hn::Exp(d, hn::Max(hn::NegMulAdd(u1, u1, halfQ), cut)), ge1);
+        ge1 = hn::IfThenElse(cut1, expHalfNeg<kPoly>(d, hn::Min(hn::MulAdd(two, hn::Mul(u1, u1), qc), R2)), ge1);
       w = hn::MulAdd(hn::Mul(p.slope, p.invM00), hn::Sub(ge0, ge1), w);
     }
     return hn::IfThenElseZero(inside, w);
   }
 
   HWY_INLINE hn::Mask<D> operator()(V px, V py, hn::Mask<D> valid, V& w, V& z, V& u) const {
+    const V zero = F.zero;
     // the ray through the pixel meets the strip's plane (in front of the eye) at depth z
     const V nr = hn::MulAdd(Ndx, px, hn::MulAdd(Ndy, py, N0));
-    const V iN = hn::Div(one, nr);
+    const V iN = reciprocalNewton(d, nr);
     z = hn::Mul(depthNum, iN);
     auto inside = hn::And(hn::Lt(nr, zero), valid);
-    if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, nearD), hn::Le(z, farD)));
+    if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, F.nearD), hn::Le(z, F.farD)));
     const V a = hn::MulSub(hn::MulAdd(Adx, px, hn::MulAdd(Ady, py, A0)), iN, a0);
     const V b = hn::MulSub(hn::MulAdd(Bdx, px, hn::MulAdd(Bdy, py, B0)), iN, b0);
     inside = hn::And(inside, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
@@ -271,13 +316,15 @@ struct SegmentKernel {
       const int k1 = int(std::clamp(std::floor((aHi + S.pieceMaxReach) * S.pieceInvLength) + 2.0f, 0.0f, K));
       for (int k = k0; k < k1; ++k) w = hn::Add(w, pieceWeight(piece(d, S.pieces[k]), a, b, inside));
     }
-    u = hn::Min(one, hn::Max(zero, hn::Mul(a, invLen)));
+    u = hn::Min(F.one, hn::Max(zero, hn::Mul(a, invLen)));
     return hn::And(inside, hn::Gt(w, zero));
   }
 };
 
-int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount, FragmentBlock& out) {
-  const SegmentKernel<DF> kernel(S);
+template <bool kPoly>
+int SegmentFragmentsT(const SegmentRaster& S, const SegmentFrameV& F, const RowSpan* spans, int spanCount,
+                      FragmentBlock& out) {
+  const SegmentKernel<kPoly> kernel(S, F);
   const DF d;
   const int L = int(hn::Lanes(d));
   alignas(64) float pxs[kBlock + kMaxLanes], pys[kBlock + kMaxLanes];
@@ -293,6 +340,11 @@ int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount
     m += pack(d, keep, px, py, w, z, u, hn::MulAdd(u, thrD, thr0), true, out, m);
   }
   return m;
+}
+
+int SegmentFragments(const SegmentRaster& S, const RowSpan* spans, int spanCount, FragmentBlock& out) {
+  const SegmentFrameV F(S);
+  return F.poly ? SegmentFragmentsT<true>(S, F, spans, spanCount, out) : SegmentFragmentsT<false>(S, F, spans, spanCount, out);
 }
 
 // The rows' spans of a segment's cutoff region (detail/splat_rows.h: segmentSpans). Eight
@@ -837,12 +889,14 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
 //     Z3Tile::insert.
 inline constexpr int kSegChunk = 512;
 
-template <class DZ>
-HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans,
-                                   int count, Z3Tile& z3) {
+template <bool kPoly, class DZ>
+HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentFrameV& F, const SegmentShadeRows& A,
+                                   const RowSpan* spans, int count, Z3Tile& z3) {
   const DF d;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
-  const SegmentKernel<DF> kernel(S);
+  const SegmentKernel<kPoly> kernel(S, F);
+  // the smooth normals only when the tile blends normal sums (else nothing reads them: Z3Tile)
+  const bool smooth = A.smooth && z3.blendNormals();
   const VF oneF = hn::Set(d, 1.0f), zero = hn::Zero(d), iota = hn::Iota(d, 0.0f), centre = hn::Iota(d, 0.5f);
   const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
   VF attr[3], dc[3], n0[3], dn[3];
@@ -915,7 +969,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentS
       } else {
         for (int c = 0; c < 3; ++c) hn::Store(hn::MulAdd(u, dc[c], attr[c]), d, bc[c] + i);
       }
-      if (A.smooth) {
+      if (smooth) {
         VF m[3];
         for (int c = 0; c < 3; ++c) m[c] = hn::MulAdd(u, dn[c], n0[c]);
         VF inv;
@@ -943,7 +997,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentS
         const VZ z = hn::LoadU(dz, bz + k), thr = hn::LoadU(dz, bt + k);
         const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
           if (a < 3) return hn::LoadU(dz, bc[a] + k);
-          if (A.smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
+          if (smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
           return constAttr[a];
         });
         if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
@@ -955,7 +1009,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentS
           float fa[Z3Tile::kAttrs];
           for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
           for (int a = 0; a < 3; ++a) fa[a] = bc[a][k + i];
-          if (A.smooth)
+          if (smooth)
             for (int a = 0; a < 3; ++a) fa[Z3Tile::kNx + a] = bn[a][k + i];
           z3.insert(run.x0 + c + i, run.y, bz[k + i], bt[k + i], bw[k + i], fa);
         }
@@ -969,9 +1023,15 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentS
 uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
   int widest = 0;  // the Z^3 pass runs on vectors of at most the widest span's lanes
   for (int r = 0; r < count; ++r) widest = std::max(widest, spans[r].x1 - spans[r].x0);
-  if (widest <= 4) return SegmentRowsT(hn::CappedTag<float, 4>(), S, A, spans, count, z3);
-  if (widest <= 8) return SegmentRowsT(hn::CappedTag<float, 8>(), S, A, spans, count, z3);
-  return SegmentRowsT(hn::CappedTag<float, 16>(), S, A, spans, count, z3);
+  const SegmentFrameV F(S);
+  if (F.poly) {
+    if (widest <= 4) return SegmentRowsT<true>(hn::CappedTag<float, 4>(), S, F, A, spans, count, z3);
+    if (widest <= 8) return SegmentRowsT<true>(hn::CappedTag<float, 8>(), S, F, A, spans, count, z3);
+    return SegmentRowsT<true>(hn::CappedTag<float, 16>(), S, F, A, spans, count, z3);
+  }
+  if (widest <= 4) return SegmentRowsT<false>(hn::CappedTag<float, 4>(), S, F, A, spans, count, z3);
+  if (widest <= 8) return SegmentRowsT<false>(hn::CappedTag<float, 8>(), S, F, A, spans, count, z3);
+  return SegmentRowsT<false>(hn::CappedTag<float, 16>(), S, F, A, spans, count, z3);
 }
 
 int64_t Target() { return HWY_TARGET; }
