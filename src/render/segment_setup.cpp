@@ -211,9 +211,10 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       const VF sa = hn::IfThenElse(flip, hn::Neg(ia), ia), sb = hn::IfThenElse(flip, hn::Neg(ib), ib);
       ax = hn::Mul(ax, sa), ay = hn::Mul(ay, sa), az = hn::Mul(az, sa);
       bx = hn::Mul(bx, sb), by = hn::Mul(by, sb), bz = hn::Mul(bz, sb);
-      // turning by more than kStationTurn (0.1 rad): several stations, the exact path
+      // turning by more than kStationTurn (0.1 rad): several lighting stations (prepareSegments
+      // lights them per lane); near that threshold the exact path decides
       const VF cosTurn = dot3(ax, ay, az, bx, by, bz);
-      exact = hn::Or(exact, hn::And(sm, hn::Not(hn::Gt(cosTurn, S(kCosStationTurn + 1e-5f)))));
+      exact = hn::Or(exact, hn::And(sm, hn::Not(hn::Gt(hn::Abs(hn::Sub(cosTurn, S(kCosStationTurn))), S(1e-5f)))));
       exact = hn::Or(exact, hn::And(sm, hn::Not(hn::And(finite(ax), finite(bx)))));
       n0x = hn::IfThenElse(sm, ax, nx), n0y = hn::IfThenElse(sm, ay, ny), n0z = hn::IfThenElse(sm, az, nz);
       n1x = hn::IfThenElse(sm, bx, nx), n1y = hn::IfThenElse(sm, by, ny), n1z = hn::IfThenElse(sm, bz, nz);
@@ -286,9 +287,36 @@ namespace {
 
 bool visible(PrimitiveStatus s) { return s == PrimitiveStatus::Drawn || s == PrimitiveStatus::Clipped; }
 
-// Lane j of the batch into its PreparedSegment (what prepareSegment's stages 4-6 write).
+// A smooth lane whose shading normals turn by more than kStationTurn gets shade Stations, as in
+// prepareSegment's stage 6 (segment_splat.cpp): Gouraud at ceil(turn / kStationTurn) + 1 stations,
+// or none when lighting is deferred. Returns the number of station intervals (0 deferred), -1 for
+// a lane that does not turn, -2 for one whose count the float turn cannot decide (the exact path).
+int turningStations(const detail::SegmentSetupBatch& b, int j, const detail::SegmentSetupFrame& F) {
+  if (!(b.smooth[j] > 0)) return -1;
+  const Vec3f n0(b.n0x[j], b.n0y[j], b.n0z[j]), n1(b.n1x[j], b.n1y[j], b.n1z[j]);
+  const float cosTurn = n0.dot(n1);  // the SIMD code left lanes within 1e-5 of the threshold
+  if (!(cosTurn < std::cos(segment::kStationTurn))) return -1;
+  if (F.perPixelLighting) return 0;
+  const float x = std::acos(std::clamp(cosTurn, -1.0f, 1.0f)) / segment::kStationTurn;
+  if (std::abs(x - std::round(x)) < 1e-3f) return -2;  // ceil(x) undecided
+  return std::clamp(int(std::ceil(x)), 1, kMaxSegmentPieces);
+}
+
+// The slot's SegmentExtra for shade Stations, untextured, with `stations` intervals.
+SegmentExtra& turningExtra(PreparedSegment& out, const Segment& seg, int stations) {
+  SegmentExtra& x = extraOf(out);
+  x.textured = false;
+  x.uv0 = seg.uv0;
+  x.uv1 = seg.uv1;
+  x.stations = stations > 0 ? stations + 1 : 0;
+  x.colour.resize(3 * size_t(x.stations));
+  return x;
+}
+
+// Lane j of the batch into its PreparedSegment (what prepareSegment's stages 4-6 write);
+// stations as turningStations gives it.
 void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_t index, const FrameContext& frame,
-          const detail::SegmentSetupFrame& F, PreparedSegment& out) {
+          const detail::SegmentSetupFrame& F, int stations, PreparedSegment& out) {
   out.index = index;
   out.fallback = false;
   resetExtra(out.extra);
@@ -322,10 +350,33 @@ void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_
   float* a = out.attr;
   if (F.perPixelLighting) {
     out.shade = smooth ? SegmentShade::Smooth : SegmentShade::Constant;
+    if (stations == 0) {  // turning: the rows normalise n0 + u dn exactly
+      out.shade = SegmentShade::Stations;
+      turningExtra(out, seg, 0);
+    }
     return;
   }
   out.shade = smooth ? SegmentShade::Smooth : SegmentShade::Linear;
   Vec3f k0, k1;
+  if (stations > 0) {  // Gouraud at stations + 1 evenly spaced stations (segment_splat.cpp, stage 6)
+    out.shade = SegmentShade::Stations;
+    SegmentExtra& x = turningExtra(out, seg, stations);
+    const Vec3f p0(b.p0x[j], b.p0y[j], b.p0z[j]), p1(b.p1cx[j], b.p1cy[j], b.p1cz[j]);
+    const Vec3f albedo = col.head<3>(), dn = n1 - n0;
+    for (int s = 0; s <= stations; ++s) {
+      const float u = float(s) / float(stations);
+      Vec3f c;
+      if (F.light && (s == 0 || s == stations)) {  // the batch's Phong factors at the ends
+        const float dif = s == 0 ? b.diffuse0[j] : b.diffuse1[j], spec = s == 0 ? b.specular0[j] : b.specular1[j];
+        c = (albedo * dif + Vec3f::Constant(spec)).cwiseProduct(frame.opt().light.color);
+      } else {
+        const Vec3f m = n0 + u * dn;
+        c = frame.shade(albedo, m / m.norm(), p0 + u * (p1 - p0));
+      }
+      for (int ch = 0; ch < 3; ++ch) x.colour[size_t(ch * (stations + 1) + s)] = c[ch];
+    }
+    return;
+  }
   if (F.light) {
     const Vec3f& lc = frame.opt().light.color;
     for (int c = 0; c < 3; ++c) {
@@ -396,17 +447,21 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       prefetchRecord(j + kAhead);
       const size_t i = base + size_t(j);
       const uint32_t index = uint32_t(first + i);
+      int stations = -1;
       switch (int(b.status[j])) {
         case 0: status[i] = PrimitiveStatus::Drawn; break;
         case 1: status[i] = PrimitiveStatus::Culled; break;
         case 3: status[i] = PrimitiveStatus::Clipped; break;
         case 4: status[i] = PrimitiveStatus::Outside; break;
-        default:
-          status[i] = prepareSegment(segments[index], index, frame, out[i]);
-          ++scalar;
-          continue;
+        default: stations = -2;
       }
-      if (visible(status[i])) pack(b, j, segments[index], index, frame, F, out[i]);
+      if (stations == -1 && visible(status[i])) stations = turningStations(b, j, F);
+      if (stations == -2) {
+        status[i] = prepareSegment(segments[index], index, frame, out[i]);
+        ++scalar;
+        continue;
+      }
+      if (visible(status[i])) pack(b, j, segments[index], index, frame, F, stations, out[i]);
     }
   }
   return scalar;

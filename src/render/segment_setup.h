@@ -4,7 +4,7 @@
 /// depth-clipped, colour linear along the segment) in SIMD over a batch of segments, in float
 /// (segment_setup.cpp, Highway runtime dispatch). Every lane the SIMD code cannot decide safely
 /// (unusual input, near a threshold of a culling or subdivision test, clamped covariance, near
-/// grazing, depth-clipped, more than one sub-segment, turning shading normals) is prepared by
+/// grazing, depth-clipped, more than one sub-segment) is prepared by
 /// prepareSegment itself, the exact path; the others agree with it up to float rounding
 /// (tests/render/segment_prepare_test.cpp).
 #include <cstdint>

@@ -32,11 +32,6 @@ using segment::kStationTurn;
 // footprint only its share of a SIMD vector.
 constexpr int kWholeRectArea = 96;
 
-SegmentExtra& extraOf(PreparedSegment& out) {
-  if (!out.extra) out.extra = std::make_unique<SegmentExtra>();
-  return *out.extra;
-}
-
 // --- prepare, stage 1: the strip in camera space ------------------------------------------
 
 // p0, the unit axes (e along, n the plane's normal facing the viewer, s = e x n across) and

@@ -153,6 +153,13 @@ struct alignas(64) PreparedSegment {
   int pieceCount() const { return extra && !extra->pieces.empty() ? int(extra->pieces.size()) : 1; }
   float length() const { return raster.length; }
 };
+/// The record slot's SegmentExtra, allocated on its first use (then kept from frame to frame:
+/// resetExtra).
+inline SegmentExtra& extraOf(PreparedSegment& out) {
+  if (!out.extra) out.extra = std::make_unique<SegmentExtra>();
+  return *out.extra;
+}
+
 /// The bytes of a PreparedSegment the common case's rows read (its first lines).
 inline constexpr size_t kSegmentHotBytes = offsetof(PreparedSegment, screenQuad);
 static_assert(kSegmentHotBytes <= 256, "the hot part of a segment record: at most four cache lines");

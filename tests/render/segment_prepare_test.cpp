@@ -26,8 +26,11 @@ struct Case {
   std::vector<Segment> segs;
 };
 
-// Random segments around the origin; every 8th strip is nearly edge-on to the eye.
-std::vector<Segment> randomSegments(int n, const Vec3f& eye, bool smooth, uint32_t seed) {
+// Random segments around the origin; every 8th strip is nearly edge-on to the eye unless `turning`;
+// smooth: every 5th one's normal turns by 0.3 rad along it, the others' by less than 0.1 rad, or with
+// `turning` every one's by 0.1 .. 1.3 rad (several lighting stations) and lengths 1e-3 .. 0.1 (as
+// contour models' segments: one sub-segment).
+std::vector<Segment> randomSegments(int n, const Vec3f& eye, bool smooth, uint32_t seed, bool turning = false) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-1, 1), u01(0, 1);
   auto dir = [&] {
@@ -41,16 +44,16 @@ std::vector<Segment> randomSegments(int n, const Vec3f& eye, bool smooth, uint32
     Segment s;
     const Vec3f c = dir() * std::pow(u01(rng), 0.5f) * 1.5f;
     const Vec3f e = dir();
-    const float len = std::pow(10.0f, -4 + 4.5f * u01(rng));
+    const float len = turning ? std::pow(10.0f, -3 + 2 * u01(rng)) : std::pow(10.0f, -4 + 4.5f * u01(rng));
     s.p0 = c - 0.5f * len * e;
     s.p1 = c + 0.5f * len * e;
     s.radius = std::pow(10.0f, -3.5f + 3 * u01(rng));
     Vec3f n = dir();
-    if (i % 8 == 0) n = (eye - c).normalized().cross(e) + 0.01f * u(rng) * dir();  // near grazing
+    if (i % 8 == 0 && !turning) n = (eye - c).normalized().cross(e) + 0.01f * u(rng) * dir();  // near grazing
     n -= n.dot(e) * e;
     s.normal = n.normalized();
     if (smooth) {
-      const float turn = i % 5 == 0 ? 0.3f : 0.08f * u01(rng);  // some turn by more than 0.1 rad
+      const float turn = turning ? 0.1f + 1.2f * u01(rng) : i % 5 == 0 ? 0.3f : 0.08f * u01(rng);
       const Vec3f side = e.cross(s.normal);
       s.normal0 = (s.normal * std::cos(turn / 2) - side * std::sin(turn / 2)).normalized();
       s.normal1 = (s.normal * std::cos(turn / 2) + side * std::sin(turn / 2)).normalized();
@@ -113,12 +116,20 @@ std::string agree(const PreparedSegment& f, const PreparedSegment& x, const Vec2
   for (int c = 0; c < 3; ++c) rel("dc", f.dc[c], x.dc[c], 1, 2e-3f);
   if (x.smooth)
     for (int c = 0; c < 3; ++c) rel("n0", f.n0[c], x.n0[c], 1, 1e-4f), rel("dn", f.dn[c], x.dn[c], 1, 1e-4f);
+  if (x.shade == SegmentShade::Stations && f.shade == SegmentShade::Stations) {  // the lighting stations
+    if (!f.extra || !x.extra || f.extra->textured || f.extra->stations != x.extra->stations ||
+        f.extra->colour.size() != x.extra->colour.size())
+      err += "stations; ";
+    else
+      for (size_t k = 0; k < x.extra->colour.size(); ++k) rel("station", f.extra->colour[k], x.extra->colour[k], 1, 2e-3f);
+  }
   return err;
 }
 
 struct Tally {
   size_t segments = 0, scalar = 0;  ///< all, and those the SIMD code left to prepareSegment
   int compared = 0, edge = 0, visible = 0;
+  int stations = 0;  ///< visible segments the exact path shades with several stations (shade Stations)
 };
 
 // One frame: every segment's status and constants from the batches against the exact path's.
@@ -153,6 +164,7 @@ void check(const std::vector<Segment>& segs, const Camera& cam, const RenderOpti
       ++tally.compared;
     }
     tally.visible += visible(sx[i]);
+    tally.stations += visible(sx[i]) && exact[i].shade == SegmentShade::Stations;
   }
 }
 
@@ -180,6 +192,40 @@ TEST(SegmentPrepare, BatchesAgreeWithTheExactPath) {
   EXPECT_GT(tally.scalar, tally.segments / 100);
   std::printf("%zu segments, %zu to the exact path, %d visible, %d compared, %d at the edge\n", tally.segments,
               tally.scalar, tally.visible, tally.compared, tally.edge);
+}
+
+// Smooth segments whose shading normals turn by 0.1 .. 1.3 rad along them (contour line models:
+// issue 14 made most of Al's turn by more than 0.1 rad) stay in the SIMD batches, with the exact
+// path's lighting stations (Gouraud; none when lighting is deferred), shade and normals: the same
+// segments with normals that do not turn go to the exact path (for their other reasons: near
+// grazing, clamped covariance) as often, up to 1% of them (the lanes whose station count or turn
+// test the float turn cannot decide), where every visible turning one did before (issue 13, i13turn).
+TEST(SegmentPrepare, TurningSegmentsStayInTheBatches) {
+  for (bool deferred : {false, true}) {
+    Tally tally;
+    size_t flatScalar = 0;
+    for (float dist : {3.0f, 20.0f}) {
+      const Vec3f eye = Vec3f(0.3f, 0.2f, 1).normalized() * dist;
+      RenderOptions o;
+      o.perPixelLighting = deferred;
+      o.material.specular = 0.5f;  // a highlight the stations must keep
+      const Camera cam = Camera::lookAt(eye, Vec3f::Zero(), Vec3f(0, 1, 0), 40, 320, 240, 0.05f, 1000);
+      const std::vector<Segment> segs = randomSegments(3000, eye, true, uint32_t(5 + int(dist) + deferred), true);
+      check(segs, cam, o, true, tally);
+      std::vector<Segment> flat = segs;
+      for (Segment& s : flat) s.normal0 = s.normal1 = s.normal;
+      FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1.5f});
+      frame.endpointNormals = true;
+      std::vector<PreparedSegment> out(flat.size());
+      std::vector<PrimitiveStatus> st(flat.size());
+      flatScalar += prepareSegments(flat.data(), 0, flat.size(), frame, segmentSetupFrame(frame), out.data(), st.data());
+    }
+    EXPECT_GT(tally.compared, tally.visible * 99 / 100);
+    EXPECT_GT(tally.stations, tally.visible * 9 / 10);  // the exact path shades them with stations
+    EXPECT_LE(tally.scalar, flatScalar + tally.segments / 100) << "turning segments left the batches";
+    std::printf("deferred %d: %zu segments, %zu to the exact path (%zu not turning), %d visible, %d with stations\n",
+                int(deferred), tally.segments, tally.scalar, flatScalar, tally.visible, tally.stations);
+  }
 }
 
 TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
