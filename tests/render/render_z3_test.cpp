@@ -4,6 +4,7 @@
 #include "linesurf/render/z3_buffer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "render/detail/splat_rows.h"
@@ -92,6 +93,8 @@ TEST(RenderZ3, ZeroWeightIsIgnoredAndResetClears) {
 // splats at several depths, opaque and translucent, flat and Gouraud, any layer count, so that
 // merges, allocations in front and behind, occlusion and compression all occur.
 TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
+  // cutoff^2 4: the rows' polynomial exp; 9: hn::Exp (splat_rows.cpp, kPolyExpMaxQ)
+  for (float cutoffQ : {4.0f, 9.0f})
   for (int layers : {1, 2, 4}) {
     std::mt19937 rng(7 + layers);
     std::uniform_real_distribution<float> U(0, 1);
@@ -106,7 +109,7 @@ TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
       P.S = {-1 / R, 0, cx / R};
       P.T = {0, -1 / R, cy / R};
       P.depthNum = -depth;
-      P.cutoffQ = 4;
+      P.cutoffQ = cutoffQ;
       P.weightScale = 0.5f + U(rng);
       float attr[Z3Tile::kAttrs] = {U(rng), U(rng), U(rng), k % 2 == 1 ? 0.5f : 1.0f, 1, 0, 0, 1};
       const float C0[3] = {U(rng), U(rng), U(rng)}, Cs[3] = {0.1f, -0.05f, 0.02f}, Ct[3] = {-0.03f, 0.04f, 0.1f},
@@ -153,6 +156,55 @@ TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
           }
       }
     if (layers > 1) EXPECT_GT(multi, 10) << layers;
+  }
+}
+
+// The SIMD point kernel (pointFragments, shared with the rows: reciprocal estimate + Newton step
+// for 1/N, a polynomial for exp(-q/2) when q <= 4) against the closed form in double on a tilted
+// plane: every pixel centre with q clearly inside the cutoff and none clearly outside is a
+// fragment, with the Gaussian weight, depth and plane coordinates to float accuracy.
+TEST(RenderZ3, PointKernelIsTheGaussianOfThePlaneCoordinates) {
+  for (float cutoffQ : {4.0f, 2.25f, 9.0f}) {
+    detail::PointRaster P;
+    P.N = {-0.004f, 0.002f, -1.1f};
+    P.S = {-1 / 3.1f, 0.05f, 20 / 3.1f};
+    P.T = {0.03f, -1 / 2.7f, 17 / 2.7f};
+    P.depthNum = -2.3f;
+    P.cutoffQ = cutoffQ;
+    P.weightScale = 0.8f;
+    const int x0 = 4, y0 = 3, W = 30, H = 30;
+    detail::FragmentBlock fb;
+    int inside = 0, found = 0;
+    double maxWeightErr = 0, maxDepthErr = 0, maxPlaneErr = 0;
+    for (int k0 = 0; k0 < W * H; k0 += detail::kBlock) {
+      const int n = std::min(detail::kBlock, W * H - k0);
+      const int m = detail::pointFragments(P, x0, y0, W, k0, n, true, fb);
+      found += m;
+      for (int i = 0; i < m; ++i) {
+        const double x = fb.x[i], y = fb.y[i];
+        const double N = double(P.N.dx) * x + double(P.N.dy) * y + double(P.N.c);
+        const double s = (double(P.S.dx) * x + double(P.S.dy) * y + double(P.S.c)) / N;
+        const double t = (double(P.T.dx) * x + double(P.T.dy) * y + double(P.T.c)) / N;
+        const double q = s * s + t * t;
+        ASSERT_LE(q, cutoffQ * (1 + 1e-4)) << x << "," << y;
+        maxWeightErr = std::max(maxWeightErr, std::abs(fb.weight[i] - std::exp(-q / 2) * P.weightScale) / P.weightScale);
+        maxDepthErr = std::max(maxDepthErr, std::abs(fb.depth[i] - P.depthNum / N) / std::abs(P.depthNum / N));
+        maxPlaneErr = std::max(maxPlaneErr, std::max(std::abs(fb.p[i] - s), std::abs(fb.q[i] - t)));
+      }
+      for (int k = k0; k < k0 + n; ++k) {  // the pixels clearly inside
+        const double x = x0 + k % W + 0.5, y = y0 + k / W + 0.5;
+        const double N = double(P.N.dx) * x + double(P.N.dy) * y + double(P.N.c);
+        const double s = (double(P.S.dx) * x + double(P.S.dy) * y + double(P.S.c)) / N;
+        const double t = (double(P.T.dx) * x + double(P.T.dy) * y + double(P.T.c)) / N;
+        inside += s * s + t * t <= cutoffQ * (1 - 1e-4);
+      }
+    }
+    EXPECT_GT(inside, 60) << cutoffQ;
+    EXPECT_GE(found, inside) << cutoffQ;
+    EXPECT_LE(found, inside + 4) << cutoffQ;  // at most a few pixels on the cutoff's edge itself
+    EXPECT_LT(maxWeightErr, 1e-5) << cutoffQ;
+    EXPECT_LT(maxDepthErr, 1e-6) << cutoffQ;
+    EXPECT_LT(maxPlaneErr, 1e-5) << cutoffQ;
   }
 }
 
