@@ -23,8 +23,8 @@ namespace hn = hwy::HWY_NAMESPACE;
 // The margins below send a lane to the exact path wherever float rounding could decide a test
 // otherwise than the double arithmetic of prepareSegment: relative 1e-4 on the culling and depth
 // tests, 4% on the subdivision test (its float error is below 1e-4), a facing of 0.02 at the
-// ends (below it the float covariance loses more than 1e-4 relative), covariances within 0.1%
-// of the stretch clamp.
+// ends (below it the float covariance loses more than 1e-4 relative), covariances with an
+// eigenvalue within 0.1% of the stretch clamp (beyond it the clamp is applied here).
 constexpr float kPieceTolerance2 = float(segment::kPieceTolerance * segment::kPieceTolerance);
 constexpr float kShort = float(segment::kShortSegment);
 constexpr float kCosStationTurn = 0.99500417f;  // cos(segment::kStationTurn)
@@ -97,7 +97,7 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
              sz = hn::MulSub(ex, ny, hn::Mul(ey, nx));
     // stage 2: the resampling covariance (segment::covariance) at both ends and the middle
     const VF sigma = hn::Mul(S(V.reconstructionScale), rad), s2 = hn::Mul(sigma, sigma);
-    const VF hi = hn::Mul(S(0.999f * kMaxStretch * kMaxStretch), s2);
+    const VF hiX = hn::Mul(S(kMaxStretch * kMaxStretch), s2);
     struct Cov {
       VF a, b, c, det;
     };
@@ -118,9 +118,30 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       M.a = hn::MulAdd(v, jc, s2), M.b = hn::Neg(hn::Mul(v, jb)), M.c = hn::MulAdd(v, ja, s2);
       // det M without cancellation: s2^2 + s2 v (ja + jc) + Vh v
       M.det = hn::MulAdd(s2, hn::MulAdd(v, hn::Add(ja, jc), s2), hn::Mul(Vh, v));
-      // within 0.1% of the stretch clamp (hi I - M not clearly positive definite): exact path
-      const VF ha = hn::Sub(hi, M.a), hc = hn::Sub(hi, M.c);
-      bad = hn::Or(bad, hn::Not(hn::And(hn::And(hn::Gt(ha, zero), hn::Gt(hc, zero)), hn::Gt(hn::Mul(ha, hc), hn::Mul(M.b, M.b)))));
+      // the stretch clamp (segment::clampEigen): an eigenvalue beyond (kMaxStretch sigma_r)^2 is
+      // clamped there (tiny far segments, whose prefilter dominates); one within 0.1% of the clamp
+      // leaves the decision to the exact path
+      const VF hm = hn::Mul(half, hn::Sub(M.a, M.c)), mean = hn::Mul(half, hn::Add(M.a, M.c));
+      const VF rad = hn::Sqrt(hn::MulAdd(hm, hm, hn::Mul(M.b, M.b)));
+      const VF l0 = hn::Add(mean, rad), l1 = hn::Div(M.det, l0);  // l1 without cancellation
+      bad = hn::Or(bad, hn::Lt(hn::Abs(hn::Sub(l0, hiX)), hn::Mul(S(1e-3f), hiX)));
+      bad = hn::Or(bad, hn::Lt(hn::Abs(hn::Sub(l1, hiX)), hn::Mul(S(1e-3f), hiX)));
+      const MF over = hn::Gt(l0, hiX);
+      if (!hn::AllFalse(d, over)) {
+        // unit eigenvector of l0: (l0 - c, b) when a >= c, else (b, l0 - a) (no cancellation)
+        const MF aBig = hn::Ge(M.a, M.c);
+        VF ux = hn::IfThenElse(aBig, hn::Add(hm, rad), M.b), uy = hn::IfThenElse(aBig, M.b, hn::Sub(rad, hm));
+        const VF u2 = hn::MulAdd(ux, ux, hn::Mul(uy, uy));
+        const MF none = hn::Not(hn::Gt(u2, zero));  // M = l0 I
+        const VF iu = hn::Div(one, hn::Sqrt(hn::IfThenElse(none, one, u2)));
+        ux = hn::IfThenElse(none, one, hn::Mul(ux, iu)), uy = hn::IfThenElseZero(hn::Not(none), hn::Mul(uy, iu));
+        const VF L0 = hn::Min(l0, hiX), L1 = hn::Min(l1, hiX);
+        const VF xx = hn::Mul(ux, ux), yy = hn::Mul(uy, uy);
+        M.a = hn::IfThenElse(over, hn::MulAdd(L0, xx, hn::Mul(L1, yy)), M.a);
+        M.b = hn::IfThenElse(over, hn::Mul(hn::Sub(L0, L1), hn::Mul(ux, uy)), M.b);
+        M.c = hn::IfThenElse(over, hn::MulAdd(L0, yy, hn::Mul(L1, xx)), M.c);
+        M.det = hn::IfThenElse(over, hn::Mul(L0, L1), M.det);
+      }
       return M;
     };
     const Cov M0 = cov(cx, cy, cz, exact);

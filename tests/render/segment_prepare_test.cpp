@@ -228,6 +228,24 @@ TEST(SegmentPrepare, TurningSegmentsStayInTheBatches) {
   }
 }
 
+// Segments so thin against a pixel that the prefilter stretches their covariance past
+// kMaxStretch sigma_r (the dragon's far contour segments: 6% of them before) are clamped in the
+// batches as the exact path clamps them (segment::clampEigen), not handed to it.
+TEST(SegmentPrepare, StretchedSegmentsStayInTheBatches) {
+  Tally tally;
+  for (float dist : {3.0f, 20.0f}) {
+    const Vec3f eye = Vec3f(0.3f, 0.2f, 1).normalized() * dist;
+    std::vector<Segment> segs = randomSegments(3000, eye, false, uint32_t(41 + int(dist)), true);
+    for (Segment& s : segs) s.radius *= 1e-3f;  // 1e-6 .. 1e-3: a tiny fraction of a pixel
+    const Camera cam = Camera::lookAt(eye, Vec3f::Zero(), Vec3f(0, 1, 0), 40, 320, 240, 0.05f, 1000);
+    check(segs, cam, RenderOptions{}, false, tally);
+  }
+  EXPECT_GT(tally.compared, tally.visible * 99 / 100);
+  EXPECT_GT(tally.visible, 500);
+  EXPECT_LT(tally.scalar, size_t(tally.visible / 4)) << "stretched segments left the batches";
+  std::printf("%zu segments, %zu to the exact path, %d visible\n", tally.segments, tally.scalar, tally.visible);
+}
+
 TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
   // degenerate input the exact stages count (zero/NaN/infinite radius, NaN endpoints, zero length)
   const Camera cam = Camera::lookAt(Vec3f(0, 0, 3), Vec3f::Zero(), Vec3f(0, 1, 0), 40, 64, 64);
