@@ -5,7 +5,8 @@
 //    model (../shared/data) as pure points (kind 0) and as the hybrid models of the extraction
 //    methods: (eps, delta) (1, Table 1), shape approximation with greedy (2, Table 2) and
 //    hierarchical (3, Table 3) clustering. Eight orbit views cycled; the thesis's "speedup" is
-//    1 - t_hybrid / t_points (docs/results.md "Rendering speedups").
+//    1 - t_hybrid / t_points (docs/results.md "Rendering speedups"); counters: prepare and
+//    rasterisation CPU of all threads per frame (prep_cpu_ms, raster_cpu_ms).
 //  - BM_ContourFrame/<mesh>/<kind>: the same for the pure point (kind 0) and pure line (kind 1)
 //    models that contour extraction (§3.3, Table 5) cuts from a shared mesh with its defaults, at
 //    512^2 on 2 threads, 8 views; counters: the stages' milliseconds per frame (prepare: wall;
@@ -159,13 +160,15 @@ void BM_HybridFrame(benchmark::State& state) {
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
-  double prepCpu = 0;
+  double prepCpu = 0, raster = 0;
   for (auto _ : state) {
     const RenderResult res = r.render(views[v++ % views.size()]);
     benchmark::DoNotOptimize(res.color.pixels.data());
     prepCpu += res.stats.prepareThreadSeconds;
+    raster += res.stats.fragmentThreadSeconds;
   }
   state.counters["prep_cpu_ms"] = 1e3 * prepCpu / double(std::max<int64_t>(1, state.iterations()));
+  state.counters["raster_cpu_ms"] = 1e3 * raster / double(std::max<int64_t>(1, state.iterations()));
   state.SetLabel(std::string(kModels[state.range(0)]) + (state.range(1) == 0 ? " points" : state.range(1) == 1 ? " eps-delta" : state.range(1) == 2 ? " greedy" : " hierarchical"));
   state.counters["points"] = double(m->points.size());
   state.counters["segments"] = double(m->segments.size());
