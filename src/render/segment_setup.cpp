@@ -318,20 +318,10 @@ int turningStations(const detail::SegmentSetupBatch& b, int j, const detail::Seg
   const float cosTurn = n0.dot(n1);  // the SIMD code left lanes within 1e-5 of the threshold
   if (!(cosTurn < std::cos(segment::kStationTurn))) return -1;
   if (F.perPixelLighting) return 0;
-  const float x = std::acos(std::clamp(cosTurn, -1.0f, 1.0f)) / segment::kStationTurn;
+  const float turn = std::acos(std::clamp(cosTurn, -1.0f, 1.0f));
+  const float x = turn / segment::kStationTurn;
   if (std::abs(x - std::round(x)) < 1e-3f) return -2;  // ceil(x) undecided
-  return std::clamp(int(std::ceil(x)), 1, kMaxSegmentPieces);
-}
-
-// The slot's SegmentExtra for shade Stations, untextured, with `stations` intervals.
-SegmentExtra& turningExtra(PreparedSegment& out, const Segment& seg, int stations) {
-  SegmentExtra& x = extraOf(out);
-  x.textured = false;
-  x.uv0 = seg.uv0;
-  x.uv1 = seg.uv1;
-  x.stations = stations > 0 ? stations + 1 : 0;
-  x.colour.resize(3 * size_t(x.stations));
-  return x;
+  return stationIntervals(turn, 1);
 }
 
 // Lane j of the batch into its PreparedSegment (what prepareSegment's stages 4-6 write);
@@ -373,7 +363,7 @@ void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_
     out.shade = smooth ? SegmentShade::Smooth : SegmentShade::Constant;
     if (stations == 0) {  // turning: the rows normalise n0 + u dn exactly
       out.shade = SegmentShade::Stations;
-      turningExtra(out, seg, 0);
+      stationsExtra(out, seg, false, 0);
     }
     return;
   }
@@ -381,7 +371,7 @@ void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_
   Vec3f k0, k1;
   if (stations > 0) {  // Gouraud at stations + 1 evenly spaced stations (segment_splat.cpp, stage 6)
     out.shade = SegmentShade::Stations;
-    SegmentExtra& x = turningExtra(out, seg, stations);
+    SegmentExtra& x = stationsExtra(out, seg, false, stations);
     const Vec3f p0(b.p0x[j], b.p0y[j], b.p0z[j]), p1(b.p1cx[j], b.p1cy[j], b.p1cz[j]);
     const Vec3f albedo = col.head<3>(), dn = n1 - n0;
     for (int s = 0; s <= stations; ++s) {

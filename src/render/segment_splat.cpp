@@ -291,8 +291,7 @@ void shading(const Segment& seg, const Strip& st, int K, const FrameContext& fra
   if (!opt.perPixelLighting) {
     S = K;
     if (turns) {  // one station per kStationTurn the shading normal turns
-      const float turn = std::acos(std::clamp(cosTurn, -1.0f, 1.0f));
-      S = std::clamp(int(std::ceil(turn / kStationTurn)), K, kMaxSegmentPieces);
+      S = stationIntervals(std::acos(std::clamp(cosTurn, -1.0f, 1.0f)), K);
     }
   }
   const Vec3f c0 = st.c0.cast<float>();
@@ -307,12 +306,7 @@ void shading(const Segment& seg, const Strip& st, int K, const FrameContext& fra
     return;
   }
   out.shade = SegmentShade::Stations;
-  SegmentExtra& x = extraOf(out);
-  x.textured = textured;
-  x.uv0 = seg.uv0;
-  x.uv1 = seg.uv1;
-  x.stations = S > 0 ? S + 1 : 0;
-  if (!textured) x.colour.resize(3 * size_t(x.stations));
+  SegmentExtra& x = stationsExtra(out, seg, textured, S);
   for (int k = 0; S > 0 && k <= S; ++k) {
     const Vec3f nf = normalAt(float(k) / float(S));
     const Vec3f p = pointAt(k);

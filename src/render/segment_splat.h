@@ -15,6 +15,7 @@
 /// The common case (ScreenSpace, one sub-segment, untextured, colour linear along the segment)
 /// allocates nothing and is rasterised by the SIMD rows; everything else keeps its state in
 /// PreparedSegment::extra (allocated once per record slot, reused across frames).
+#include <cmath>
 #include <cstddef>
 #include <algorithm>
 #include <cstdint>
@@ -158,6 +159,25 @@ struct alignas(64) PreparedSegment {
 inline SegmentExtra& extraOf(PreparedSegment& out) {
   if (!out.extra) out.extra = std::make_unique<SegmentExtra>();
   return *out.extra;
+}
+
+/// Gouraud intervals along a smooth segment whose shading normals turn by `turn` radians (§6.2.2,
+/// beyond the thesis: one lighting station per kStationTurn), at least `minIntervals`. Shared by
+/// the exact path (prepareSegment, stage 6) and the SIMD batches (prepareSegments), which must agree.
+inline int stationIntervals(float turn, int minIntervals) {
+  return std::clamp(int(std::ceil(turn / segment::kStationTurn)), minIntervals, kMaxSegmentPieces);
+}
+
+/// The slot's SegmentExtra for shade Stations with `intervals` Gouraud intervals (0: lighting
+/// deferred, no stations); the untextured colours are sized, not filled.
+inline SegmentExtra& stationsExtra(PreparedSegment& out, const Segment& seg, bool textured, int intervals) {
+  SegmentExtra& x = extraOf(out);
+  x.textured = textured;
+  x.uv0 = seg.uv0;
+  x.uv1 = seg.uv1;
+  x.stations = intervals > 0 ? intervals + 1 : 0;
+  if (!textured) x.colour.resize(3 * size_t(x.stations));
+  return x;
 }
 
 /// The bytes of a PreparedSegment the common case's rows read (its first lines).
