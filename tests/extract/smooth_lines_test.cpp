@@ -72,26 +72,31 @@ TEST(SmoothLines, ContourEndpointNormalsFromAreaWeightedVertexNormals) {
   EXPECT_GT(1 - faceMean, 1.5 * (1 - endMean)) << endMean << " " << faceMean;
 }
 
-TEST(SmoothLines, PlyRoundTripKeepsEndpointNormals) {
-  const HybridModel lines = extractContour(shapes::sphereMesh(1, 2));
-  const auto dir = test::scratchDir("smooth_lines_ply");
+// `model` written to the scratch folder `name` as binary and as ascii PLY, each read back and
+// handed to check(back); returns the folder.
+template <class Check>
+std::filesystem::path roundTripBothEncodings(const HybridModel& model, const std::string& name, Check&& check) {
+  const auto dir = test::scratchDir(name);
   for (bool ascii : {false, true}) {
     const auto path = dir / (ascii ? "a.ply" : "b.ply");
     WriteOptions wo;
     if (ascii) wo.encoding = PlyEncoding::Ascii;
-    writeModel(path, lines, wo);
-    const HybridModel back = readModel(path);
+    writeModel(path, model, wo);
+    check(readModel(path));
+  }
+  return dir;
+}
+
+TEST(SmoothLines, PlyRoundTripKeepsEndpointNormals) {
+  const HybridModel lines = extractContour(shapes::sphereMesh(1, 2));
+  roundTripBothEncodings(lines, "smooth_lines_ply", [&](const HybridModel& back) {
     ASSERT_TRUE(back.attributes.endpointNormals);
     ASSERT_EQ(back.segments.size(), lines.segments.size());
     for (size_t i = 0; i < lines.segments.size(); ++i) {
       EXPECT_EQ(back.segments[i].normal0, lines.segments[i].normal0) << i;
       EXPECT_EQ(back.segments[i].normal1, lines.segments[i].normal1) << i;
     }
-  }
-  HybridModel plain = lines;
-  plain.attributes.endpointNormals = false;
-  writeModel(dir / "c.ply", plain);
-  EXPECT_FALSE(readModel(dir / "c.ply").attributes.endpointNormals);
+  });
 }
 
 // Shading normals (default): on a sphere mesh with exact radial vertex normals the interpolated
@@ -144,13 +149,7 @@ TEST(SmoothLines, PlyRoundTripKeepsPointShadingNormals) {
   o.allPoints = true;
   const HybridModel pts = extractContour(shapes::sphereMesh(1, 1), o);
   ASSERT_TRUE(pts.attributes.shadingNormals);
-  const auto dir = test::scratchDir("shading_normals_ply");
-  for (bool ascii : {false, true}) {
-    const auto path = dir / (ascii ? "a.ply" : "b.ply");
-    WriteOptions wo;
-    if (ascii) wo.encoding = PlyEncoding::Ascii;
-    writeModel(path, pts, wo);
-    const HybridModel back = readModel(path);
+  const auto dir = roundTripBothEncodings(pts, "shading_normals_ply", [&](const HybridModel& back) {
     ASSERT_TRUE(back.attributes.shadingNormals);
     EXPECT_TRUE(back.pointProperties.empty());  // not read as extra properties
     ASSERT_EQ(back.pointShadingNormals.size(), pts.points.size());
@@ -158,7 +157,7 @@ TEST(SmoothLines, PlyRoundTripKeepsPointShadingNormals) {
       EXPECT_EQ(back.pointShadingNormals[i], pts.pointShadingNormals[i]) << i;
       EXPECT_EQ(back.points[i].normal, pts.points[i].normal) << i;
     }
-  }
+  });
   HybridModel plain = pts;
   plain.attributes.shadingNormals = false;
   writeModel(dir / "c.ply", plain);
