@@ -5,15 +5,33 @@
 #include "segment_setup.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
+#include <new>
 
 #include "detail/splat_math.h"
 #include "point_setup.h"
+
+#ifndef LINESURF_SEGMENT_SETUP_FLAGS  // once: foreach_target includes this file per target
+#define LINESURF_SEGMENT_SETUP_FLAGS
+namespace linesurf::detail {
+// The word of the record image holding `smooth` and `shade` (the other bytes: the template's).
+inline constexpr int kFlagSlot = int((offsetof(PreparedSegment, smooth) - kRecordBegin) / 4);
+inline constexpr int kSmoothShift = int(8 * ((offsetof(PreparedSegment, smooth) - kRecordBegin) % 4));
+inline constexpr int kShadeShift = int(8 * ((offsetof(PreparedSegment, shade) - kRecordBegin) % 4));
+static_assert(int((offsetof(PreparedSegment, shade) - kRecordBegin) / 4) == kFlagSlot && sizeof(SegmentShade) == 1 &&
+                  sizeof(bool) == 1 && std::endian::native == std::endian::little,
+              "smooth and shade: bytes of one word of the record image");
+}  // namespace linesurf::detail
+#endif
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "render/segment_setup.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
+#include <hwy/contrib/math/math-inl.h>
 
 HWY_BEFORE_NAMESPACE();
 namespace linesurf::detail {
@@ -28,6 +46,86 @@ namespace hn = hwy::HWY_NAMESPACE;
 constexpr float kPieceTolerance2 = float(segment::kPieceTolerance * segment::kPieceTolerance);
 constexpr float kShort = float(segment::kShortSegment);
 constexpr float kCosStationTurn = 0.99500417f;  // cos(segment::kStationTurn)
+
+// Phong factors (FrameContext::shade with the specular table) at unit shading normal m and
+// camera-space point q: colour = (albedo dif + spec) * light colour.
+template <class DF, class VF = hn::Vec<DF>>
+HWY_INLINE void Phong(DF d, const SegmentSetupFrame& F, VF mx, VF my, VF mz, VF qx, VF qy, VF qz, VF& dif, VF& spec) {
+  const PointSetupFrame& V = F.view;
+  const hn::RebindToSigned<DF> di;
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto dot3 = [](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
+  const VF lx = hn::Set(d, V.lightDir[0]), ly = hn::Set(d, V.lightDir[1]), lz = hn::Set(d, V.lightDir[2]);
+  const VF ndl = hn::Max(zero, dot3(mx, my, mz, lx, ly, lz));
+  dif = hn::MulAdd(hn::Set(d, V.diffuse), ndl, hn::Set(d, V.ambient));
+  spec = zero;
+  if (!(V.specular > 0)) return;
+  const VF q2 = dot3(qx, qy, qz, qx, qy, qz);
+  const VF iq = hn::Neg(hn::Div(one, hn::Sqrt(q2)));  // view vector -q / |q|
+  const VF hx = hn::MulAdd(qx, iq, lx), hy = hn::MulAdd(qy, iq, ly), hz = hn::MulAdd(qz, iq, lz);
+  const VF h2 = dot3(hx, hy, hz, hx, hy, hz);
+  const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(mx, my, mz, hx, hy, hz), hn::Sqrt(h2))));
+  // lanes the exact path takes may hold NaN here: the index stays inside the table
+  const VF table = hn::Set(d, float(FrameContext::kSpecularTable));
+  VF x = hn::Mul(ndh, table);
+  x = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(x, x), x), zero), table);
+  const VF xi = hn::Floor(x);
+  const auto k = hn::ConvertTo(di, xi);
+  const VF t0 = hn::GatherIndex(d, F.specularTable, k), t1 = hn::GatherIndex(d, F.specularTable + 1, k);
+  const VF pw = hn::MulAdd(hn::Sub(x, xi), hn::Sub(t1, t0), t0);
+  const auto lit = hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(h2, zero)), hn::Gt(q2, zero));
+  spec = hn::IfThenElseZero(lit, hn::Mul(hn::Set(d, V.specular), pw));
+}
+
+// Where each word of the record image comes from: the batch array at that byte offset in
+// SegmentSetupBatch (the lane's value), or -1 (the frame's template).
+const std::array<int32_t, kRecordSlots>& recordSources() {
+  static const std::array<int32_t, kRecordSlots> table = [] {
+    std::array<int32_t, kRecordSlots> t;
+    t.fill(-1);
+    using P = PreparedSegment;
+    using B = SegmentSetupBatch;
+    auto put = [&](size_t rec, size_t batch) { t[(rec - kRecordBegin) / 4] = int32_t(batch); };
+    const size_t b = offsetof(P, bounds), r = offsetof(P, raster), a = offsetof(P, attr);
+    put(b + offsetof(PixelRect, x0), offsetof(B, x0)), put(b + offsetof(PixelRect, y0), offsetof(B, y0));
+    put(b + offsetof(PixelRect, x1), offsetof(B, x1)), put(b + offsetof(PixelRect, y1), offsetof(B, y1));
+    put(offsetof(P, index), offsetof(B, index));
+    put(kRecordBegin + 4 * size_t(kFlagSlot), offsetof(B, flags));
+    auto affine = [&](size_t at, size_t x, size_t y, size_t c) {
+      put(at + offsetof(Affine2, dx), x), put(at + offsetof(Affine2, dy), y), put(at + offsetof(Affine2, c), c);
+    };
+    using R = SegmentRaster;
+    affine(r + offsetof(R, N), offsetof(B, Nx), offsetof(B, Ny), offsetof(B, N0));
+    affine(r + offsetof(R, A), offsetof(B, Ax), offsetof(B, Ay), offsetof(B, A0));
+    affine(r + offsetof(R, B), offsetof(B, Bx), offsetof(B, By), offsetof(B, B0));
+    put(r + offsetof(R, depthNum), offsetof(B, depthNum)), put(r + offsetof(R, a0), offsetof(B, a0));
+    put(r + offsetof(R, b0), offsetof(B, b0)), put(r + offsetof(R, length), offsetof(B, length));
+    put(r + offsetof(R, aMin), offsetof(B, aMin)), put(r + offsetof(R, aMax), offsetof(B, aMax));
+    put(r + offsetof(R, bMax), offsetof(B, bMax)), put(r + offsetof(R, skew), offsetof(B, skew));
+    put(r + offsetof(R, across), offsetof(B, across)), put(r + offsetof(R, invM00), offsetof(B, invM00));
+    put(r + offsetof(R, k), offsetof(B, k)), put(r + offsetof(R, erfScale), offsetof(B, erfScale));
+    put(r + offsetof(R, scale0), offsetof(B, scale0)), put(r + offsetof(R, slope), offsetof(B, slope));
+    put(r + offsetof(R, zThreshold0), offsetof(B, zt0)), put(r + offsetof(R, zThreshold1), offsetof(B, zt1));
+    put(a + 4 * Z3Tile::kR, offsetof(B, ar)), put(a + 4 * Z3Tile::kG, offsetof(B, ag));
+    put(a + 4 * Z3Tile::kB, offsetof(B, ab)), put(a + 4 * Z3Tile::kA, offsetof(B, aa));
+    put(a + 4 * Z3Tile::kNx, offsetof(B, n0x)), put(a + 4 * Z3Tile::kNy, offsetof(B, n0y));
+    put(a + 4 * Z3Tile::kNz, offsetof(B, n0z));
+    const size_t dc[3] = {offsetof(B, dcx), offsetof(B, dcy), offsetof(B, dcz)};
+    const size_t n0[3] = {offsetof(B, n0x), offsetof(B, n0y), offsetof(B, n0z)};
+    const size_t dn[3] = {offsetof(B, dnx), offsetof(B, dny), offsetof(B, dnz)};
+    for (int c = 0; c < 3; ++c) {  // Vec3f: three floats
+      put(offsetof(P, dc) + 4 * size_t(c), dc[c]);
+      put(offsetof(P, n0) + 4 * size_t(c), n0[c]);
+      put(offsetof(P, dn) + 4 * size_t(c), dn[c]);
+    }
+    for (int k = 0; k < 4; ++k) {
+      put(offsetof(P, screenQuad) + sizeof(Vec2f) * size_t(k), offsetof(B, qx) + size_t(k) * sizeof(B::qx[0]));
+      put(offsetof(P, screenQuad) + sizeof(Vec2f) * size_t(k) + 4, offsetof(B, qy) + size_t(k) * sizeof(B::qy[0]));
+    }
+    return t;
+  }();
+  return table;
+}
 
 void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   const PointSetupFrame& V = F.view;
@@ -218,13 +316,15 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       const VF q = hn::MulAdd(M.a, hn::Mul(ez, ez), hn::MulAdd(hn::Add(M.b, M.b), hn::Mul(ez, sz), hn::Mul(M.c, hn::Mul(sz, sz))));
       return hn::MulAdd(R, hn::Sqrt(hn::Max(q, zero)), rad);
     };
-    St(extent(M0), B.extent0), St(extent(M1), B.extent1);
-    St(nx, B.nx), St(ny, B.ny), St(nz, B.nz);
+    if (F.zPerPrimitive) St(hn::Mul(S(F.zScale), extent(M0)), B.zt0), St(hn::Mul(S(F.zScale), extent(M1)), B.zt1);
+    else St(S(F.zFixed), B.zt0), St(S(F.zFixed), B.zt1);
     St(qx1, B.p1cx), St(qy1, B.p1cy), St(qz1, B.p1cz);
     // stage 6: shading normals (smooth: the endpoint normals on the plane normal's side) and Phong
     VF n0x = nx, n0y = ny, n0z = nz, n1x = nx, n1y = ny, n1z = nz;
+    MF sm = hn::Lt(one, zero), turning = sm;
+    VF stations = S(-1.0f);
     if (F.smoothFrame) {
-      const MF sm = hn::Gt(L(B.smooth), zero);
+      sm = hn::Gt(L(B.smooth), zero);
       VF ax = L(B.m0x), ay = L(B.m0y), az = L(B.m0z), bx = L(B.m1x), by = L(B.m1y), bz = L(B.m1z);
       const VF ia = hn::Div(one, hn::Sqrt(dot3(ax, ay, az, ax, ay, az))), ib = hn::Div(one, hn::Sqrt(dot3(bx, by, bz, bx, by, bz)));
       const MF flip = hn::Lt(dot3(nx, ny, nz, hn::MulAdd(ax, ia, hn::Mul(bx, ib)), hn::MulAdd(ay, ia, hn::Mul(by, ib)),
@@ -232,46 +332,114 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       const VF sa = hn::IfThenElse(flip, hn::Neg(ia), ia), sb = hn::IfThenElse(flip, hn::Neg(ib), ib);
       ax = hn::Mul(ax, sa), ay = hn::Mul(ay, sa), az = hn::Mul(az, sa);
       bx = hn::Mul(bx, sb), by = hn::Mul(by, sb), bz = hn::Mul(bz, sb);
-      // turning by more than kStationTurn (0.1 rad): several lighting stations (prepareSegments
-      // lights them per lane); near that threshold the exact path decides
+      // turning by more than kStationTurn (0.1 rad): shade Stations, Gouraud at ceil(turn /
+      // kStationTurn) + 1 stations (prepareSegment's stage 6), or none where lighting is deferred;
+      // near the threshold, or near an integer ceil(), the exact path decides
       const VF cosTurn = dot3(ax, ay, az, bx, by, bz);
       exact = hn::Or(exact, hn::And(sm, hn::Not(hn::Gt(hn::Abs(hn::Sub(cosTurn, S(kCosStationTurn))), S(1e-5f)))));
       exact = hn::Or(exact, hn::And(sm, hn::Not(hn::And(finite(ax), finite(bx)))));
+      turning = hn::And(sm, hn::Lt(cosTurn, S(kCosStationTurn)));
+      if (!hn::AllFalse(d, turning)) {
+        if (F.perPixelLighting) {
+          stations = hn::IfThenElse(turning, zero, stations);
+        } else {
+          const VF turn = hn::Acos(d, hn::Min(hn::Max(cosTurn, S(-1.0f)), one));
+          const VF x = hn::Div(turn, S(segment::kStationTurn));
+          exact = hn::Or(exact, hn::And(turning, hn::Lt(hn::Abs(hn::Sub(x, hn::Round(x))), S(1e-3f))));
+          const VF count = hn::Min(hn::Max(hn::Ceil(x), one), S(float(kMaxSegmentPieces)));
+          stations = hn::IfThenElse(turning, count, stations);
+        }
+      }
       n0x = hn::IfThenElse(sm, ax, nx), n0y = hn::IfThenElse(sm, ay, ny), n0z = hn::IfThenElse(sm, az, nz);
       n1x = hn::IfThenElse(sm, bx, nx), n1y = hn::IfThenElse(sm, by, ny), n1z = hn::IfThenElse(sm, bz, nz);
     }
     St(n0x, B.n0x), St(n0y, B.n0y), St(n0z, B.n0z), St(n1x, B.n1x), St(n1y, B.n1y), St(n1z, B.n1z);
+    St(hn::Sub(n1x, n0x), B.dnx), St(hn::Sub(n1y, n0y), B.dny), St(hn::Sub(n1z, n0z), B.dnz);
+    St(stations, B.stations);
+    // the attributes at u = 0 (setBaseAttributes) and the colour's change to u = 1: Gouraud
+    // between the ends (F.light); the albedo where lighting is deferred, for lanes with stations
+    // (their colours in SegmentExtra) and where prepareSegments lights the ends per lane (!F.light)
+    const VF cr = L(B.cr), cg = L(B.cg), cb = L(B.cb);
+    St(hn::Min(hn::Max(L(B.ca), zero), one), B.aa);
+    VF ar = cr, ag = cg, ab = cb, dcx = zero, dcy = zero, dcz = zero;
     if (F.light) {
-      const VF lx = S(V.lightDir[0]), ly = S(V.lightDir[1]), lz = S(V.lightDir[2]);
-      auto phong = [&](VF mx, VF my, VF mz, VF qx, VF qy, VF qz, float* dif, float* spec) {
-        const VF ndl = hn::Max(zero, dot3(mx, my, mz, lx, ly, lz));
-        St(hn::MulAdd(S(V.diffuse), ndl, S(V.ambient)), dif);
-        VF sp = zero;
-        if (V.specular > 0) {
-          const VF q2 = dot3(qx, qy, qz, qx, qy, qz);
-          const VF iq = hn::Neg(hn::Div(one, hn::Sqrt(q2)));  // view vector -q / |q|
-          const VF hx = hn::MulAdd(qx, iq, lx), hy = hn::MulAdd(qy, iq, ly), hz = hn::MulAdd(qz, iq, lz);
-          const VF h2 = dot3(hx, hy, hz, hx, hy, hz);
-          const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(mx, my, mz, hx, hy, hz), hn::Sqrt(h2))));
-          // lanes the exact path takes may hold NaN here: the index stays inside the table
-          VF x = hn::Mul(ndh, S(float(FrameContext::kSpecularTable)));
-          x = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(x, x), x), zero), S(float(FrameContext::kSpecularTable)));
-          const VF xi = hn::Floor(x);
-          const VI k = hn::ConvertTo(di, xi);
-          const VF t0 = hn::GatherIndex(d, F.specularTable, k), t1 = hn::GatherIndex(d, F.specularTable + 1, k);
-          const VF pw = hn::MulAdd(hn::Sub(x, xi), hn::Sub(t1, t0), t0);
-          const MF lit = hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(h2, zero)), hn::Gt(q2, zero));
-          sp = hn::IfThenElseZero(lit, hn::Mul(S(V.specular), pw));
-        }
-        St(sp, spec);
-      };
-      phong(n0x, n0y, n0z, cx, cy, cz, B.diffuse0, B.specular0);
-      phong(n1x, n1y, n1z, qx1, qy1, qz1, B.diffuse1, B.specular1);
+      VF dif0, spec0, dif1, spec1;
+      Phong(d, F, n0x, n0y, n0z, cx, cy, cz, dif0, spec0);
+      Phong(d, F, n1x, n1y, n1z, qx1, qy1, qz1, dif1, spec1);
+      St(dif0, B.diffuse0), St(spec0, B.specular0), St(dif1, B.diffuse1), St(spec1, B.specular1);
+      const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
+      auto lit = [&](VF c, VF dif, VF spec, VF l) { return hn::Mul(hn::MulAdd(c, dif, spec), l); };
+      const VF r0 = lit(cr, dif0, spec0, lr), g0 = lit(cg, dif0, spec0, lg), b0 = lit(cb, dif0, spec0, lb);
+      ar = hn::IfThenElse(turning, cr, r0), ag = hn::IfThenElse(turning, cg, g0), ab = hn::IfThenElse(turning, cb, b0);
+      dcx = hn::IfThenElseZero(hn::Not(turning), hn::Sub(lit(cr, dif1, spec1, lr), r0));
+      dcy = hn::IfThenElseZero(hn::Not(turning), hn::Sub(lit(cg, dif1, spec1, lg), g0));
+      dcz = hn::IfThenElseZero(hn::Not(turning), hn::Sub(lit(cb, dif1, spec1, lb), b0));
+    }
+    St(ar, B.ar), St(ag, B.ag), St(ab, B.ab), St(dcx, B.dcx), St(dcy, B.dcy), St(dcz, B.dcz);
+    {  // the index, and the word holding smooth and shade
+      const hn::RebindToUnsigned<DF> du;
+      using VU = hn::Vec<decltype(du)>;
+      hn::StoreU(hn::Iota(du, B.first + uint32_t(i)), du, B.index + i);
+      const VU shade = hn::IfThenElse(hn::RebindMask(du, turning), hn::Set(du, uint32_t(SegmentShade::Stations)),
+                                      hn::IfThenElse(hn::RebindMask(du, sm), hn::Set(du, uint32_t(SegmentShade::Smooth)),
+                                                     hn::Set(du, uint32_t(F.perPixelLighting ? SegmentShade::Constant
+                                                                                             : SegmentShade::Linear))));
+      const VU smooth = hn::IfThenElseZero(hn::RebindMask(du, sm), hn::Set(du, 1u));
+      const uint32_t keep = F.record.word[kFlagSlot] & ~((0xFFu << kSmoothShift) | (0xFFu << kShadeShift));
+      const VU flags = hn::Or(hn::Set(du, keep), hn::Or(hn::ShiftLeftSame(smooth, kSmoothShift), hn::ShiftLeftSame(shade, kShadeShift)));
+      hn::StoreU(flags, du, B.flags + i);
     }
     const VF status = hn::IfThenElse(empty, S(4.0f), hn::IfThenElseZero(cut, S(3.0f)));
     const VF two = S(2.0f);
     St(hn::IfThenElse(badInput, two, hn::IfThenElse(outside, S(4.0f), hn::IfThenElse(early, two,
         hn::IfThenElse(culled, one, hn::IfThenElse(exact, two, status))))), B.status);
+  }
+}
+
+// The records' images (lane-major in 16-byte chunks) from the batch arrays and the template.
+void SegmentRecords(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
+  using DF = hn::ScalableTag<float>;
+  const DF d;
+  const hn::RebindToUnsigned<DF> du;
+  const std::array<int32_t, kRecordSlots>& src = recordSources();
+  const char* base = reinterpret_cast<const char*>(&B);
+  const int lanes = int(hn::Lanes(d));
+  for (int i = 0; i < n; i += lanes) {
+    for (int c = 0; c < kRecordChunks; ++c) {
+      hn::Vec<DF> v[4];
+      for (int k = 0; k < 4; ++k) {
+        const int s = 4 * c + k;
+        v[k] = src[s] >= 0 ? hn::LoadU(d, reinterpret_cast<const float*>(base + src[s]) + i)
+                           : hn::BitCast(d, hn::Set(du, F.record.word[s]));
+      }
+      hn::StoreInterleaved4(v[0], v[1], v[2], v[3], d, B.rec[c] + 4 * i);
+    }
+  }
+}
+
+void SegmentStations(const SegmentSetupFrame& F, const SegmentSetupBatch& B, SegmentStationJobs& J) {
+  using DF = hn::ScalableTag<float>;
+  using VF = hn::Vec<DF>;
+  const DF d;
+  const hn::RebindToSigned<DF> di;
+  const int lanes = int(hn::Lanes(d));
+  for (int i = 0; i < J.count; i += lanes) {
+    const auto lane = hn::LoadU(di, J.lane + i);
+    auto G = [&](const float* a) { return hn::GatherIndex(d, a, lane); };
+    const VF u = hn::LoadU(d, J.u + i);
+    VF mx = hn::MulAdd(u, hn::Sub(G(B.n1x), G(B.n0x)), G(B.n0x));
+    VF my = hn::MulAdd(u, hn::Sub(G(B.n1y), G(B.n0y)), G(B.n0y));
+    VF mz = hn::MulAdd(u, hn::Sub(G(B.n1z), G(B.n0z)), G(B.n0z));
+    const VF im = hn::Div(hn::Set(d, 1.0f), hn::Sqrt(hn::MulAdd(mx, mx, hn::MulAdd(my, my, hn::Mul(mz, mz)))));
+    mx = hn::Mul(mx, im), my = hn::Mul(my, im), mz = hn::Mul(mz, im);
+    const VF qx = hn::MulAdd(u, hn::Sub(G(B.p1cx), G(B.p0x)), G(B.p0x));
+    const VF qy = hn::MulAdd(u, hn::Sub(G(B.p1cy), G(B.p0y)), G(B.p0y));
+    const VF qz = hn::MulAdd(u, hn::Sub(G(B.p1cz), G(B.p0z)), G(B.p0z));
+    VF dif, spec;
+    Phong(d, F, mx, my, mz, qx, qy, qz, dif, spec);
+    hn::StoreU(hn::Mul(hn::MulAdd(G(B.cr), dif, spec), hn::Set(d, F.lightColor[0])), d, J.r + i);
+    hn::StoreU(hn::Mul(hn::MulAdd(G(B.cg), dif, spec), hn::Set(d, F.lightColor[1])), d, J.g + i);
+    hn::StoreU(hn::Mul(hn::MulAdd(G(B.cb), dif, spec), hn::Set(d, F.lightColor[2])), d, J.b + i);
   }
 }
 
@@ -282,8 +450,16 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace linesurf::detail {
 HWY_EXPORT(SegmentSetup);
+HWY_EXPORT(SegmentRecords);
+HWY_EXPORT(SegmentStations);
 void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
   HWY_DYNAMIC_DISPATCH(SegmentSetup)(frame, batch, n);
+}
+void segmentRecords(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
+  HWY_DYNAMIC_DISPATCH(SegmentRecords)(frame, batch, n);
+}
+void segmentStations(const SegmentSetupFrame& frame, const SegmentSetupBatch& batch, SegmentStationJobs& jobs) {
+  HWY_DYNAMIC_DISPATCH(SegmentStations)(frame, batch, jobs);
 }
 }  // namespace linesurf::detail
 
@@ -299,107 +475,78 @@ detail::SegmentSetupFrame segmentSetupFrame(const FrameContext& frame) {
   f.perPixelLighting = opt.perPixelLighting;
   f.specularTable = frame.specularPow ? frame.specularPow->data() : nullptr;
   f.light = !opt.perPixelLighting && (f.specularTable || !(opt.material.specular > 0));
+  for (int c = 0; c < 3; ++c) f.lightColor[c] = opt.light.color[c];
+  f.zPerPrimitive = opt.zThresholdMode == ZThresholdMode::PerPrimitive;
+  f.zScale = opt.zThreshold, f.zFixed = frame.fixedZThreshold;
   // the common case the SIMD code handles: the ScreenSpace method, untextured, with a prefilter
   f.simd = opt.segmentMethod == SegmentMethod::ScreenSpace && !frame.texture && opt.prefilterVariance > 0;
+  // the record words every common-case segment shares (as prepareSegment writes them for it);
+  // padding zero
+  alignas(PreparedSegment) unsigned char bytes[sizeof(PreparedSegment)] = {};
+  PreparedSegment* t = new (bytes) PreparedSegment;
+  t->method = SegmentMethod::ScreenSpace;
+  t->fallback = false;
+  t->useSpans = true;
+  t->shade = SegmentShade::Linear;
+  detail::SegmentRaster& k = t->raster;
+  k.R2 = frame.cutoffQ;
+  k.nearD = f.view.nearD, k.farD = f.view.farD;
+  k.clipDepth = false;
+  k.pieceCount = 1;
+  k.pieces = nullptr;
+  k.pieceInvLength = 0, k.pieceMaxReach = 0;
+  t->attr[Z3Tile::kW] = 1.0f;
+  std::memcpy(f.record.word, bytes + detail::kRecordBegin, sizeof(f.record.word));
+  t->~PreparedSegment();
   return f;
 }
 
 namespace {
 
-bool visible(PrimitiveStatus s) { return s == PrimitiveStatus::Drawn || s == PrimitiveStatus::Clipped; }
-
-// A smooth lane whose shading normals turn by more than kStationTurn gets shade Stations, as in
-// prepareSegment's stage 6 (segment_splat.cpp): Gouraud at ceil(turn / kStationTurn) + 1 stations,
-// or none when lighting is deferred. Returns the number of station intervals (0 deferred), -1 for
-// a lane that does not turn, -2 for one whose count the float turn cannot decide (the exact path).
-int turningStations(const detail::SegmentSetupBatch& b, int j, const detail::SegmentSetupFrame& F) {
-  if (!(b.smooth[j] > 0)) return -1;
-  const Vec3f n0(b.n0x[j], b.n0y[j], b.n0z[j]), n1(b.n1x[j], b.n1y[j], b.n1z[j]);
-  const float cosTurn = n0.dot(n1);  // the SIMD code left lanes within 1e-5 of the threshold
-  if (!(cosTurn < std::cos(segment::kStationTurn))) return -1;
-  if (F.perPixelLighting) return 0;
-  const float turn = std::acos(std::clamp(cosTurn, -1.0f, 1.0f));
-  const float x = turn / segment::kStationTurn;
-  if (std::abs(x - std::round(x)) < 1e-3f) return -2;  // ceil(x) undecided
-  return stationIntervals(turn, 1);
+// The colours of a turning lane's stations + 1 lighting stations (prepareSegment's stage 6):
+// the ends from the batch's Phong factors, the stations between them queued for
+// segmentStations (F.light); else every station by FrameContext::shade.
+void stationColours(const detail::SegmentSetupBatch& b, int j, const FrameContext& frame,
+                    const detail::SegmentSetupFrame& F, int stations, SegmentExtra& x, detail::SegmentStationJobs& jobs) {
+  float* colour = x.colour.data();
+  const int n = stations + 1;
+  if (F.light) {
+    for (int c = 0; c < 3; ++c) {
+      const float albedo = c == 0 ? b.cr[j] : c == 1 ? b.cg[j] : b.cb[j];
+      colour[c * n] = (albedo * b.diffuse0[j] + b.specular0[j]) * F.lightColor[c];
+      colour[c * n + stations] = (albedo * b.diffuse1[j] + b.specular1[j]) * F.lightColor[c];
+    }
+    for (int s = 1; s < stations; ++s) {
+      const int q = jobs.count++;
+      jobs.lane[q] = j;
+      jobs.u[q] = float(s) / float(stations);
+      jobs.out[q] = colour + s;
+      jobs.stride[q] = n;
+    }
+    return;
+  }
+  const Vec3f p0(b.p0x[j], b.p0y[j], b.p0z[j]), p1(b.p1cx[j], b.p1cy[j], b.p1cz[j]);
+  const Vec3f n0(b.n0x[j], b.n0y[j], b.n0z[j]), dn(b.dnx[j], b.dny[j], b.dnz[j]), albedo(b.cr[j], b.cg[j], b.cb[j]);
+  for (int s = 0; s <= stations; ++s) {
+    const float u = float(s) / float(stations);
+    const Vec3f m = n0 + u * dn;
+    const Vec3f c = frame.shade(albedo, m / m.norm(), p0 + u * (p1 - p0));
+    for (int ch = 0; ch < 3; ++ch) colour[ch * n + s] = c[ch];
+  }
 }
 
-// Lane j of the batch into its PreparedSegment (what prepareSegment's stages 4-6 write);
-// stations as turningStations gives it.
-void pack(const detail::SegmentSetupBatch& b, int j, const Segment& seg, uint32_t index, const FrameContext& frame,
-          const detail::SegmentSetupFrame& F, int stations, PreparedSegment& out) {
-  out.index = index;
-  out.fallback = false;
-  resetExtra(out.extra);
-  out.bounds = {b.x0[j], b.y0[j], b.x1[j], b.y1[j]};
-  out.method = SegmentMethod::ScreenSpace;
-  out.useSpans = true;
-  for (int k = 0; k < 4; ++k) out.screenQuad[k] = Vec2f(b.qx[k][j], b.qy[k][j]);
-  detail::SegmentRaster& k = out.raster;
-  k.N = {b.Nx[j], b.Ny[j], b.N0[j]};
-  k.A = {b.Ax[j], b.Ay[j], b.A0[j]};
-  k.B = {b.Bx[j], b.By[j], b.B0[j]};
-  k.depthNum = b.depthNum[j], k.a0 = b.a0[j], k.b0 = b.b0[j];
-  k.length = b.length[j], k.R2 = frame.cutoffQ;
-  k.aMin = b.aMin[j], k.aMax = b.aMax[j], k.bMax = b.bMax[j];
-  k.skew = b.skew[j], k.across = b.across[j], k.invM00 = b.invM00[j], k.k = b.k[j], k.erfScale = b.erfScale[j];
-  k.scale0 = b.scale0[j], k.slope = b.slope[j];
-  k.zThreshold0 = frame.zThreshold(b.extent0[j]);
-  k.zThreshold1 = frame.zThreshold(b.extent1[j]);
-  k.nearD = F.view.nearD, k.farD = F.view.farD;
-  k.clipDepth = false;
-  k.pieceCount = 1;
-  k.pieces = nullptr;
-  k.pieceInvLength = 0, k.pieceMaxReach = 0;
-  // shading (segment_splat.cpp, stage 6, for one or no lighting station interval)
-  const bool smooth = b.smooth[j] > 0;
-  out.smooth = smooth;
-  const Vec3f n0(b.n0x[j], b.n0y[j], b.n0z[j]), n1(b.n1x[j], b.n1y[j], b.n1z[j]);
-  if (smooth) out.n0 = n0, out.dn = n1 - n0;
-  const Color col = frame.primitiveColor(seg.color);
-  setBaseAttributes(out, col, n0);
-  float* a = out.attr;
-  if (F.perPixelLighting) {
-    out.shade = smooth ? SegmentShade::Smooth : SegmentShade::Constant;
-    if (stations == 0) {  // turning: the rows normalise n0 + u dn exactly
-      out.shade = SegmentShade::Stations;
-      stationsExtra(out, seg, false, 0);
-    }
-    return;
+// The queued stations lit (segmentStations) and written to their SegmentExtras.
+void flushStations(const detail::SegmentSetupFrame& F, const detail::SegmentSetupBatch& b,
+                   detail::SegmentStationJobs& jobs) {
+  if (jobs.count == 0) return;
+  for (int q = jobs.count; q < (jobs.count + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes; ++q)
+    jobs.lane[q] = 0, jobs.u[q] = 0;  // the last vector's spare lanes: defined values
+  detail::segmentStations(F, b, jobs);
+  for (int q = 0; q < jobs.count; ++q) {
+    float* o = jobs.out[q];
+    o[0] = jobs.r[q], o[jobs.stride[q]] = jobs.g[q], o[2 * jobs.stride[q]] = jobs.b[q];
   }
-  out.shade = smooth ? SegmentShade::Smooth : SegmentShade::Linear;
-  Vec3f k0, k1;
-  if (stations > 0) {  // Gouraud at stations + 1 evenly spaced stations (segment_splat.cpp, stage 6)
-    out.shade = SegmentShade::Stations;
-    SegmentExtra& x = stationsExtra(out, seg, false, stations);
-    const Vec3f p0(b.p0x[j], b.p0y[j], b.p0z[j]), p1(b.p1cx[j], b.p1cy[j], b.p1cz[j]);
-    const Vec3f albedo = col.head<3>(), dn = n1 - n0;
-    for (int s = 0; s <= stations; ++s) {
-      const float u = float(s) / float(stations);
-      Vec3f c;
-      if (F.light && (s == 0 || s == stations)) {  // the batch's Phong factors at the ends
-        const float dif = s == 0 ? b.diffuse0[j] : b.diffuse1[j], spec = s == 0 ? b.specular0[j] : b.specular1[j];
-        c = (albedo * dif + Vec3f::Constant(spec)).cwiseProduct(frame.opt().light.color);
-      } else {
-        const Vec3f m = n0 + u * dn;
-        c = frame.shade(albedo, m / m.norm(), p0 + u * (p1 - p0));
-      }
-      for (int ch = 0; ch < 3; ++ch) x.colour[size_t(ch * (stations + 1) + s)] = c[ch];
-    }
-    return;
-  }
-  if (F.light) {
-    const Vec3f& lc = frame.opt().light.color;
-    for (int c = 0; c < 3; ++c) {
-      k0[c] = (col[c] * b.diffuse0[j] + b.specular0[j]) * lc[c];
-      k1[c] = (col[c] * b.diffuse1[j] + b.specular1[j]) * lc[c];
-    }
-  } else {
-    k0 = frame.shade(col.head<3>(), n0, frame.cam().toCamera(seg.p0));
-    k1 = frame.shade(col.head<3>(), n1, Vec3f(b.p1cx[j], b.p1cy[j], b.p1cz[j]));
-  }
-  a[Z3Tile::kR] = k0.x(), a[Z3Tile::kG] = k0.y(), a[Z3Tile::kB] = k0.z();
-  out.dc = k1 - k0;
+  jobs.count = 0;
 }
 
 }  // namespace
@@ -413,14 +560,16 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
   size_t scalar = 0;
   const Camera& cam = frame.cam();
   detail::SegmentSetupBatch b;
+  detail::SegmentStationJobs jobs;
   for (size_t base = 0; base < count; base += detail::kSegmentBatch) {
     const int n = int(std::min<size_t>(detail::kSegmentBatch, count - base));
     for (int j = 0; j < n; ++j) {  // AoS -> SoA
       const Segment& s = segments[first + base + size_t(j)];
-      // the input a batch ahead (a hint: an address past the array is harmless)
-      const char* next = reinterpret_cast<const char*>(&s + detail::kSegmentBatch);
-      __builtin_prefetch(next);
-      __builtin_prefetch(next + 64);
+      // the input a batch ahead, every line it spans (a hint: an address past the array is harmless)
+      const uintptr_t next = reinterpret_cast<uintptr_t>(&s) + detail::kSegmentBatch * sizeof(Segment);
+      __builtin_prefetch(reinterpret_cast<const void*>(next));
+      __builtin_prefetch(reinterpret_cast<const void*>(next + 64));
+      __builtin_prefetch(reinterpret_cast<const void*>(next + sizeof(Segment) - 1));
       const Vec3f c0 = cam.toCamera(s.p0), c1 = cam.toCamera(s.p1);
       b.p0x[j] = c0.x(), b.p0y[j] = c0.y(), b.p0z[j] = c0.z();
       b.p1x[j] = c1.x(), b.p1y[j] = c1.y(), b.p1z[j] = c1.z();
@@ -429,6 +578,13 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
                           s.normal0.squaredNorm() > 0 && s.normal1.squaredNorm() > 0;
       const Vec3f w = cam.rotation() * (smooth && !(s.normal.squaredNorm() > 0) ? Vec3f(s.normal0 + s.normal1) : s.normal);
       b.wx[j] = w.x(), b.wy[j] = w.y(), b.wz[j] = w.z();
+      // the lane's record slot, all its lines, into L2 unless the plane clearly faces away (issue
+      // 13, i13segprep: the records stream through memory once per frame; fetched a few lanes
+      // before their writing, the writes stalled; from here the batch's set-up passes meanwhile)
+      if (!(F.view.backfaceCulling && w.dot(c0) > 0)) {
+        const char* slot = reinterpret_cast<const char*>(out + base + size_t(j));
+        for (size_t o = 0; o < sizeof(PreparedSegment); o += 64) __builtin_prefetch(slot + o, 0, 2);
+      }
       b.smooth[j] = smooth ? 1.0f : 0.0f;
       if (F.smoothFrame) {
         const Vec3f m0 = smooth ? Vec3f(cam.rotation() * s.normal0) : Vec3f::UnitZ();
@@ -436,6 +592,8 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
         b.m0x[j] = m0.x(), b.m0y[j] = m0.y(), b.m0z[j] = m0.z();
         b.m1x[j] = m1.x(), b.m1y[j] = m1.y(), b.m1z[j] = m1.z();
       }
+      const Color col = frame.primitiveColor(s.color);
+      b.cr[j] = col.x(), b.cg[j] = col.y(), b.cb[j] = col.z(), b.ca[j] = col.w();
     }
     for (int j = n; j < detail::kSegmentBatch && j < ((n + 15) & ~15); ++j) {  // harmless padding lanes
       b.p0x[j] = b.p0y[j] = b.p0z[j] = b.p1y[j] = b.p1z[j] = b.wx[j] = b.wy[j] = 0;
@@ -443,37 +601,55 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       b.smooth[j] = 0;
       b.m0x[j] = b.m0y[j] = b.m1x[j] = b.m1y[j] = 0;
       b.m0z[j] = b.m1z[j] = 1;
+      b.cr[j] = b.cg[j] = b.cb[j] = b.ca[j] = 0;
     }
+    b.first = uint32_t(first + base);
     detail::segmentSetup(F, b, n);
-    // the records of the segments drawn, a few lanes ahead of their writing (they stream
-    // through memory once per frame)
-    constexpr int kAhead = 24;
-    auto prefetchRecord = [&](int j) {
-      if (j >= n || b.status[j] == 1.0f || b.status[j] == 4.0f) return;
-      const char* rec = reinterpret_cast<const char*>(out + base + size_t(j));
-      for (size_t o = 0; o < sizeof(PreparedSegment); o += 64) __builtin_prefetch(rec + o, 1);
-    };
-    for (int j = 0; j < kAhead; ++j) prefetchRecord(j);
     for (int j = 0; j < n; ++j) {
-      prefetchRecord(j + kAhead);
+      // the SegmentExtra of each turning lane's slot (its station colours below), where the slot
+      // has one from an earlier frame: fetched while the records' images are made
+      if (!(b.stations[j] >= 0) || !(b.status[j] == 0.0f || b.status[j] == 3.0f)) continue;
+      if (const SegmentExtra* x = out[base + size_t(j)].extra.get()) {
+        const char* c = reinterpret_cast<const char*>(&x->colour);
+        __builtin_prefetch(c, 1);
+        __builtin_prefetch(c + sizeof(x->colour) + 2 * sizeof(Vec2f) + 2 * sizeof(int), 1);
+      }
+    }
+    detail::segmentRecords(F, b, n);
+    for (int j = 0; j < n; ++j) {
       const size_t i = base + size_t(j);
       const uint32_t index = uint32_t(first + i);
-      int stations = -1;
       switch (int(b.status[j])) {
         case 0: status[i] = PrimitiveStatus::Drawn; break;
-        case 1: status[i] = PrimitiveStatus::Culled; break;
+        case 1: status[i] = PrimitiveStatus::Culled; continue;
         case 3: status[i] = PrimitiveStatus::Clipped; break;
-        case 4: status[i] = PrimitiveStatus::Outside; break;
-        default: stations = -2;
+        case 4: status[i] = PrimitiveStatus::Outside; continue;
+        default:
+          status[i] = prepareSegment(segments[index], index, frame, out[i]);
+          ++scalar;
+          continue;
       }
-      if (stations == -1 && visible(status[i])) stations = turningStations(b, j, F);
-      if (stations == -2) {
-        status[i] = prepareSegment(segments[index], index, frame, out[i]);
-        ++scalar;
-        continue;
+      // the lane's record image (all but `extra`, which the common case neither reads nor resets)
+      PreparedSegment& rec = out[i];
+      char* dst = reinterpret_cast<char*>(&rec);
+      std::memcpy(dst + 8, b.rec[0] + 4 * j + 2, 8);
+      for (int c = 1; c < detail::kRecordChunks; ++c) std::memcpy(dst + 16 * c, b.rec[c] + 4 * j, 16);
+      const int stations = int(b.stations[j]);
+      if (stations >= 0) {  // turning: shade Stations (SegmentExtra), lit at the stations
+        if (jobs.count + stations > detail::kStationJobs) flushStations(F, b, jobs);
+        SegmentExtra& x = stationsExtra(rec, segments[index], false, stations);
+        if (stations > 0) stationColours(b, j, frame, F, stations, x, jobs);
+      } else if (!F.light && !F.perPixelLighting) {  // Gouraud between the ends, lit per lane
+        const Vec3f albedo(b.cr[j], b.cg[j], b.cb[j]);
+        const Vec3f n1 = rec.n0 + rec.dn;
+        const Vec3f k0 = frame.shade(albedo, rec.n0, Vec3f(b.p0x[j], b.p0y[j], b.p0z[j]));
+        const Vec3f k1 = frame.shade(albedo, n1, Vec3f(b.p1cx[j], b.p1cy[j], b.p1cz[j]));
+        float* a = rec.attr;
+        a[Z3Tile::kR] = k0.x(), a[Z3Tile::kG] = k0.y(), a[Z3Tile::kB] = k0.z();
+        rec.dc = k1 - k0;
       }
-      if (visible(status[i])) pack(b, j, segments[index], index, frame, F, stations, out[i]);
     }
+    flushStations(F, b, jobs);
   }
   return scalar;
 }

@@ -7,6 +7,7 @@
 /// grazing, depth-clipped, more than one sub-segment) is prepared by
 /// prepareSegment itself, the exact path; the others agree with it up to float rounding
 /// (tests/render/segment_prepare_test.cpp).
+#include <cstddef>
 #include <cstdint>
 
 #include "segment_splat.h"
@@ -14,6 +15,25 @@
 namespace linesurf {
 
 namespace detail {
+
+/// A PreparedSegment as the batches write it (issue 13, i13segprep): one image per lane of the
+/// record's bytes [0, 16 kRecordChunks) in 16-byte chunks (aligned: no store splits a cache line),
+/// all written but `extra` (its first 8 bytes: neither read nor written in the common case).
+inline constexpr size_t kRecordBegin = 0;
+inline constexpr int kRecordChunks =
+    int((offsetof(PreparedSegment, screenQuad) + sizeof(PreparedSegment::screenQuad) + 15) / 16);
+inline constexpr int kRecordSlots = 4 * kRecordChunks;  ///< 32-bit words
+static_assert(offsetof(PreparedSegment, extra) == 0 && sizeof(PreparedSegment::extra) == 8 &&
+                  16 * kRecordChunks <= sizeof(PreparedSegment) && alignof(PreparedSegment) % 16 == 0,
+              "the record image: `extra` in its first 8 bytes, inside the record");
+
+/// The per-frame image of the fields a common-case segment's record holds for every segment of
+/// the frame (method, useSpans, R2, nearD, farD, one piece, weight 1, ...), as 32-bit words.
+struct SegmentRecordTemplate {
+  uint32_t word[kRecordSlots] = {};
+};
+
+inline constexpr int kSegmentBatch = 64;
 
 /// Per-frame constants of the segment set-up.
 struct SegmentSetupFrame {
@@ -26,9 +46,12 @@ struct SegmentSetupFrame {
   /// perPixelLighting false the batch calls FrameContext::shade per segment instead.
   bool light = false, perPixelLighting = false;
   const float* specularTable = nullptr;
+  float lightColor[3] = {1, 1, 1};  ///< RenderOptions::light.color
+  /// FrameContext::zThreshold: zScale * depth extent (PerPrimitive), else zFixed
+  bool zPerPrimitive = true;
+  float zScale = 0, zFixed = 0;
+  SegmentRecordTemplate record;
 };
-
-inline constexpr int kSegmentBatch = 64;
 
 /// SoA input and output of a batch of at most kSegmentBatch segments.
 struct SegmentSetupBatch {
@@ -40,6 +63,9 @@ struct SegmentSetupBatch {
   alignas(64) float smooth[kSegmentBatch];
   alignas(64) float m0x[kSegmentBatch], m0y[kSegmentBatch], m0z[kSegmentBatch];
   alignas(64) float m1x[kSegmentBatch], m1y[kSegmentBatch], m1z[kSegmentBatch];
+  /// the colour (FrameContext::primitiveColor)
+  alignas(64) float cr[kSegmentBatch], cg[kSegmentBatch], cb[kSegmentBatch], ca[kSegmentBatch];
+  uint32_t first = 0;  ///< the index of lane 0's segment
   // output: 0 = drawn; 1 = culled; 2 = needs the exact path; 3 = drawn, bounds cut by the
   // viewport (Clipped); 4 = outside
   alignas(64) float status[kSegmentBatch];
@@ -50,10 +76,8 @@ struct SegmentSetupBatch {
   alignas(64) float aMin[kSegmentBatch], aMax[kSegmentBatch], bMax[kSegmentBatch];
   alignas(64) float skew[kSegmentBatch], across[kSegmentBatch], invM00[kSegmentBatch], k[kSegmentBatch],
       erfScale[kSegmentBatch], scale0[kSegmentBatch], slope[kSegmentBatch];
-  alignas(64) float extent0[kSegmentBatch], extent1[kSegmentBatch];  ///< depth extents at p0, p1 (z threshold)
   alignas(64) float qx[4][kSegmentBatch], qy[4][kSegmentBatch];      ///< projected footprint box
   alignas(64) int32_t x0[kSegmentBatch], y0[kSegmentBatch], x1[kSegmentBatch], y1[kSegmentBatch];
-  alignas(64) float nx[kSegmentBatch], ny[kSegmentBatch], nz[kSegmentBatch];  ///< plane normal facing the viewer
   /// shading normals at p0 and p1 (unit; the plane normal unless smooth)
   alignas(64) float n0x[kSegmentBatch], n0y[kSegmentBatch], n0z[kSegmentBatch];
   alignas(64) float n1x[kSegmentBatch], n1y[kSegmentBatch], n1z[kSegmentBatch];
@@ -61,10 +85,39 @@ struct SegmentSetupBatch {
   alignas(64) float diffuse0[kSegmentBatch], specular0[kSegmentBatch], diffuse1[kSegmentBatch],
       specular1[kSegmentBatch];
   alignas(64) float p1cx[kSegmentBatch], p1cy[kSegmentBatch], p1cz[kSegmentBatch];  ///< p1, camera space
+  /// the rest of the record's per-lane words: z thresholds, attributes at u = 0 (colour, alpha;
+  /// the normal is n0), the colour's change dc and the normal's dn to u = 1, the index, and the
+  /// word holding `smooth` and `shade` (the template's with those bytes set)
+  alignas(64) float zt0[kSegmentBatch], zt1[kSegmentBatch];  ///< z thresholds at p0, p1
+  alignas(64) float ar[kSegmentBatch], ag[kSegmentBatch], ab[kSegmentBatch], aa[kSegmentBatch];
+  alignas(64) float dcx[kSegmentBatch], dcy[kSegmentBatch], dcz[kSegmentBatch];
+  alignas(64) float dnx[kSegmentBatch], dny[kSegmentBatch], dnz[kSegmentBatch];
+  alignas(64) uint32_t index[kSegmentBatch], flags[kSegmentBatch];
+  /// Gouraud intervals of a turning smooth lane (shade Stations): > 0, or 0 where lighting is
+  /// deferred; -1 for a lane that does not turn
+  alignas(64) float stations[kSegmentBatch];
+  /// the records' images: chunk c of lane j at rec[c][4 j .. 4 j + 4) (segmentRecords)
+  alignas(64) float rec[kRecordChunks][4 * kSegmentBatch];
 };
 
 /// The SIMD set-up of n <= kSegmentBatch segments (runtime dispatch).
 void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
+
+/// The records' images of lanes [0, n) of a batch segmentSetup has set up (rec; runtime dispatch).
+void segmentRecords(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
+
+/// Lighting stations in SIMD: job k is lane lane[k] of the batch at u[k] in [0, 1]: the lit colour
+/// (FrameContext::shade, with the batch's Phong) of the albedo (cr, cg, cb) at the shading normal
+/// normalize(n0 + u (n1 - n0)) and the point p0 + u (p1 - p0), into r, g, b.
+inline constexpr int kStationJobs = 256;
+struct SegmentStationJobs {
+  alignas(64) int32_t lane[kStationJobs];
+  alignas(64) float u[kStationJobs], r[kStationJobs], g[kStationJobs], b[kStationJobs];
+  float* out[kStationJobs];  ///< where channel 0 goes; channel c at out[k][c * stride[k]]
+  int stride[kStationJobs];
+  int count = 0;
+};
+void segmentStations(const SegmentSetupFrame& frame, const SegmentSetupBatch& batch, SegmentStationJobs& jobs);
 
 }  // namespace detail
 
@@ -72,9 +125,9 @@ void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int 
 detail::SegmentSetupFrame segmentSetupFrame(const FrameContext& frame);
 
 /// prepareSegment for segments[first .. first + count): status[j] for segment first + j, and
-/// out[j] as prepareSegment writes it where that status is Drawn or Clipped; the record of a
-/// segment not drawn may be left as it was (not read, not written: culled segments cost no
-/// memory traffic). Returns how many went through
+/// out[j] as prepareSegment writes it where that status is Drawn or Clipped (but `extra`, which
+/// the common case neither reads nor resets); the record of a segment not drawn may be left as it
+/// was (not written: culled segments cost no memory writes). Returns how many went through
 /// prepareSegment itself (lanes the SIMD code left, or all where the frame is not the common case).
 size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, const FrameContext& frame,
                        const detail::SegmentSetupFrame& setup, PreparedSegment* out, PrimitiveStatus* status);

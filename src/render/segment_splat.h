@@ -127,8 +127,9 @@ enum class SegmentShade : uint8_t {
 /// kSegmentHotBytes; screenQuad (only the box walk reads it) comes last. Stage 3 prefetches only
 /// the hot lines (4 instead of the 5-6 a 280-byte unaligned record spans).
 struct alignas(64) PreparedSegment {
-  /// null in the common case, or a SegmentExtra kept from an earlier use of the slot, reset
-  /// (empty: read only where method, pieceCount or shade say the segment needs it). First, with
+  /// null in the common case, or a SegmentExtra kept from an earlier use of the slot: reset by
+  /// prepareSegment, left as it was by the SIMD batches (segment_setup.h), so read only where
+  /// method, pieceCount or shade say the segment needs it (which sets it up). First, with
   /// the fields below up to `shade`: for a segment it does not draw prepareSegment writes (and
   /// reads) only the record's first cache line.
   std::unique_ptr<SegmentExtra> extra;
@@ -150,8 +151,8 @@ struct alignas(64) PreparedSegment {
   /// span inside it (the box walk; cold: the common case's tight spans do not read it).
   Vec2f screenQuad[4];
 
-  /// Number of ScreenSpace sub-segments.
-  int pieceCount() const { return extra && !extra->pieces.empty() ? int(extra->pieces.size()) : 1; }
+  /// Number of ScreenSpace sub-segments (K > 1: their pieces in extra).
+  int pieceCount() const { return raster.pieceCount; }
   float length() const { return raster.length; }
 };
 /// The record slot's SegmentExtra, allocated on its first use (then kept from frame to frame:
