@@ -127,7 +127,71 @@ const std::array<int32_t, kRecordSlots>& recordSources() {
   return table;
 }
 
+// World to camera space in place over lanes [0, n) of the batch, rounded as the exact path's
+// Camera::toCamera and rotation() products round (Eigen: r0 x + (r1 y + r2 z), then + t; separate
+// products and sums: no contraction to fused multiply-adds here), and the smooth flags.
+#if defined(__clang__)
+#define LINESURF_NO_CONTRACT _Pragma("clang fp contract(off)")
+#else
+#define LINESURF_NO_CONTRACT
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")
+#endif
+HWY_NOINLINE void SegmentToCamera(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
+  LINESURF_NO_CONTRACT
+  const PointSetupFrame& V = F.view;
+  using DF = hn::ScalableTag<float>;
+  using VF = hn::Vec<DF>;
+  const DF d;
+  const int lanes = int(hn::Lanes(d));
+  const VF zero = hn::Zero(d), inf = hn::Set(d, INFINITY);
+  VF r[9], t[3];
+  for (int k = 0; k < 9; ++k) r[k] = hn::Set(d, V.rot[k]);
+  for (int k = 0; k < 3; ++k) t[k] = hn::Set(d, V.trans[k]);
+  auto row = [&](int i, VF x, VF y, VF z) { return hn::Add(hn::Mul(r[3 * i], x), hn::Add(hn::Mul(r[3 * i + 1], y), hn::Mul(r[3 * i + 2], z))); };
+  auto rotate = [&](float* x, float* y, float* z, int i, VF X, VF Y, VF Z) {
+    hn::StoreU(row(0, X, Y, Z), d, x + i), hn::StoreU(row(1, X, Y, Z), d, y + i), hn::StoreU(row(2, X, Y, Z), d, z + i);
+  };
+  auto point = [&](float* x, float* y, float* z, int i) {
+    const VF X = hn::LoadU(d, x + i), Y = hn::LoadU(d, y + i), Z = hn::LoadU(d, z + i);
+    hn::StoreU(hn::Add(row(0, X, Y, Z), t[0]), d, x + i), hn::StoreU(hn::Add(row(1, X, Y, Z), t[1]), d, y + i);
+    hn::StoreU(hn::Add(row(2, X, Y, Z), t[2]), d, z + i);
+  };
+  auto norm2 = [](VF x, VF y, VF z) { return hn::Add(hn::Add(hn::Mul(x, x), hn::Mul(y, y)), hn::Mul(z, z)); };
+  for (int i = 0; i < n; i += lanes) {
+    point(B.p0x, B.p0y, B.p0z, i);
+    point(B.p1x, B.p1y, B.p1z, i);
+    VF wx = hn::LoadU(d, B.wx + i), wy = hn::LoadU(d, B.wy + i), wz = hn::LoadU(d, B.wz + i);
+    if (F.smoothFrame) {
+      const VF ax = hn::LoadU(d, B.m0x + i), ay = hn::LoadU(d, B.m0y + i), az = hn::LoadU(d, B.m0z + i);
+      const VF bx = hn::LoadU(d, B.m1x + i), by = hn::LoadU(d, B.m1y + i), bz = hn::LoadU(d, B.m1z + i);
+      auto finite3 = [&](VF x, VF y, VF z) {
+        return hn::And(hn::And(hn::Lt(hn::Abs(x), inf), hn::Lt(hn::Abs(y), inf)), hn::Lt(hn::Abs(z), inf));
+      };
+      // a sum of squares is positive where one term is, whatever the order of the sums
+      const auto sm = hn::And(hn::And(finite3(ax, ay, az), finite3(bx, by, bz)),
+                              hn::And(hn::Gt(norm2(ax, ay, az), zero), hn::Gt(norm2(bx, by, bz), zero)));
+      hn::StoreU(hn::IfThenElseZero(sm, hn::Set(d, 1.0f)), d, B.smooth + i);
+      const auto sum = hn::AndNot(hn::Gt(norm2(wx, wy, wz), zero), sm);
+      wx = hn::IfThenElse(sum, hn::Add(ax, bx), wx), wy = hn::IfThenElse(sum, hn::Add(ay, by), wy);
+      wz = hn::IfThenElse(sum, hn::Add(az, bz), wz);
+      const VF ux = hn::IfThenElseZero(sm, ax), uy = hn::IfThenElseZero(sm, ay), uz = hn::IfThenElse(sm, az, hn::Set(d, 1.0f));
+      const VF vx = hn::IfThenElseZero(sm, bx), vy = hn::IfThenElseZero(sm, by), vz = hn::IfThenElse(sm, bz, hn::Set(d, 1.0f));
+      rotate(B.m0x, B.m0y, B.m0z, i, ux, uy, uz);
+      rotate(B.m1x, B.m1y, B.m1z, i, vx, vy, vz);
+    } else {
+      hn::StoreU(zero, d, B.smooth + i);
+    }
+    rotate(B.wx, B.wy, B.wz, i, wx, wy, wz);
+  }
+}
+#if !defined(__clang__)
+#pragma GCC pop_options
+#endif
+#undef LINESURF_NO_CONTRACT
+
 void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
+  SegmentToCamera(F, B, n);
   const PointSetupFrame& V = F.view;
   using DF = hn::ScalableTag<float>;
   using VF = hn::Vec<DF>;
@@ -558,7 +622,6 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
     return count;
   }
   size_t scalar = 0;
-  const Camera& cam = frame.cam();
   detail::SegmentSetupBatch b;
   detail::SegmentStationJobs jobs;
   for (size_t base = 0; base < count; base += detail::kSegmentBatch) {
@@ -570,27 +633,21 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       __builtin_prefetch(reinterpret_cast<const void*>(next));
       __builtin_prefetch(reinterpret_cast<const void*>(next + 64));
       __builtin_prefetch(reinterpret_cast<const void*>(next + sizeof(Segment) - 1));
-      const Vec3f c0 = cam.toCamera(s.p0), c1 = cam.toCamera(s.p1);
-      b.p0x[j] = c0.x(), b.p0y[j] = c0.y(), b.p0z[j] = c0.z();
-      b.p1x[j] = c1.x(), b.p1y[j] = c1.y(), b.p1z[j] = c1.z();
+      b.p0x[j] = s.p0.x(), b.p0y[j] = s.p0.y(), b.p0z[j] = s.p0.z();
+      b.p1x[j] = s.p1.x(), b.p1y[j] = s.p1.y(), b.p1z[j] = s.p1.z();
+      b.wx[j] = s.normal.x(), b.wy[j] = s.normal.y(), b.wz[j] = s.normal.z();
       b.radius[j] = s.radius;
-      const bool smooth = F.smoothFrame && s.normal0.allFinite() && s.normal1.allFinite() &&
-                          s.normal0.squaredNorm() > 0 && s.normal1.squaredNorm() > 0;
-      const Vec3f w = cam.rotation() * (smooth && !(s.normal.squaredNorm() > 0) ? Vec3f(s.normal0 + s.normal1) : s.normal);
-      b.wx[j] = w.x(), b.wy[j] = w.y(), b.wz[j] = w.z();
+      if (F.smoothFrame) {
+        b.m0x[j] = s.normal0.x(), b.m0y[j] = s.normal0.y(), b.m0z[j] = s.normal0.z();
+        b.m1x[j] = s.normal1.x(), b.m1y[j] = s.normal1.y(), b.m1z[j] = s.normal1.z();
+      }
       // the lane's record slot, all its lines, into L2 unless the plane clearly faces away (issue
       // 13, i13segprep: the records stream through memory once per frame; fetched a few lanes
       // before their writing, the writes stalled; from here the batch's set-up passes meanwhile)
-      if (!(F.view.backfaceCulling && w.dot(c0) > 0)) {
+      const Vec3f toEye = Vec3f(F.view.eye[0], F.view.eye[1], F.view.eye[2]) - s.p0;
+      if (!(F.view.backfaceCulling && s.normal.dot(toEye) < 0)) {
         const char* slot = reinterpret_cast<const char*>(out + base + size_t(j));
         for (size_t o = 0; o < sizeof(PreparedSegment); o += 64) __builtin_prefetch(slot + o, 0, 2);
-      }
-      b.smooth[j] = smooth ? 1.0f : 0.0f;
-      if (F.smoothFrame) {
-        const Vec3f m0 = smooth ? Vec3f(cam.rotation() * s.normal0) : Vec3f::UnitZ();
-        const Vec3f m1 = smooth ? Vec3f(cam.rotation() * s.normal1) : Vec3f::UnitZ();
-        b.m0x[j] = m0.x(), b.m0y[j] = m0.y(), b.m0z[j] = m0.z();
-        b.m1x[j] = m1.x(), b.m1y[j] = m1.y(), b.m1z[j] = m1.z();
       }
       const Color col = frame.primitiveColor(s.color);
       b.cr[j] = col.x(), b.cg[j] = col.y(), b.cb[j] = col.z(), b.ca[j] = col.w();

@@ -55,8 +55,10 @@ struct SegmentSetupFrame {
 
 /// SoA input and output of a batch of at most kSegmentBatch segments.
 struct SegmentSetupBatch {
-  // input, camera space (Camera::toCamera, rotation()): endpoints, plane normal, radius; endpoint
-  // normals where smooth[i] = 1
+  // input, world space (the model's: endpoints, plane normal, radius, endpoint normals where the
+  // frame is smooth); segmentSetup turns them into camera space (Camera::toCamera, rotation(), as
+  // they round: the exact path's input) and sets smooth[i] = 1 where the endpoint normals are
+  // usable, the plane normal then normal0 + normal1 if it is zero (prepareSegment's stage 1)
   alignas(64) float p0x[kSegmentBatch], p0y[kSegmentBatch], p0z[kSegmentBatch];
   alignas(64) float p1x[kSegmentBatch], p1y[kSegmentBatch], p1z[kSegmentBatch];
   alignas(64) float wx[kSegmentBatch], wy[kSegmentBatch], wz[kSegmentBatch], radius[kSegmentBatch];

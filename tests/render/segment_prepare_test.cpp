@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <hwy/targets.h>
+
 #include "linesurf/render/camera.h"
 #include "render/segment_setup.h"
 #include "render/segment_splat.h"
@@ -275,6 +277,56 @@ TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
   EXPECT_EQ(st[0], PrimitiveStatus::Drawn);
   for (int i : {1, 2, 3, 4, 5}) EXPECT_EQ(st[size_t(i)], PrimitiveStatus::Degenerate) << i;
   EXPECT_EQ(st[6], PrimitiveStatus::Drawn);
+}
+
+TEST(SegmentPrepare, BatchesTakeCameraSpaceAsToCameraRoundsIt) {
+  // segmentSetup's world -> camera transform rounds as Camera::toCamera and rotation() products
+  // do (the exact path's input: a short segment far away keeps its direction), bit for bit, on
+  // every SIMD target the machine runs; the smooth flags and plane normals as stage 1 takes them
+  const Vec3f eye(3.1f, -7.3f, 11.7f);
+  const Camera cam = Camera::lookAt(eye, Vec3f(0.2f, 0.1f, -0.3f), Vec3f(0, 1, 0), 40, 320, 240);
+  RenderOptions o;
+  FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1.5f});
+  frame.endpointNormals = true;
+  std::vector<Segment> segs = randomSegments(detail::kSegmentBatch, eye, true, 7);
+  segs[3].normal = Vec3f::Zero();    // the plane normal from the endpoint normals
+  segs[5].normal1 = Vec3f::Zero();   // not smooth
+  segs[6].normal0.x() = NAN;         // not smooth
+  const detail::SegmentSetupFrame F = segmentSetupFrame(frame);
+  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    detail::SegmentSetupBatch b;
+    const int n = detail::kSegmentBatch;
+    for (int j = 0; j < n; ++j) {
+      const Segment& s = segs[size_t(j)];
+      b.p0x[j] = s.p0.x(), b.p0y[j] = s.p0.y(), b.p0z[j] = s.p0.z();
+      b.p1x[j] = s.p1.x(), b.p1y[j] = s.p1.y(), b.p1z[j] = s.p1.z();
+      b.wx[j] = s.normal.x(), b.wy[j] = s.normal.y(), b.wz[j] = s.normal.z(), b.radius[j] = s.radius;
+      b.m0x[j] = s.normal0.x(), b.m0y[j] = s.normal0.y(), b.m0z[j] = s.normal0.z();
+      b.m1x[j] = s.normal1.x(), b.m1y[j] = s.normal1.y(), b.m1z[j] = s.normal1.z();
+      b.cr[j] = b.cg[j] = b.cb[j] = b.ca[j] = 1;
+    }
+    detail::segmentSetup(F, b, n);
+    for (int j = 0; j < n; ++j) {
+      const Segment& s = segs[size_t(j)];
+      const Vec3f c0 = cam.toCamera(s.p0), c1 = cam.toCamera(s.p1);
+      const bool smooth = s.normal0.allFinite() && s.normal1.allFinite() && s.normal0.squaredNorm() > 0 &&
+                          s.normal1.squaredNorm() > 0;
+      const Vec3f w = cam.rotation() * (smooth && !(s.normal.squaredNorm() > 0) ? Vec3f(s.normal0 + s.normal1) : s.normal);
+      auto same = [&](const float* x, const float* y, const float* z, const Vec3f& v, const char* what) {
+        EXPECT_TRUE(x[j] == v.x() && y[j] == v.y() && z[j] == v.z()) << what << " " << j << " target " << target;
+      };
+      same(b.p0x, b.p0y, b.p0z, c0, "p0");
+      same(b.p1x, b.p1y, b.p1z, c1, "p1");
+      same(b.wx, b.wy, b.wz, w, "plane normal");
+      EXPECT_EQ(b.smooth[j] > 0, smooth) << j;
+      if (smooth) {
+        same(b.m0x, b.m0y, b.m0z, Vec3f(cam.rotation() * s.normal0), "normal0");
+        same(b.m1x, b.m1y, b.m1z, Vec3f(cam.rotation() * s.normal1), "normal1");
+      }
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
 }
 
 }  // namespace
