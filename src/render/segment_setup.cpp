@@ -252,6 +252,14 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       early = hn::Or(early, hn::AndNot(culled, hn::Lt(hn::Abs(hn::Sub(D2, g)), hn::Mul(S(1e-3f), g))));
       culled = hn::Or(culled, graze);
     }
+    {  // a vector whose lanes are all decided outside or culled skips the rest (contour lines come
+       // in polylines: neighbours in the batch mostly face the same way)
+      const MF done = hn::AndNot(badInput, hn::Or(outside, hn::AndNot(early, culled)));
+      if (hn::AllTrue(d, hn::Or(done, hn::Not(hn::FirstN(d, size_t(n - i)))))) {
+        St(hn::IfThenElse(badInput, S(2.0f), hn::IfThenElse(outside, S(4.0f), hn::IfThenElse(early, S(2.0f), one))), B.status);
+        continue;
+      }
+    }
     // near grazing at an end: the float covariance is not accurate enough there
     const VF end2 = hn::Max(dot3(cx, cy, cz, cx, cy, cz), dot3(qx1, qy1, qz1, qx1, qy1, qz1));
     MF exact = hn::Lt(hn::Mul(D, D), hn::Mul(S(4e-4f), end2));
@@ -469,6 +477,9 @@ void SegmentRecords(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   const char* base = reinterpret_cast<const char*>(&B);
   const int lanes = int(hn::Lanes(d));
   for (int i = 0; i < n; i += lanes) {
+    // no record for a vector of segments not drawn (culled, outside: SegmentSetup skipped them)
+    const hn::Vec<DF> status = hn::LoadU(d, B.status + i);
+    if (hn::AllTrue(d, hn::Or(hn::Eq(status, hn::Set(d, 1.0f)), hn::Eq(status, hn::Set(d, 4.0f))))) continue;
     for (int c = 0; c < kRecordChunks; ++c) {
       hn::Vec<DF> v[4];
       for (int k = 0; k < 4; ++k) {
