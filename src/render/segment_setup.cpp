@@ -676,7 +676,7 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
     for (int j = 0; j < n; ++j) {
       // the SegmentExtra of each turning lane's slot (its station colours below), where the slot
       // has one from an earlier frame: fetched while the records' images are made
-      if (!(b.stations[j] >= 0) || !(b.status[j] == 0.0f || b.status[j] == 3.0f)) continue;
+      if (!(b.status[j] == 0.0f || b.status[j] == 3.0f) || !(b.stations[j] >= 0)) continue;  // drawn lanes only
       if (const SegmentExtra* x = out[base + size_t(j)].extra.get()) {
         const char* c = reinterpret_cast<const char*>(&x->colour);
         __builtin_prefetch(c, 1);
