@@ -1084,7 +1084,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
       py::arg("model"), py::kw_only(), py::arg("size") = std::pair<int, int>(512, 512), py::arg("azimuth") = 30.0f,
       py::arg("elevation") = 20.0f, py::arg("distance") = 0.0f, py::arg("zoom") = 1.0f, py::arg("fov") = 30.0f,
       py::arg("up_axis") = "y", py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(),
-      py::arg("prefilter_variance") = 1.0f, py::arg("cutoff_radius") = 2.0f, py::arg("reconstruction_scale") = 0.5f,
+      py::arg("prefilter_variance") = RenderOptions{}.prefilterVariance, py::arg("cutoff_radius") = 2.0f, py::arg("reconstruction_scale") = 0.5f,
       py::arg("radius_scale") = 1.0f, py::arg("layers") = 4, py::arg("z_threshold_mode") = "primitive",
       py::arg("z_threshold") = py::none(), py::arg("alpha_override") = -1.0f, py::arg("backface_culling") = true,
       py::arg("ambient") = 0.25f, py::arg("diffuse") = 0.75f, py::arg("specular") = 0.2f, py::arg("shininess") = 24.0f,

@@ -56,8 +56,11 @@ struct Light {
 struct RenderOptions {
   // --- filtering (§4.2.2) -------------------------------------------------------------------
   /// Variance of the screen-space Gaussian prefilter, pixels^2. 0 disables the prefilter (plain
-  /// object-space splatting, aliases under minification). Default 1 (Zwicker et al. 2001).
-  float prefilterVariance = 1.0f;
+  /// object-space splatting, aliases under minification). Default 0.35 px^2, not the thesis's
+  /// identity (Zwicker et al. 2001): 1 paints small splats' colour ~1 px past every silhouette;
+  /// 0.35 is the narrowest that keeps the hole tests closed and still more than halves the
+  /// grazing checkerboard's error against no prefilter (docs/decisions.md, "Issue 14 (i14edge)").
+  float prefilterVariance = 0.35f;
   /// Cut-off of the resampling Gaussian, in standard deviations; fragments beyond it are not
   /// generated. [1, 5], default 2 (weights below e^-2 = 13.5% of the peak are dropped; 2.5
   /// costs 56% more fragments for no visible change, see docs/rendering.md).
