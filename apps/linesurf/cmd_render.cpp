@@ -208,6 +208,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bind(f, "reconstructionScale", o.reconstructionScale, "Reconstruction sigma as a fraction of the point radius, (0, 4]",
        "--recon-scale");
   bind(f, "radiusScale", a->prepare.radiusScale, "Multiply every primitive radius, [1e-3, 1e3]");
+  bind(f, "coverageGain", o.coverageGain,
+       "Coverage alpha at silhouettes (beyond the thesis): alpha = gain x the kernel sum over the model's kernel "
+       "density, [0, 100] (0 = the thesis's normalised alpha; 1.5 for contour models)");
   auto* vis = sub->add_option_group("visibility", "Modified Z^3 buffer (§6.2.3)");
   bind(vis, "layers", o.layers, "Fragment layers per pixel [1, 8]");
   bindEnum(vis, "zThresholdMode", o.zThresholdMode,

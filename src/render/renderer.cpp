@@ -15,6 +15,7 @@
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
+#include "coverage.h"
 #include "detail/splat_rows.h"
 #include "point_setup.h"
 #include "point_splat.h"
@@ -94,6 +95,17 @@ struct Renderer::Buffers {
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
     : model_(model), options_(options), sphere_(boundingSphere(model)), buffers_(std::make_shared<Buffers>()) {
   validate(options_);
+  if (options_.coverageGain > 0) {
+    if (model_.attributes.colors) {
+      for (const Point& p : model_.points) opaqueModel_ = opaqueModel_ && p.color.w() >= 1;
+      for (const Segment& s : model_.segments) opaqueModel_ = opaqueModel_ && s.color.w() >= 1;
+    }
+    if (model_.attributes.texcoords && model_.texture) opaqueModel_ = false;
+    if (opaqueModel_) {
+      coverage_ = detail::coverageConstants(model_, options_.reconstructionScale, options_.cutoffRadius);
+      for (float c : coverage_) coverageMax_ = std::max(coverageMax_, c);
+    }
+  }
 }
 
 const char* renderSimdTarget() { return detail::simdTargetName(); }
@@ -217,6 +229,13 @@ RenderResult Renderer::render(const Camera& cam) const {
     for (int ty = s.y0; ty <= s.y1; ++ty)
       for (int tx = s.x0; tx <= s.x1; ++tx) ++cnt[size_t(ty) * size_t(tilesX) + size_t(tx)];
   };
+  // Coverage alpha (RenderOptions::coverageGain, beyond the thesis): a primitive's alpha attribute
+  // becomes its coverage constant g c_k (coverage.h), stored as c_k / (2 cMax) (at most 1/2: no
+  // fragment is opaque on its own) with the tile's scale 2 g cMax (Z3Tile::setCoverageScale).
+  const bool coverage = coverageMax_ > 0 && !(opt.alphaOverride >= 0 && opt.alphaOverride < 1) && opt.defaultColor.w() >= 1;
+  const float coverageScale = coverage ? 2 * opt.coverageGain * coverageMax_ : 0.0f;
+  const float invC = coverage ? 0.5f / coverageMax_ : 0.0f;
+  const float* const covC = coverage_.data();
   const detail::PointSetupFrame setup = pointSetupFrame(frame);
   parallelFor(0, pointChunks, [&](size_t c) {
     const double t0 = threadCpuSeconds();
@@ -226,6 +245,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     for (size_t i = base, e = std::min(np, base + chunkPoints); i < e; i += detail::kSetupBatch) {
       const int n = preparePoints(model_.points.data(), uint32_t(i), int(std::min<size_t>(detail::kSetupBatch, e - i)),
                                   frame, setup, pointOut + k, buf.chunkCounts[c]);
+      if (coverage)
+        for (size_t j = k; j < k + size_t(n); ++j) pts[j].color[3] = covC[pointOut.cold[j].index] * invC;
       for (size_t j = k; j < k + size_t(n); ++j) countSpan(cnt, spans[j] = tileSpan(pointBounds[j]));
       k += size_t(n);
     }
@@ -251,6 +272,7 @@ RenderResult Renderer::render(const Camera& cam) const {
       for (size_t i = i0; i < i1; ++i) {
         count(segStatus[i], n[0], n[1], n[2], n[3], n[4]);
         if (!visible(segStatus[i])) continue;
+        if (coverage) segs[i].attr[Z3Tile::kA] = covC[np + i] * invC;
         n[5] += segs[i].fallback;
         if (lod && (segLod[i] = segmentLodPoint(segs[i], frame, opt.segmentLod, lodOut + i))) {
           segTiles[i] = tileSpan(lodOut.bounds[i]);
@@ -341,6 +363,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     else buffer->reset(rect);
     Z3Tile& z3 = *buffer;
     z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
+    z3.setCoverageScale(coverageScale);
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     const size_t kEnd = tileStart[tile + 1];

@@ -535,6 +535,7 @@ struct Z3Rows {
   int32_t* cnt;
   bool opaque;
   int nAttr;
+  float coverage;  // Z3Tile::coverageScale(): a layer is opaque once its coverage reaches 1
   // per-lane counts of the lanes opened and of those dropped behind (a vector subtract of the
   // mask per row, not a popcount); opened() / occluded() sum them
   hn::Vec<hn::RebindToSigned<D>> openedV = hn::Zero(di), occludedV = hn::Zero(di);
@@ -542,7 +543,8 @@ struct Z3Rows {
   uint64_t occluded() const { return uint64_t(hn::GetLane(hn::SumOfLanes(di, occludedV))); }
   Z3Rows(Z3Tile& z3, bool opaqueFragments)
       : base(z3.plane(0, 0)), stride(size_t(z3.plane(0, 1) - z3.plane(0, 0))), cnt(z3.counts()),
-        opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1) {}
+        opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1),
+        coverage(z3.coverageScale()) {}
   HWY_INLINE float* field(int f, size_t p) const { return base + size_t(f) * stride + p; }
   template <class AttrAt>
   HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
@@ -565,8 +567,14 @@ struct Z3Rows {
       for (int k = Z3Tile::kW + 1; k < nAttr; ++k) blend(k);
       hn::BlendedStore(z, open, d, field(Z3Tile::kZ, p));
       hn::BlendedStore(thr, open, d, field(Z3Tile::kThr, p));
-      if (opaque) hn::BlendedStore(hn::Set(d, 1.0f), open, d, field(Z3Tile::kOpaque, p));
-      else hn::BlendedStore(zero, fast, d, field(Z3Tile::kOpaque, p));
+      if (coverage > 0) {  // (a single layer: nothing behind it to free)
+        const auto covered = hn::Ge(hn::Mul(hn::LoadU(d, field(Z3Tile::kA, p)), hn::Set(d, coverage)), hn::Set(d, 1.0f));
+        hn::BlendedStore(hn::IfThenElseZero(covered, hn::Set(d, 1.0f)), fast, d, field(Z3Tile::kOpaque, p));
+      } else if (opaque) {
+        hn::BlendedStore(hn::Set(d, 1.0f), open, d, field(Z3Tile::kOpaque, p));
+      } else {
+        hn::BlendedStore(zero, fast, d, field(Z3Tile::kOpaque, p));
+      }
       hn::BlendedStore(hn::Set(di, 1), hn::RebindMask(di, open), di, cnt + p);
       openedV = hn::Sub(openedV, hn::VecFromMask(di, hn::RebindMask(di, open)));
     }
@@ -842,6 +850,8 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
   const float *R = z3.plane(0, Z3Tile::kR) + p0, *G = z3.plane(0, Z3Tile::kG) + p0, *B = z3.plane(0, Z3Tile::kB) + p0;
   const float *A = z3.plane(0, Z3Tile::kA) + p0, *Wt = z3.plane(0, Z3Tile::kW) + p0;
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  const float coverage = z3.coverageScale();
+  const VF covS = hn::Set(d, coverage);
   const VF bgR = hn::Set(d, bg[0]), bgG = hn::Set(d, bg[1]), bgB = hn::Set(d, bg[2]), bgW = hn::Set(d, bg[3]);
   const int whole = n / L * L;
   auto several = hn::Lt(hn::Set(di, 1), hn::Zero(di));  // none yet
@@ -854,7 +864,9 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
       continue;
     }
     const VF iw = hn::Div(one, hn::LoadU(d, Wt + i));
-    const VF a = hn::Min(hn::Max(hn::Mul(hn::LoadU(d, A + i), iw), zero), one);
+    // Z3Tile::layerAlpha: coverage min(1, s A), or the normalised alpha A/W
+    const VF a = coverage > 0 ? hn::Min(hn::Mul(hn::LoadU(d, A + i), covS), one)
+                              : hn::Min(hn::Max(hn::Mul(hn::LoadU(d, A + i), iw), zero), one);
     VF r = hn::Mul(a, hn::Mul(hn::LoadU(d, R + i), iw));
     VF g = hn::Mul(a, hn::Mul(hn::LoadU(d, G + i), iw));
     VF b = hn::Mul(a, hn::Mul(hn::LoadU(d, B + i), iw));

@@ -50,13 +50,15 @@ void Z3Tile::compress(float* px, int& n) {
   auto f = [&](int k) -> float& { return F[k * fs]; };
   auto b = [&](int k) { return B[k * fs]; };
   const float iwf = 1.0f / f(kW), iwb = 1.0f / b(kW);
-  const float af = f(kA) * iwf, ab = b(kA) * iwb;
+  // coverage alpha: each layer's min(1, s A), the merged one stored as A = alpha / s
+  const bool cov = coverage_ > 0;
+  const float af = cov ? layerAlpha(f(kA), iwf) : f(kA) * iwf, ab = cov ? layerAlpha(b(kA), iwb) : b(kA) * iwb;
   const float tb = ab * (1 - af);
   const float am = af + tb;
   const float W = f(kW) + b(kW);
   const float s = am > 0 ? W / am : 0;  // store straight colour times W
   for (int c = kR; c <= kB; ++c) f(c) = (f(c) * iwf * af + b(c) * iwb * tb) * s;
-  f(kA) = am * W;
+  f(kA) = cov ? am / coverage_ : am * W;
   for (int c = kNx; c <= kNz; ++c) f(c) *= W * iwf;  // normal of the front layer
   f(kZ) = 0.5f * (f(kZ) + b(kZ));
   f(kThr) = std::max(f(kThr), b(kThr));
@@ -74,7 +76,8 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
   auto at = [&](int layer, int k) -> float& { return px[layer * layerStride_ + k * fs]; };
   const int L = layers_;
   int n = count_[p];
-  const float alpha = attr[kA];
+  const bool cov = coverage_ > 0;
+  const float alpha = cov ? std::min(w * attr[kA] * coverage_, 1.0f) : attr[kA];  // the fragment's own
   // behind an opaque layer (always the last one): occluded
   if (n > 0 && at(n - 1, kOpaque) != 0 && depth > at(n - 1, kZ)) {
     ++counters_.occluded;
@@ -84,7 +87,7 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
   if (n == L) {
     if (n == 1) {
       // One layer: composite the fragment with it directly, in depth order.
-      const float wl = at(0, kW), al = at(0, kA) / wl, af = alpha;
+      const float wl = at(0, kW), al = cov ? layerAlpha(at(0, kA), 1.0f / wl) : at(0, kA) / wl, af = alpha;
       const Vec3f cl(at(0, kR) / wl, at(0, kG) / wl, at(0, kB) / wl), cf(attr[kR], attr[kG], attr[kB]);
       const bool front = depth < at(0, kZ);
       const float aFront = front ? af : al, aBack = front ? al : af;
@@ -94,7 +97,7 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
       const float W = wl + w;
       const float sc = am > 0 ? W / am : 0;
       at(0, kR) = cm.x() * sc; at(0, kG) = cm.y() * sc; at(0, kB) = cm.z() * sc;
-      at(0, kA) = am * W;
+      at(0, kA) = cov ? am / coverage_ : am * W;
       if (front) { at(0, kNx) = attr[kNx] * W; at(0, kNy) = attr[kNy] * W; at(0, kNz) = attr[kNz] * W; }
       else { at(0, kNx) *= W / wl; at(0, kNy) *= W / wl; at(0, kNz) *= W / wl; }
       at(0, kZ) = 0.5f * (at(0, kZ) + depth);
@@ -116,7 +119,7 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
   // b. allocation, keeping the layers sorted front to back
   int pos = n;
   while (pos > 0 && at(pos - 1, kZ) > depth) --pos;
-  const bool opaque = alpha >= 1.0f;
+  const bool opaque = alpha >= 1.0f;  // coverage alpha: the fragment alone covers the pixel
   if (opaque) n = pos;  // everything behind an opaque fragment is occluded: free it
   for (int i = n; i > pos; --i) moveLayer(px, layerStride_, fs, i, i - 1);
   for (int k = 0; k < kAttrs; ++k) at(pos, k) = w * attr[k];

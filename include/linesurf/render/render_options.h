@@ -69,6 +69,17 @@ struct RenderOptions {
   /// the primitive's radius is the 2-sigma ellipse of its reconstruction Gaussian. (0, 4].
   float reconstructionScale = 0.5f;
 
+  /// Coverage alpha (beyond the thesis; issue 14). > 0: a pixel's alpha is the surface's coverage
+  /// min(1, g sum_k c_k w_k) (w_k the fragments' resampling weights, c_k the inverse of the model's
+  /// least kernel density around primitive k, src/render/coverage.h; g this gain), composited over
+  /// what lies behind, instead of the normalised alpha that paints a splat's colour out to its
+  /// cut-off: the soft silhouette of a box-filtered mesh instead of a 1-3 pixel fringe. A partly
+  /// covered layer keeps the layers behind it (Z^3 step b waits for full coverage). Only when every
+  /// primitive is opaque (no alphaOverride < 1, no colour alpha < 1, no texture); otherwise the
+  /// thesis's alpha. 0 = off, the default: irregular point clouds keep translucent pixels inside
+  /// (docs/decisions.md, "Issue 14 (i14edge)"); 1.5 measured best for contour models. [0, 100].
+  float coverageGain = 0.0f;
+
   // --- visibility and blending (§6.2.3, modified Z^3) -----------------------------------------
   ZThresholdMode zThresholdMode = ZThresholdMode::PerPrimitive;
   /// Fixed: fraction of the bounding-sphere radius. PerPrimitive: multiple of the primitive's

@@ -7,6 +7,7 @@
 /// count.
 #include <cstdint>
 #include <memory>
+#include <vector>
 #include <optional>
 
 #include "linesurf/core/image.h"
@@ -59,6 +60,12 @@ class Renderer {
   const HybridModel& model_;
   RenderOptions options_;
   BoundingSphere sphere_;
+  /// Coverage alpha (RenderOptions::coverageGain): the primitives' coverage constants (points,
+  /// then segments; src/render/coverage.h), their largest, and whether every primitive is opaque
+  /// (the mode's condition)
+  std::vector<float> coverage_;
+  float coverageMax_ = 0;
+  bool opaqueModel_ = true;
   struct Buffers;  // per-frame buffers reused by the next frame (renderer.cpp)
   std::shared_ptr<Buffers> buffers_;
 };

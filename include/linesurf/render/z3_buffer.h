@@ -13,6 +13,10 @@
 ///     composited into one (normalised colours, "over" operator, W = 1; step c);
 ///  2. resolve: layers normalised (C/W, A/W), lit when shading is deferred (C is then the
 ///     weighted albedo, lit once per layer with the normalised N), composited back to front.
+/// Coverage alpha (beyond the thesis; issue 14, setCoverageScale): A then sums each fragment's
+/// coverage, weight times a per-primitive constant, and a layer's alpha is min(1, s A) (s the
+/// tile's coverage scale) instead of the weighted mean A/W; a layer is opaque (step b) only once
+/// that reaches 1, so a partly covered layer keeps what lies behind it.
 /// Storage: a fixed number of layers per pixel in structure-of-arrays planes, one plane of
 /// floats per (layer, field), row-major over the tile, so that the SIMD point rows
 /// (detail/splat_rows.h, pointRowsZ3) test and merge a whole row of pixels per instruction (the
@@ -93,7 +97,7 @@ class Z3Tile {
       for (int k = 0; k < kAttrs; ++k) px[k * fs] = weight * attr[k];
       px[kZ * fs] = depth;
       px[kThr * fs] = zThreshold;
-      px[kOpaque * fs] = attr[kA] >= 1.0f ? 1.0f : 0.0f;
+      px[kOpaque * fs] = fragmentOpaque(weight, attr[kA]) ? 1.0f : 0.0f;
       count_[p] = 1;
       ++counters_.allocated;
       return;
@@ -109,7 +113,14 @@ class Z3Tile {
     if (hit < 0) return insertNew(p, depth, zThreshold, weight, attr);
     float* ly = px + hit * layerStride_;
     for (int k = 0; k < kAttrs; ++k) ly[k * fs] += weight * attr[k];
-    if (attr[kA] < 1.0f) ly[kOpaque * fs] = 0;
+    if (coverage_ > 0) {  // opaque once covered: what lies behind is freed (step b)
+      if (ly[kA * fs] * coverage_ >= 1.0f) {
+        ly[kOpaque * fs] = 1;
+        count_[p] = hit + 1;
+      }
+    } else if (attr[kA] < 1.0f) {
+      ly[kOpaque * fs] = 0;
+    }
   }
   void addFragments(uint64_t n) { fragments_ += n; }
   /// The same for one Fragment, counted.
@@ -142,7 +153,7 @@ class Z3Tile {
     for (int i = 0; i < n && a < 1.0f; ++i) {
       const float* ly = px + i * layerStride_;
       const float iw = 1.0f / ly[kW * fs];
-      const float al = std::clamp(ly[kA * fs] * iw, 0.0f, 1.0f);
+      const float al = layerAlpha(ly[kA * fs], iw);
       const float t = (1 - a) * al;
       c += t * shade(Vec3f(ly[kR * fs] * iw, ly[kG * fs] * iw, ly[kB * fs] * iw),
                      Vec3f(ly[kNx * fs], ly[kNy * fs], ly[kNz * fs]), ly[kZ * fs]);
@@ -188,6 +199,19 @@ class Z3Tile {
   /// (ResolvedPixel::normal, the shade argument) is then unspecified.
   bool blendNormals() const { return blendNormals_; }
   void setBlendNormals(bool on) { blendNormals_ = on; }
+  /// Coverage alpha (see the top of this file): s > 0 turns it on, alpha = min(1, s A); 0 (the
+  /// default) keeps the thesis's normalised alpha A/W. The renderer sets it per frame when every
+  /// primitive is opaque, and the primitives' alpha attribute to their coverage constants.
+  float coverageScale() const { return coverage_; }
+  void setCoverageScale(float s) { coverage_ = s > 0 ? s : 0; }
+  /// A layer's alpha from its sum A and 1/W (either mode).
+  float layerAlpha(float A, float invW) const {
+    return coverage_ > 0 ? std::min(A * coverage_, 1.0f) : std::clamp(A * invW, 0.0f, 1.0f);
+  }
+  /// Whether a lone fragment of this weight and alpha attribute is opaque (frees what is behind).
+  bool fragmentOpaque(float weight, float alpha) const {
+    return coverage_ > 0 ? weight * alpha * coverage_ >= 1.0f : alpha >= 1.0f;
+  }
 
  private:
   void compress(float* px, int& n);
@@ -201,6 +225,7 @@ class Z3Tile {
   Z3Counters counters_;  ///< allocated, occluded, compressed (fragments and merged: counters())
   uint64_t fragments_ = 0, direct_ = 0;
   bool blendNormals_ = true;
+  float coverage_ = 0;
 };
 
 }  // namespace linesurf

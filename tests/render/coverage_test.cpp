@@ -1,0 +1,218 @@
+// Coverage alpha (RenderOptions::coverageGain; beyond the thesis, issue 14): interiors stay opaque,
+// silhouettes get the soft edge of a box-filtered surface instead of the normalised alpha's fringe,
+// a partly covered layer keeps what lies behind it, and the SIMD rows agree with the pixel resolve.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/coverage.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/core/shapes.h"
+#include "linesurf/render/renderer.h"
+#include "linesurf/render/z3_buffer.h"
+
+namespace linesurf {
+namespace {
+
+float maxAbsDiff(const Image& a, const Image& b) {
+  float m = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, (a.pixels[i] - b.pixels[i]).cwiseAbs().maxCoeff());
+  return m;
+}
+
+// A square 2 x 2 as points on a grid, or as strips along x at the same spacing.
+HybridModel squarePoints() { return shapes::plane(2, 2, 41, 41); }
+HybridModel squareStrips() {
+  HybridModel m;
+  const int n = 41;
+  const float h = 2.0f / float(n - 1);
+  for (int j = 0; j < n; ++j) {
+    Segment s;
+    const float y = -1 + float(j) * h;
+    s.p0 = Vec3f(-1, y, 0), s.p1 = Vec3f(1, y, 0), s.normal = Vec3f(0, 0, 1), s.radius = h;
+    s.color = Color(0.8f, 0.8f, 0.8f, 1);
+    m.segments.push_back(s);
+  }
+  m.attributes = {true, false, true, false};
+  return m;
+}
+
+// A closed surface's silhouette where the kernels are wide against its curvature (Al's arms and
+// fingers): a cylinder of radius kR along z (|z| <= 1.5) as points on a grid or as strips along its
+// generatrices, radius = spacing, seen from +x: its silhouette is |y| = kR.
+constexpr float kR = 0.15f;
+HybridModel cylinder(bool strips) {
+  const int around = 12, along = 41;
+  const float h = 2 * 3.14159265f * kR / around;  // spacing around (0.079), ~ along (3 / 40)
+  HybridModel m;
+  for (int i = 0; i < around; ++i) {
+    const float t = h * float(i);  // arc length
+    const Vec3f n(std::cos(t / kR), std::sin(t / kR), 0), c = kR * n;
+    if (strips) {
+      Segment s;
+      s.p0 = c - Vec3f(0, 0, 1.5f), s.p1 = c + Vec3f(0, 0, 1.5f), s.normal = n, s.radius = h;
+      m.segments.push_back(s);
+      continue;
+    }
+    for (int j = 0; j < along; ++j) {
+      Point p;
+      p.position = c + Vec3f(0, 0, -1.5f + 3.0f * float(j) / float(along - 1)), p.normal = n, p.radius = h;
+      m.points.push_back(p);
+    }
+  }
+  m.attributes = {true, false, true, false};
+  return m;
+}
+
+// Pixels of the cylinder's image (|z| < 1 only) by their distance outside (> 0) or inside (< 0)
+// its silhouette, in pixels.
+struct EdgeStats {
+  int interior = 0, interiorTranslucent = 0;  // >= 3 px inside
+  float fringe = 0;                           // alpha summed 0.5 to 3 px outside (a box filter: 0)
+};
+EdgeStats edgeStats(const Image& alpha, const Camera& cam) {
+  EdgeStats s;
+  const Vec3f eye = cam.eye();
+  const Mat3f toWorld = cam.rotation().transpose();
+  for (int y = 0; y < cam.height(); ++y)
+    for (int x = 0; x < cam.width(); ++x) {
+      const Vec3f d = (toWorld * cam.rayThrough(x + 0.5f, y + 0.5f)).normalized();
+      // the ray's distance to the z axis (its closest approach in the xy plane) and the z there
+      const Vec2f e(eye.x(), eye.y()), dd(d.x(), d.y());
+      const float t = -e.dot(dd) / dd.squaredNorm();
+      const float dist = (e + t * dd).norm(), z = eye.z() + t * d.z();
+      if (std::abs(z) > 1) continue;
+      const float px = t * d.norm() / cam.focalPixels();  // world units per pixel there
+      const float out = (dist - kR) / px;
+      const float a = alpha.at(x, y).w();
+      if (out <= -3) {
+        ++s.interior;
+        s.interiorTranslucent += a < 0.999f;
+      } else if (out >= 0.5f && out <= 3) {
+        s.fringe += a;
+      }
+    }
+  return s;
+}
+
+TEST(Coverage, InteriorOpaqueAndNoFringeForPointsAndStrips) {
+  const Camera cam = Camera::lookAt(Vec3f(3, 0.02f, 0.05f), Vec3f(0, 0, 0), Vec3f(0, 0, 1), 40, 160, 160);
+  for (bool strips : {false, true}) {
+    const HybridModel m = cylinder(strips);
+    RenderOptions o;
+    o.alphaBuffer = true;
+    const EdgeStats plain = edgeStats(*renderImage(m, cam, o).alpha, cam);
+    o.coverageGain = 1.5f;
+    const EdgeStats cov = edgeStats(*renderImage(m, cam, o).alpha, cam);
+    std::printf("%s: interior %d (translucent %d), alpha 0.5-3 px outside: normalised alpha %.1f, coverage %.1f\n",
+                strips ? "strips" : "points", cov.interior, cov.interiorTranslucent, plain.fringe, cov.fringe);
+    EXPECT_GT(cov.interior, 1000);
+    EXPECT_EQ(cov.interiorTranslucent, 0);
+    EXPECT_GT(plain.fringe, 100);  // the normalised alpha paints the kernels' tails opaque
+    EXPECT_LT(2 * cov.fringe, plain.fringe);  // measured: points 341 -> 127, strips 432 -> 97
+  }
+}
+
+TEST(Coverage, ConstantsInvertTheKernelDensity) {
+  // a regular grid: every interior point's constant is the same, and the kernel sum at a point
+  // times its constant is 1 by construction; points on the edge see half the neighbours
+  HybridModel m = squarePoints();
+  const float h = 2.0f / 40;
+  for (Point& p : m.points) p.radius = 1.5f * h;  // neighbours well inside the cut-off
+  const std::vector<float> c = detail::coverageConstants(m, 0.5f, 2.0f);
+  ASSERT_EQ(c.size(), m.points.size());
+  auto at = [&](float x, float y) {
+    size_t best = 0;
+    for (size_t i = 0; i < m.points.size(); ++i)
+      if ((m.points[i].position - Vec3f(x, y, 0)).norm() < (m.points[best].position - Vec3f(x, y, 0)).norm()) best = i;
+    return c[best];
+  };
+  const float centre = at(0, 0), inner = at(0.5f, -0.4f), corner = at(-1, -1);
+  EXPECT_NEAR(inner / centre, 1.0f, 1e-4f);
+  // an edge's ring reaches off the surface: a corner's least density is far lower
+  EXPECT_GT(corner, 3 * centre);
+  // the density of a grid of spacing h is 2 pi / h^2 (each kernel integrates to 2 pi; cut off
+  // at 2 sigma it keeps 86% of its mass), least between the samples: c h^-2 2 pi just above 1
+  EXPECT_GT(centre * 2 * 3.14159265f / (h * h), 1.0f);
+  EXPECT_LT(centre * 2 * 3.14159265f / (h * h), 1.4f);
+  // strips of the same spacing and radius (a strip weighs as length / radius points): the same
+  HybridModel strips = squareStrips();
+  for (Segment& s : strips.segments) s.radius = 1.5f * h;
+  const std::vector<float> cs = detail::coverageConstants(strips, 0.5f, 2.0f);
+  EXPECT_NEAR(cs[20] / centre, 1.0f, 0.35f);  // measured 1.28
+  // c_k times the density at the primitive's centre is >= 1 (the least of centre and ring)
+}
+
+TEST(Coverage, PartlyCoveredLayerKeepsWhatIsBehind) {
+  // one pixel: an opaque far surface (blue, fully covered) and a near one (red) covering 30%
+  const PixelRect rect{0, 0, 1, 1};
+  const float blue[Z3Tile::kAttrs] = {0, 0, 1, 1, 1, 0, 0, 1}, red[Z3Tile::kAttrs] = {1, 0, 0, 1, 1, 0, 0, 1};
+  for (bool nearFirst : {false, true}) {
+    Z3Tile t(rect, 4);
+    t.setCoverageScale(1);
+    // coverage = weight * alpha attribute * scale: 2 * 0.5 = 1 (far), 0.6 * 0.5 = 0.3 (near)
+    float b[Z3Tile::kAttrs], r[Z3Tile::kAttrs];
+    std::copy(blue, blue + Z3Tile::kAttrs, b), std::copy(red, red + Z3Tile::kAttrs, r);
+    b[Z3Tile::kA] = r[Z3Tile::kA] = 0.5f;
+    if (nearFirst) t.insert(0, 0, 1.0f, 0.01f, 0.6f, r);
+    t.insert(0, 0, 2.0f, 0.01f, 2.0f, b);
+    if (!nearFirst) t.insert(0, 0, 1.0f, 0.01f, 0.6f, r);
+    const ResolvedPixel p = t.resolve(0, 0);
+    EXPECT_NEAR(p.color.x(), 0.3f, 1e-5f) << nearFirst;
+    EXPECT_NEAR(p.color.z(), 0.7f, 1e-5f) << nearFirst;
+    EXPECT_NEAR(p.color.w(), 1.0f, 1e-5f) << nearFirst;
+    // a fragment behind the covered far layer is occluded
+    t.insert(0, 0, 3.0f, 0.01f, 1.0f, r);
+    EXPECT_NEAR(t.resolve(0, 0).color.z(), 0.7f, 1e-5f);
+  }
+  // the thesis's alpha: the near opaque fragment frees the far layer, whatever its weight
+  Z3Tile t(rect, 4);
+  t.insert(0, 0, 2.0f, 0.01f, 2.0f, blue);
+  t.insert(0, 0, 1.0f, 0.01f, 0.6f, red);
+  EXPECT_NEAR(t.resolve(0, 0).color.x(), 1.0f, 1e-6f);
+  EXPECT_NEAR(t.resolve(0, 0).color.z(), 0.0f, 1e-6f);
+}
+
+TEST(Coverage, SimdRowsMatchThePixelResolveAndThreads) {
+  // a sphere of points in front of a strip plane: several layers, partly covered edges
+  HybridModel m = shapes::sphere(0.6f, 20000);
+  const HybridModel strips = squareStrips();
+  m.segments = strips.segments;
+  for (Point& p : m.points) p.position.z() += 0.8f;
+  const Camera cam = Camera::lookAt(Vec3f(0.3f, 0.2f, 5), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 120, 90);
+  for (int tile : {16, 64}) {
+    RenderOptions o;
+    o.coverageGain = 2;
+    o.tileSize = tile;
+    const RenderResult simd = renderImage(m, cam, o);
+    o.alphaBuffer = true;  // every pixel through Z3Tile::resolve
+    const RenderResult pixel = renderImage(m, cam, o);
+    EXPECT_LT(maxAbsDiff(simd.color, pixel.color), 1e-6) << tile;
+    int partial = 0;
+    for (const Color& c : pixel.alpha->pixels) partial += c.w() > 0.01f && c.w() < 0.99f;
+    EXPECT_GT(partial, 100) << tile;  // soft edges exist
+    RenderResult one;
+    {
+      ThreadLimit single(1);
+      one = renderImage(m, cam, o);
+    }
+    EXPECT_EQ(maxAbsDiff(one.color, pixel.color), 0.0f) << tile;
+  }
+}
+
+TEST(Coverage, TranslucentModelsKeepTheThesisAlpha) {
+  HybridModel m = squarePoints();
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 64, 64);
+  RenderOptions o;
+  o.alphaOverride = 0.5f;
+  const Image plain = renderImage(m, cam, o).color;
+  o.coverageGain = 2;
+  EXPECT_EQ(maxAbsDiff(renderImage(m, cam, o).color, plain), 0.0f);
+  RenderOptions bad;
+  bad.coverageGain = -1;
+  EXPECT_THROW(Renderer(m, bad), Error);
+}
+
+}  // namespace
+}  // namespace linesurf
