@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <unordered_map>
 
 #include "linesurf/core/parallel.h"
 
@@ -65,7 +64,7 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
     k.n = nn > 0 ? Vec3f(p.normal / nn) : Vec3f::Zero();
     k.sigma = reconstructionScale * p.radius, k.radius = p.radius;
     centre[i] = p.position, normal[i] = k.n, ok[i] = 1;
-    cell = std::max(cell, cutoff * k.sigma);
+    cell = std::max(cell, cutoff * k.sigma + kRingRadius * k.radius);
   }
   for (size_t j = 0; j < ns; ++j) {
     const Segment& s = model.segments[j];
@@ -77,51 +76,98 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
     k.n = nn > 0 ? Vec3f(s.normal / nn) : Vec3f::Zero();
     k.sigma = reconstructionScale * s.radius, k.radius = s.radius, k.invRadius = 1.0f / s.radius;
     centre[np + j] = 0.5f * (s.p0 + s.p1), normal[np + j] = k.n, ok[np + j] = 1;
-    cell = std::max(cell, cutoff * k.sigma);
+    cell = std::max(cell, cutoff * k.sigma + kRingRadius * k.radius);
   }
   std::vector<float> c(n, 0.0f);
   if (!(cell > 0)) return c;
-  // a hash grid of cells of the largest kernel reach: each kernel in every cell its box touches
+  // A grid of cells of side c = 2 (largest reach + ring radius): every kernel listed once per piece
+  // of at most c / 2 (a point is one piece), in the cell of the piece's middle, as (cell, primitive)
+  // pairs in hash buckets, in primitive order (deterministic, no container per cell). A kernel that
+  // reaches a primitive's samples then has a piece middle within reach + ring + c / 4 < c of the
+  // primitive's centre: in the 27 cells around the centre's.
+  cell *= 2;
   const float inv = 1.0f / cell;
   auto key = [](int64_t x, int64_t y, int64_t z) {
     return (uint64_t(x) * 73856093u) ^ (uint64_t(y) * 19349663u) ^ (uint64_t(z) * 83492791u);
   };
   auto cellOf = [&](float v) { return int64_t(std::floor(v * inv)); };
-  std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
-  grid.reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    if (!ok[i]) continue;
-    const Kernel& k = ks[i];
-    const Vec3f p1 = k.p0 + k.length * k.e;
-    const float r = cutoff * k.sigma;
-    const Vec3f lo = k.p0.cwiseMin(p1).array() - r, hi = k.p0.cwiseMax(p1).array() + r;
-    for (int64_t x = cellOf(lo.x()); x <= cellOf(hi.x()); ++x)
-      for (int64_t y = cellOf(lo.y()); y <= cellOf(hi.y()); ++y)
-        for (int64_t z = cellOf(lo.z()); z <= cellOf(hi.z()); ++z) {
-          std::vector<uint32_t>& v = grid[key(x, y, z)];
-          if (v.empty() || v.back() != uint32_t(i)) v.push_back(uint32_t(i));
-        }
+  struct Entry {
+    uint64_t key;
+    uint32_t index;
+  };
+  const size_t chunk = 16384, chunks = (n + chunk - 1) / chunk;
+  std::vector<std::vector<Entry>> parts(chunks);
+  parallelFor(0, chunks, [&](size_t ch) {
+    std::vector<Entry>& out = parts[ch];
+    for (size_t i = ch * chunk, e = std::min(n, i + chunk); i < e; ++i) {
+      if (!ok[i]) continue;
+      const Kernel& k = ks[i];
+      const int pieces = std::max(1, int(std::ceil(2 * k.length * inv)));
+      for (int q = 0; q < pieces; ++q) {
+        const Vec3f m = k.p0 + (k.length * (float(q) + 0.5f) / float(pieces)) * k.e;
+        out.push_back({key(cellOf(m.x()), cellOf(m.y()), cellOf(m.z())), uint32_t(i)});
+      }
+    }
+  }, 1);
+  // buckets by a hash of the cell (a power of two, about 2 per entry), filled in primitive order
+  size_t total = 0;
+  for (const auto& v : parts) total += v.size();
+  size_t buckets = 1024;
+  while (buckets < 2 * total) buckets *= 2;
+  const uint64_t mask = buckets - 1;
+  auto bucketOf = [mask](uint64_t k) { return size_t((k * 0x9E3779B97F4A7C15ull) >> 20 & mask); };
+  std::vector<uint32_t> start(buckets + 1, 0);
+  for (const auto& v : parts)
+    for (const Entry& e : v) ++start[bucketOf(e.key) + 1];
+  for (size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+  std::vector<Entry> grid(total);
+  {
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (auto& v : parts) {
+      for (const Entry& e : v) grid[fill[bucketOf(e.key)]++] = e;
+      std::vector<Entry>().swap(v);
+    }
   }
   parallelFor(0, n, [&](size_t i) {
     if (!ok[i]) return;
-    auto density = [&](const Vec3f& x) {
-      const auto it = grid.find(key(cellOf(x.x()), cellOf(x.y()), cellOf(x.z())));
+    const Kernel& k = ks[i];
+    const float ringR = kRingRadius * k.radius;
+    // the kernels that may reach the centre or the ring (distance to the kernel's segment within its
+    // reach + the ring's radius), in primitive order
+    thread_local std::vector<uint32_t> near;
+    near.clear();
+    const Vec3f& x = centre[i];
+    const int64_t cx = cellOf(x.x()), cy = cellOf(x.y()), cz = cellOf(x.z());
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy)
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          const uint64_t kx = key(cx + dx, cy + dy, cz + dz);
+          const size_t b = bucketOf(kx);
+          for (uint32_t g = start[b]; g < start[b + 1]; ++g) {
+            if (grid[g].key != kx) continue;
+            const Kernel& kj = ks[grid[g].index];
+            const Vec3f d = x - kj.p0;
+            const float a = std::clamp(kj.e.dot(d), 0.0f, kj.length);
+            const float lim = cutoff * kj.sigma + ringR;
+            if ((d - a * kj.e).squaredNorm() <= lim * lim) near.push_back(grid[g].index);
+          }
+        }
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    auto density = [&](const Vec3f& p) {
       float sum = 0;
-      if (it != grid.end())
-        for (uint32_t j : it->second) sum += weightAt(ks[j], x, normal[i], cutoff);
+      for (uint32_t j : near) sum += weightAt(ks[j], p, normal[i], cutoff);
       return sum;
     };
     // the least of the density at the centre and on a ring of kRing points at kRingRadius r in
     // the primitive's plane (across and along a segment's middle): the troughs between samples
-    float sum = density(centre[i]);
-    const Kernel& k = ks[i];
-    const float r = kRingRadius * k.radius;
+    float sum = density(x);
     Vec3f u = k.length > 0 ? k.e : (std::abs(k.n.x()) < 0.9f ? Vec3f(Vec3f::UnitX().cross(k.n)) : Vec3f(Vec3f::UnitY().cross(k.n)));
     u.normalize();
     const Vec3f v = k.n.cross(u);
     for (int a = 0; a < kRing; ++a) {
       const float t = 2 * 3.14159265f * float(a) / float(kRing);
-      sum = std::min(sum, density(centre[i] + r * (std::cos(t) * u + std::sin(t) * v)));
+      sum = std::min(sum, density(x + ringR * (std::cos(t) * u + std::sin(t) * v)));
     }
     c[i] = sum > 0 ? 1.0f / sum : 0.0f;
   }, 1024);
