@@ -899,9 +899,12 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
 //  2. per span, the Z^3 fast path of PointRowsT on the tile's planes (a span's pixels are
 //     contiguous there), vectors of at most the widest span's lanes; the other fragments through
 //     Z3Tile::insert.
+// kOneChunk: the spans hold at most kSegChunk pixels (nearly always): one chunk, the spans are its
+// runs as they are (no cutting, no runs copied; a short contour segment has ~5 spans in a tile,
+// and the chunk's bookkeeping cost more instructions per span than its Z^3 pass: issue 13).
 inline constexpr int kSegChunk = 512;
 
-template <bool kPoly, class DZ>
+template <bool kPoly, class DZ, bool kOneChunk>
 HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentFrameV& F, const SegmentShadeRows& A,
                                    const RowSpan* spans, int count, Z3Tile& z3) {
   const DF d;
@@ -937,7 +940,18 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   while (r < count) {
     // gather up to kSegChunk pixels of runs (a span wider than that is cut)
     int n = 0, nRuns = 0;
-    while (r < count && n < kSegChunk) {
+    if (kOneChunk) {
+      for (; r < count; ++r) {
+        const RowSpan& sp = spans[r];
+        const VF y = hn::Set(d, float(sp.y) + 0.5f);
+        for (int i = 0; i < sp.x1 - sp.x0; i += L) {  // the next span overwrites the excess
+          hn::StoreU(hn::Add(centre, hn::Set(d, float(sp.x0 + i))), d, px + n + i);
+          hn::StoreU(y, d, py + n + i);
+        }
+        n += sp.x1 - sp.x0;
+      }
+    }
+    while (!kOneChunk && r < count && n < kSegChunk) {
       const RowSpan& sp = spans[r];
       const int x1 = std::min(sp.x1, rx + (kSegChunk - n));
       if (x1 > rx) {
@@ -995,37 +1009,43 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
         for (int c = 0; c < 3; ++c) hn::Store(hn::Mul(m[c], inv), d, bn[c] + i);
       }
     }
-    // 2. into the Z^3 tile, run by run
-    for (int q = 0; q < nRuns; ++q) {
-      const Run& run = runs[q];
+    // 2. into the Z^3 tile, run by run (kOneChunk: the spans); lanes c .. c + LZ - 1 of a run:
+    auto blend = [&](const Run& run, size_t rowBase, int width, int c) HWY_ATTR __attribute__((always_inline)) {
+      const int k = run.at + c;
+      const VZ w = hn::LoadU(dz, bw + k);
+      const auto inside = hn::And(hn::Gt(w, zeroZ), hn::FirstN(dz, size_t(width - c)));
+      if (hn::AllFalse(dz, inside)) return;
+      inserted += hn::CountTrue(dz, inside);
+      const VZ z = hn::LoadU(dz, bz + k), thr = hn::LoadU(dz, bt + k);
+      const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
+        if (a < 3) return hn::LoadU(dz, bc[a] + k);
+        if (smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
+        return constAttr[a];
+      });
+      if (HWY_LIKELY(hn::AllFalse(dz, rest))) return;
+      // the other fragments (a new layer in front of or behind others, compression, occlusion)
+      HWY_ALIGN float mk[kMaxLanes];
+      hn::StoreU(hn::VecFromMask(dz, rest), dz, mk);
+      for (int i = 0; i < LZ; ++i) {
+        if (mk[i] == 0) continue;
+        float fa[Z3Tile::kAttrs];
+        for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
+        for (int a = 0; a < 3; ++a) fa[a] = bc[a][k + i];
+        if (smooth)
+          for (int a = 0; a < 3; ++a) fa[Z3Tile::kNx + a] = bn[a][k + i];
+        z3.insert(run.x0 + c + i, run.y, bz[k + i], bt[k + i], bw[k + i], fa);
+      }
+    };
+    for (int q = 0, at = 0; q < (kOneChunk ? count : nRuns); ++q) {
+      const Run run = kOneChunk ? Run{spans[q].y, spans[q].x0, spans[q].x1, at} : runs[q];
       const size_t rowBase = z3.index(run.x0, run.y);
       const int width = run.x1 - run.x0;
-      for (int c = 0; c < width; c += LZ) {
-        const int k = run.at + c;
-        const VZ w = hn::LoadU(dz, bw + k);
-        const auto inside = hn::And(hn::Gt(w, zeroZ), hn::FirstN(dz, size_t(width - c)));
-        if (hn::AllFalse(dz, inside)) continue;
-        inserted += hn::CountTrue(dz, inside);
-        const VZ z = hn::LoadU(dz, bz + k), thr = hn::LoadU(dz, bt + k);
-        const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
-          if (a < 3) return hn::LoadU(dz, bc[a] + k);
-          if (smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
-          return constAttr[a];
-        });
-        if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
-        // the other fragments (a new layer in front of or behind others, compression, occlusion)
-        HWY_ALIGN float mk[kMaxLanes];
-        hn::StoreU(hn::VecFromMask(dz, rest), dz, mk);
-        for (int i = 0; i < LZ; ++i) {
-          if (mk[i] == 0) continue;
-          float fa[Z3Tile::kAttrs];
-          for (int a = 0; a < Z3Tile::kAttrs; ++a) fa[a] = A.attr[a];
-          for (int a = 0; a < 3; ++a) fa[a] = bc[a][k + i];
-          if (smooth)
-            for (int a = 0; a < 3; ++a) fa[Z3Tile::kNx + a] = bn[a][k + i];
-          z3.insert(run.x0 + c + i, run.y, bz[k + i], bt[k + i], bw[k + i], fa);
-        }
+      at += width;
+      if (width <= LZ) {  // one vector (DZ fits the widest span unless it is wider than 16)
+        blend(run, rowBase, width, 0);
+        continue;
       }
+      for (int c = 0; c < width; c += LZ) blend(run, rowBase, width, c);
     }
   }
   z3.addFastCounts(z3rows.opened(), z3rows.occluded());
@@ -1033,17 +1053,23 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
 }
 
 uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
-  int widest = 0;  // the Z^3 pass runs on vectors of at most the widest span's lanes
-  for (int r = 0; r < count; ++r) widest = std::max(widest, spans[r].x1 - spans[r].x0);
-  const SegmentFrameV F(S);
-  if (F.poly) {
-    if (widest <= 4) return SegmentRowsT<true>(hn::CappedTag<float, 4>(), S, F, A, spans, count, z3);
-    if (widest <= 8) return SegmentRowsT<true>(hn::CappedTag<float, 8>(), S, F, A, spans, count, z3);
-    return SegmentRowsT<true>(hn::CappedTag<float, 16>(), S, F, A, spans, count, z3);
+  int widest = 0, pixels = 0;  // the Z^3 pass runs on vectors of at most the widest span's lanes
+  for (int r = 0; r < count; ++r) {
+    const int w = spans[r].x1 - spans[r].x0;
+    widest = std::max(widest, w), pixels += w;
   }
-  if (widest <= 4) return SegmentRowsT<false>(hn::CappedTag<float, 4>(), S, F, A, spans, count, z3);
-  if (widest <= 8) return SegmentRowsT<false>(hn::CappedTag<float, 8>(), S, F, A, spans, count, z3);
-  return SegmentRowsT<false>(hn::CappedTag<float, 16>(), S, F, A, spans, count, z3);
+  const SegmentFrameV F(S);
+  auto rows = [&](auto dz) {
+    using DZ = decltype(dz);
+    if (pixels <= kSegChunk)
+      return F.poly ? SegmentRowsT<true, DZ, true>(dz, S, F, A, spans, count, z3)
+                    : SegmentRowsT<false, DZ, true>(dz, S, F, A, spans, count, z3);
+    return F.poly ? SegmentRowsT<true, DZ, false>(dz, S, F, A, spans, count, z3)
+                  : SegmentRowsT<false, DZ, false>(dz, S, F, A, spans, count, z3);
+  };
+  if (widest <= 4) return rows(hn::CappedTag<float, 4>());
+  if (widest <= 8) return rows(hn::CappedTag<float, 8>());
+  return rows(hn::CappedTag<float, 16>());
 }
 
 int64_t Target() { return HWY_TARGET; }
