@@ -11,6 +11,7 @@
 //    models that contour extraction (§3.3, Table 5) cuts from a shared mesh with its defaults, at
 //    512^2 on 2 threads, 8 views; counters: the stages' milliseconds per frame (prepare: wall;
 //    raster, resolve: CPU of all threads) and fragments.
+//  - BM_ContourTileRaster/<0|1>: the bunny line model's rasterisation alone, ns per (segment, tile).
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -364,3 +365,53 @@ BENCHMARK(BM_ContourFrame)
     ->MinTime(1.0);
 
 }  // namespace
+namespace {
+// The rasterisation of the bunny's contour line model alone, one thread, one view (512^2, 64-pixel
+// tiles, the renderer's batches of kRasterBatch): every tile of the frame in turn (arg 0) or the
+// busiest tile 64 times (arg 1: the records in the cache); counters: ns per (segment, tile) pair
+// and pairs per frame. What a short segment's fixed cost is (issue 13, i13segraster); under
+// `valgrind --tool=callgrind --toggle-collect='linesurf::rasterizeSegments*'` it counts
+// instructions per pair (AVX2 there: valgrind runs no AVX-512).
+void BM_ContourTileRaster(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = contourModel(0, 1, error);
+  if (!m) return state.SkipWithError(error.c_str());
+  RenderOptions o;
+  o.alphaBuffer = true;
+  const Renderer r(*m, o);
+  const Camera cam = Camera::spreadViews(r.sphere(), 8, 512, 512)[0];
+  FrameContext frame = FrameContext::make(cam, o, r.sphere(), m->attributes.colors);
+  frame.endpointNormals = m->attributes.endpointNormals;
+  std::vector<PreparedSegment> segs(m->segments.size());
+  std::vector<PrimitiveStatus> status(segs.size());
+  prepareSegments(m->segments.data(), 0, segs.size(), frame, segmentSetupFrame(frame), segs.data(), status.data());
+  const int T = 64;
+  std::vector<std::vector<const PreparedSegment*>> bins(64);
+  for (size_t i = 0; i < segs.size(); ++i) {
+    if (status[i] != PrimitiveStatus::Drawn && status[i] != PrimitiveStatus::Clipped) continue;
+    const PixelRect& b = segs[i].bounds;
+    for (int ty = std::max(0, b.y0 / T); ty <= std::min(7, (b.y1 - 1) / T); ++ty)
+      for (int tx = std::max(0, b.x0 / T); tx <= std::min(7, (b.x1 - 1) / T); ++tx) bins[size_t(ty * 8 + tx)].push_back(&segs[i]);
+  }
+  int busiest = 0;
+  for (int t = 0; t < 64; ++t) if (bins[size_t(t)].size() > bins[size_t(busiest)].size()) busiest = t;
+  Z3Tile z3(PixelRect{0, 0, T, T}, o.layers);
+  z3.setBlendNormals(false);
+  double pairs = 0;
+  for (auto _ : state) {
+    for (int t = 0; t < 64; ++t) {
+      const int tile = state.range(0) ? busiest : t;
+      const PixelRect rect{(tile % 8) * T, (tile / 8) * T, (tile % 8 + 1) * T, (tile / 8 + 1) * T};
+      z3.reset(rect);
+      SplatContext ctx{frame, rect, z3};
+      const auto& bin = bins[size_t(tile)];
+      for (size_t k = 0; k < bin.size(); k += kRasterBatch)
+        rasterizeSegments(bin.data() + k, int(std::min<size_t>(kRasterBatch, bin.size() - k)), ctx);
+      pairs += double(bin.size());
+    }
+  }
+  state.counters["ns/pair"] = benchmark::Counter(pairs, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["pairs"] = pairs / double(state.iterations());
+}
+}  // namespace
+BENCHMARK(BM_ContourTileRaster)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
