@@ -605,6 +605,25 @@ struct FragmentAttributes {
   }
 };
 
+// Whether the SIMD rows shade the segment's fragments (all but textured ones).
+bool shadedInRows(const PreparedSegment& sp) { return sp.shade != SegmentShade::Stations || !sp.extra->textured; }
+
+// The rows' shading of an untextured segment (detail::SegmentShadeRows).
+detail::SegmentShadeRows shadeRows(const PreparedSegment& sp) {
+  const bool stations = sp.shade == SegmentShade::Stations;
+  detail::SegmentShadeRows shade;
+  shade.attr = sp.attr;
+  shade.dc = sp.dc.data(), shade.n0 = sp.n0.data(), shade.dn = sp.dn.data();
+  shade.dn2 = sp.dn.squaredNorm();
+  shade.smooth = sp.smooth && (sp.shade == SegmentShade::Smooth || stations);
+  shade.exactNormal = stations;
+  if (stations && sp.extra->stations >= 2) {
+    shade.stations = sp.extra->stations;
+    shade.stationColour = sp.extra->colour.data();
+  }
+  return shade;
+}
+
 // ScreenSpace segments: the closed form evaluated in SIMD over the rows' spans of the cutoff
 // region (`given`, else forEachRowSpan's), straight into the Z^3 tile (detail/splat_rows.h).
 void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const PixelRect& r,
@@ -616,18 +635,8 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
   detail::RowSpan spans[detail::kBlock];
   int spanCount = 0;
   uint64_t inserted = 0;
-  const bool stations = sp.shade == SegmentShade::Stations;
-  if (!stations || !sp.extra->textured) {  // straight into the Z^3 tile, attributes in SIMD
-    detail::SegmentShadeRows shade;
-    shade.attr = sp.attr;
-    for (int k = 0; k < 3; ++k) shade.dc[k] = sp.dc[k], shade.n0[k] = sp.n0[k], shade.dn[k] = sp.dn[k];
-    shade.dn2 = sp.dn.squaredNorm();
-    shade.smooth = sp.smooth && (sp.shade == SegmentShade::Smooth || stations);
-    shade.exactNormal = stations;
-    if (stations && sp.extra->stations >= 2) {
-      shade.stations = sp.extra->stations;
-      shade.stationColour = sp.extra->colour.data();
-    }
+  if (shadedInRows(sp)) {  // straight into the Z^3 tile, attributes in SIMD
+    const detail::SegmentShadeRows shade = shadeRows(sp);
     if (given && givenCount <= detail::kBlock) {  // the batch's spans as they are (no copy)
       if (givenCount > 0) inserted = detail::segmentRowsZ3(sp.raster, shade, given, givenCount, ctx.tile);
       ctx.tile.addFragments(inserted);
@@ -738,11 +747,25 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
     if (spans.size() < size_t(kRasterBatch * stride)) spans.resize(size_t(kRasterBatch * stride));
     detail::segmentSpansBatch(batch, rects, m, kSpanSlack, spans.data(), stride, counts);
   }
+  // runs of consecutive ones shaded in the rows in one call (detail::segmentRowsRunZ3)
+  detail::SegmentRowsItem items[kRasterBatch];
+  int runLength = 0;
+  auto flush = [&] {
+    if (runLength > 0) ctx.tile.addFragments(detail::segmentRowsRunZ3(items, runLength, ctx.tile));
+    runLength = 0;
+  };
   for (int i = 0; i < n; ++i) {
     const int k = slot[i];
-    if (k >= 0 && counts[k] >= 0) rasterizeRows(*segs[i], ctx, rects[k], spans.data() + size_t(k) * size_t(stride), counts[k]);
-    else rasterizeSegment(*segs[i], ctx);
+    const PreparedSegment& sp = *segs[i];
+    if (k >= 0 && counts[k] >= 0 && shadedInRows(sp)) {
+      if (counts[k] > 0) items[runLength++] = {&sp.raster, shadeRows(sp), spans.data() + size_t(k) * size_t(stride), counts[k]};
+      continue;
+    }
+    flush();
+    if (k >= 0 && counts[k] >= 0) rasterizeRows(sp, ctx, rects[k], spans.data() + size_t(k) * size_t(stride), counts[k]);
+    else rasterizeSegment(sp, ctx);
   }
+  flush();
 }
 
 }  // namespace linesurf

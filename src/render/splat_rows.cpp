@@ -202,6 +202,7 @@ struct SegmentFrameV {
   VF gcut;  ///< exp(-R^2 / 2) (as expHalfNeg gives it): the slope term's ends where the cutoff bounds
   float r2 = std::numeric_limits<float>::quiet_NaN(), nd = 0, fd = 0;
   bool poly = false;  ///< R2 <= kPolyExpMaxQ: exp by the polynomial
+  SegmentFrameV() = default;  ///< set() before use
   explicit SegmentFrameV(const SegmentRaster& S) { set(S); }
   HWY_INLINE void set(const SegmentRaster& S) {
     if (S.R2 == r2 && S.nearD == nd && S.farD == fd) return;
@@ -1052,13 +1053,16 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   return inserted;
 }
 
-uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
+// One segment's rows (SegmentRowsZ3, SegmentRowsRunZ3) with the frame's constants F (set here).
+HWY_INLINE uint64_t SegmentRowsF(SegmentFrameV& F, const SegmentRaster& S, const SegmentShadeRows& A,
+                                 const RowSpan* spans, int count, Z3Tile& z3) {
   int widest = 0, pixels = 0;  // the Z^3 pass runs on vectors of at most the widest span's lanes
   for (int r = 0; r < count; ++r) {
     const int w = spans[r].x1 - spans[r].x0;
     widest = std::max(widest, w), pixels += w;
   }
-  const SegmentFrameV F(S);
+  if (pixels <= 0) return 0;
+  F.set(S);
   auto rows = [&](auto dz) {
     using DZ = decltype(dz);
     if (pixels <= kSegChunk)
@@ -1072,6 +1076,20 @@ uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const 
   return rows(hn::CappedTag<float, 16>());
 }
 
+uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
+  SegmentFrameV F;
+  return SegmentRowsF(F, S, A, spans, count, z3);
+}
+
+// SegmentRowsZ3 for a run of segments (detail/splat_rows.h): one dispatch, the frame's constants
+// set again only when they change.
+uint64_t SegmentRowsRunZ3(const SegmentRowsItem* items, int n, Z3Tile& z3) {
+  SegmentFrameV F;
+  uint64_t inserted = 0;
+  for (int i = 0; i < n; ++i) inserted += SegmentRowsF(F, *items[i].raster, items[i].shade, items[i].spans, items[i].count, z3);
+  return inserted;
+}
+
 int64_t Target() { return HWY_TARGET; }
 
 }  // namespace HWY_NAMESPACE
@@ -1083,6 +1101,7 @@ namespace linesurf::detail {
 HWY_EXPORT(PointFragments);
 HWY_EXPORT(SegmentFragments);
 HWY_EXPORT(SegmentRowsZ3);
+HWY_EXPORT(SegmentRowsRunZ3);
 HWY_EXPORT(SegmentSpans);
 HWY_EXPORT(SegmentSpansBatch);
 HWY_EXPORT(Target);
@@ -1109,6 +1128,9 @@ int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, f
 uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
                        Z3Tile& tile) {
   return HWY_DYNAMIC_DISPATCH(SegmentRowsZ3)(s, shade, spans, count, tile);
+}
+uint64_t segmentRowsRunZ3(const SegmentRowsItem* items, int n, Z3Tile& tile) {
+  return HWY_DYNAMIC_DISPATCH(SegmentRowsRunZ3)(items, n, tile);
 }
 int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpan* out) {
   return HWY_DYNAMIC_DISPATCH(SegmentSpans)(s, r, slack, out);

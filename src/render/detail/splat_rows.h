@@ -128,9 +128,11 @@ int segmentFragments(const SegmentRaster& s, const RowSpan* spans, int count, Fr
 /// The blended attributes of one untextured segment's fragments (PreparedSegment):
 /// attr[Z3Tile::kAttrs] at u = 0, the colour attr + u dc, and with smooth the normal
 /// normalize(n0 + u dn) (by a series when n0, n1 are unit and at most 0.1 rad apart, dn2 = |dn|^2).
+/// dc, n0, dn: 3 floats each (in the prepared record: not copied per tile).
 struct SegmentShadeRows {
   const float* attr = nullptr;
-  float dc[3] = {}, n0[3] = {}, dn[3] = {}, dn2 = 0;
+  const float *dc = nullptr, *n0 = nullptr, *dn = nullptr;
+  float dn2 = 0;
   bool smooth = false;
   /// normalize(n0 + u dn) exactly (the endpoint normals turn by more than 0.1 rad)
   bool exactNormal = false;
@@ -145,6 +147,18 @@ struct SegmentShadeRows {
 /// common fragments, Z3Tile::insert for the others. Returns how many fragments it inserted.
 uint64_t segmentRowsZ3(const SegmentRaster& s, const SegmentShadeRows& shade, const RowSpan* spans, int count,
                        Z3Tile& tile);
+
+/// One segment of segmentRowsRunZ3: its constants, shading and row spans.
+struct SegmentRowsItem {
+  const SegmentRaster* raster = nullptr;
+  SegmentShadeRows shade;
+  const RowSpan* spans = nullptr;
+  int count = 0;
+};
+
+/// segmentRowsZ3 for items[0 .. n) in turn, with one dispatch and the frame's kernel constants set
+/// once (beyond the thesis: issue 13, a short segment's fixed cost). Returns the fragments inserted.
+uint64_t segmentRowsRunZ3(const SegmentRowsItem* items, int n, Z3Tile& tile);
 
 /// A prepared point splat's hot record (PreparedPoint, point_splat.h; 64 bytes): PointRaster
 /// without the frame's constants, the z threshold and the colour.
