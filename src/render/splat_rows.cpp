@@ -490,9 +490,11 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
     const VF half = hn::Set(d, 0.5f);
     VF py = hn::Add(hn::ConvertTo(d, hn::Load(di, ry0)), half);
     // the rows' bounds in vectors (row t of lane j at [t][j]), kRows rows at a time, then each
-    // lane's spans in a run of its own rows (no per-row test of the other lanes' heights)
+    // lane's spans in a run of its own rows (no per-row test of the other lanes' heights) from its
+    // first to its last non-empty row so far (a segment's rect holds about twice its spans' rows)
     constexpr int kRows = 32;
-    HWY_ALIGN int32_t xb[kRows][kMaxLanes], xe[kRows][kMaxLanes];
+    HWY_ALIGN int32_t xb[kRows][kMaxLanes], xe[kRows][kMaxLanes], firstRow[kMaxLanes], lastRow[kMaxLanes];
+    auto first = hn::Set(di, kRows), last = hn::Set(di, -1);
     for (int t0 = 0; t0 < maxRows; t0 += kRows) {
       const int rows = std::min(kRows, maxRows - t0);
       for (int t = 0; t < rows; ++t, py = hn::Add(py, one)) {
@@ -502,14 +504,23 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
           hi = hn::Min(hi, hn::MulAdd(hiY[c], py, hi0[c]));
         }
         lo = hn::Min(lo, big), hi = hn::Max(hi, hn::Neg(big));
-        hn::Store(hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0), di, xb[t]);
-        hn::Store(hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1), di, xe[t]);
+        const auto b = hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0);
+        const auto e = hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1);
+        hn::Store(b, di, xb[t]);
+        hn::Store(e, di, xe[t]);
+        const auto some = hn::Gt(e, b);
+        first = hn::IfThenElse(hn::And(some, hn::Eq(first, hn::Set(di, kRows))), hn::Set(di, t), first);
+        last = hn::IfThenElse(some, hn::Set(di, t), last);
       }
+      hn::Store(first, di, firstRow);
+      hn::Store(last, di, lastRow);
+      first = hn::IfThenElse(hn::Eq(first, hn::Set(di, kRows)), first, hn::Zero(di));  // the next chunk from its row 0
+      last = hn::Set(di, -1);
       for (int j = 0; j < m; ++j) {
         int c = counts[g0 + j];
         if (c < 0) continue;
         RowSpan* o = out + size_t(g0 + j) * size_t(stride);
-        for (int t = 0, te = std::min(rows, rh[j] - t0); t < te; ++t) {
+        for (int t = firstRow[j], te = std::min(lastRow[j] + 1, rh[j] - t0); t < te; ++t) {
           o[c] = {ry0[j] + t0 + t, xb[t][j], xe[t][j]};
           c += xe[t][j] > xb[t][j];
         }
