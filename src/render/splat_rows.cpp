@@ -926,15 +926,11 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   const bool smooth = A.smooth && z3.blendNormals();
   const VF oneF = hn::Set(d, 1.0f), zero = hn::Zero(d), iota = hn::Iota(d, 0.0f), centre = hn::Iota(d, 0.5f);
   const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
-  VF attr[3], dc[3], n0[3], dn[3];
-  for (int k = 0; k < 3; ++k) {
-    attr[k] = hn::Set(d, A.attr[k]), dc[k] = hn::Set(d, A.dc[k]);
-    n0[k] = hn::Set(d, A.n0[k]), dn[k] = hn::Set(d, A.dn[k]);
-  }
-  const VF dn2 = hn::Set(d, A.dn2), c05 = hn::Set(d, 0.5f), c0375 = hn::Set(d, 0.375f);
+  // (the stations' and the smooth normals' constants are broadcast where they are used: most
+  // segments need neither, and hoisted they were spilled and reloaded for every segment)
+  VF attr[3], dc[3];
+  for (int k = 0; k < 3; ++k) attr[k] = hn::Set(d, A.attr[k]), dc[k] = hn::Set(d, A.dc[k]);
   const hn::RebindToSigned<DF> di;
-  const VF lastStation = hn::Set(d, float(std::max(A.stations - 1, 1)));
-  const auto lastSegment = hn::Set(di, std::max(A.stations - 2, 0));
   // the chunk's pixels (centres) and pass 1's results, kMaxLanes of padding for whole vectors
   constexpr int kPad = kSegChunk + kMaxLanes;
   HWY_ALIGN float px[kPad], py[kPad], bw[kPad], bz[kPad], bt[kPad], bc[3][kPad], bn[3][kPad];
@@ -992,12 +988,13 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
         continue;
       }
       hn::Store(hn::IfThenElseZero(keep, w), d, bw + i);
+      inserted += hn::CountTrue(d, keep);  // every one is a fragment pass 2 inserts
       u = hn::IfThenElseZero(keep, u);  // the other lanes' u may be anything (the station gather's index)
       hn::Store(z, d, bz + i);
       hn::Store(hn::MulAdd(u, thrD, thr0), d, bt + i);
       if (A.stations >= 2) {  // piecewise linear between the lighting stations
-        const VF fs = hn::Mul(u, lastStation);
-        const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), lastSegment);
+        const VF fs = hn::Mul(u, hn::Set(d, float(A.stations - 1)));
+        const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), hn::Set(di, A.stations - 2));
         const VF v = hn::Sub(fs, hn::ConvertTo(d, k));
         for (int c = 0; c < 3; ++c) {
           const float* sc = A.stationColour + c * A.stations;
@@ -1009,14 +1006,14 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       }
       if (smooth) {
         VF m[3];
-        for (int c = 0; c < 3; ++c) m[c] = hn::MulAdd(u, dn[c], n0[c]);
+        for (int c = 0; c < 3; ++c) m[c] = hn::MulAdd(u, hn::Set(d, A.dn[c]), hn::Set(d, A.n0[c]));
         VF inv;
         if (A.exactNormal) {
           const VF len2 = hn::MulAdd(m[0], m[0], hn::MulAdd(m[1], m[1], hn::Mul(m[2], m[2])));
           inv = hn::IfThenElseZero(hn::Gt(len2, zero), hn::Div(oneF, hn::Sqrt(len2)));
         } else {
-          const VF xx = hn::Mul(hn::Mul(u, hn::Sub(oneF, u)), dn2);
-          inv = hn::MulAdd(xx, hn::MulAdd(xx, c0375, c05), oneF);
+          const VF xx = hn::Mul(hn::Mul(u, hn::Sub(oneF, u)), hn::Set(d, A.dn2));
+          inv = hn::MulAdd(xx, hn::MulAdd(xx, hn::Set(d, 0.375f), hn::Set(d, 0.5f)), oneF);
         }
         for (int c = 0; c < 3; ++c) hn::Store(hn::Mul(m[c], inv), d, bn[c] + i);
       }
@@ -1027,7 +1024,6 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       const VZ w = hn::LoadU(dz, bw + k);
       const auto inside = hn::And(hn::Gt(w, zeroZ), hn::FirstN(dz, size_t(width - c)));
       if (hn::AllFalse(dz, inside)) return;
-      inserted += hn::CountTrue(dz, inside);
       const VZ z = hn::LoadU(dz, bz + k), thr = hn::LoadU(dz, bt + k);
       const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
         if (a < 3) return hn::LoadU(dz, bc[a] + k);
