@@ -90,7 +90,7 @@ def extract_contour(mesh: Mesh, *, spacing: float = 0.0, spacing_scale: float = 
                     radius_scale: float = 0.55, points_below: float = 0.0, all_points: bool = False,
                     vertex_normals: bool = False, family_switch_sine: float = 1.0,
                     endpoint_normals: bool = True, merge_normal_deviation: float = 0.01,
-                    merge_tangent_deviation: float = 0.05, merge_angle: float = 0.5,
+                    merge_tangent_deviation: float = 0.05, merge_angle: float = 2.0,
                     merge_max_pieces: int = 32) -> SimpleNamespace: ...
 def verify(cloud: PointsLike, hybrid: Model, *, epsilon: Optional[float] = None, delta: Optional[float] = None,
            k: Optional[int] = None) -> Dict[str, Any]: ...

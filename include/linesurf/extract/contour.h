@@ -82,12 +82,15 @@ struct ContourOptions {
   /// merging (one segment per face and plane crossed, the thesis's model). Ignored with allPoints
   /// (the point model of Table 5 is cut from the unmerged segments). Every merge moved Table 5's
   /// line-vs-point difference up a little, in proportion to how much was merged (whichever limit
-  /// binds); 0.5 degrees keeps it within +0.007 on the seven shared meshes, 1 degree within
-  /// +0.028, 5 degrees +0.14 (docs/decisions.md, "Issue 13 (i13merge)"). The tangent deviation
-  /// 0.05 d = radiusScale - 0.5: neighbouring strips (d apart, half-width 0.55 d) still overlap.
+  /// binds), while the line model's difference from the mesh itself stays unchanged (SSIM, PSNR
+  /// and the > 64 share within 0.0002 / 0.01 dB / 0.01 points). 2 degrees (the default since
+  /// stop 22): 3-37% fewer segments than 0.5, Table 5 +0.009 to +0.046 on the seven shared meshes
+  /// (docs/decisions.md, "Issue 13 (lead, stop 22)"; 0.5, 1 and 5 degrees measured in "Issue 13
+  /// (i13merge)"). The tangent deviation 0.05 d = radiusScale - 0.5: neighbouring strips (d
+  /// apart, half-width 0.55 d) still overlap.
   float mergeNormalDeviation = 0.01f;
   float mergeTangentDeviation = 0.05f;
-  float mergeAngle = 0.5f;
+  float mergeAngle = 2.0f;
   int mergeMaxPieces = 32;
   /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.
   float pointsBelow = 0;
