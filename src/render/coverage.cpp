@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "detail/splat_math.h"
 #include "linesurf/core/parallel.h"
 
 namespace linesurf::detail {
@@ -43,7 +44,7 @@ float weightAt(const Kernel& k, const Vec3f& x, const Vec3f& nx, float cut) {
   const float b2 = std::max(0.0f, d.squaredNorm() - a * a - off * off);
   if (b2 > reach * reach || a < -reach || a > k.length + reach) return 0;
   const float is = 1.0f / (k.sigma * std::sqrt(2.0f));
-  const float along = 0.5f * (std::erf(a * is) - std::erf((a - k.length) * is)) * k.sigma * std::sqrt(2.0f * 3.14159265f);
+  const float along = 0.5f * (std::erf(a * is) - std::erf((a - k.length) * is)) * k.sigma * std::sqrt(2.0f * float(kPi));
   return std::exp(-0.5f * b2 / s2) * along * k.invRadius / s2;
 }
 
@@ -166,7 +167,7 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
     u.normalize();
     const Vec3f v = k.n.cross(u);
     for (int a = 0; a < kRing; ++a) {
-      const float t = 2 * 3.14159265f * float(a) / float(kRing);
+      const float t = 2 * float(kPi) * float(a) / float(kRing);
       sum = std::min(sum, density(x + ringR * (std::cos(t) * u + std::sin(t) * v)));
     }
     c[i] = sum > 0 ? 1.0f / sum : 0.0f;

@@ -77,6 +77,12 @@ HWY_INLINE void Phong(DF d, const SegmentSetupFrame& F, VF mx, VF my, VF mz, VF 
   spec = hn::IfThenElseZero(lit, hn::Mul(hn::Set(d, V.specular), pw));
 }
 
+// One channel of the lit colour from Phong's factors: (albedo dif + spec) * light colour.
+template <class VF>
+HWY_INLINE VF Lit(VF albedo, VF dif, VF spec, VF light) {
+  return hn::Mul(hn::MulAdd(albedo, dif, spec), light);
+}
+
 // Where each word of the record image comes from: the batch array at that byte offset in
 // SegmentSetupBatch (the lane's value), or -1 (the frame's template).
 const std::array<int32_t, kRecordSlots>& recordSources() {
@@ -440,12 +446,11 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       Phong(d, F, n1x, n1y, n1z, qx1, qy1, qz1, dif1, spec1);
       St(dif0, B.diffuse0), St(spec0, B.specular0), St(dif1, B.diffuse1), St(spec1, B.specular1);
       const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
-      auto lit = [&](VF c, VF dif, VF spec, VF l) { return hn::Mul(hn::MulAdd(c, dif, spec), l); };
-      const VF r0 = lit(cr, dif0, spec0, lr), g0 = lit(cg, dif0, spec0, lg), b0 = lit(cb, dif0, spec0, lb);
+      const VF r0 = Lit(cr, dif0, spec0, lr), g0 = Lit(cg, dif0, spec0, lg), b0 = Lit(cb, dif0, spec0, lb);
       ar = hn::IfThenElse(turning, cr, r0), ag = hn::IfThenElse(turning, cg, g0), ab = hn::IfThenElse(turning, cb, b0);
-      dcx = hn::IfThenElseZero(hn::Not(turning), hn::Sub(lit(cr, dif1, spec1, lr), r0));
-      dcy = hn::IfThenElseZero(hn::Not(turning), hn::Sub(lit(cg, dif1, spec1, lg), g0));
-      dcz = hn::IfThenElseZero(hn::Not(turning), hn::Sub(lit(cb, dif1, spec1, lb), b0));
+      dcx = hn::IfThenElseZero(hn::Not(turning), hn::Sub(Lit(cr, dif1, spec1, lr), r0));
+      dcy = hn::IfThenElseZero(hn::Not(turning), hn::Sub(Lit(cg, dif1, spec1, lg), g0));
+      dcz = hn::IfThenElseZero(hn::Not(turning), hn::Sub(Lit(cb, dif1, spec1, lb), b0));
     }
     St(ar, B.ar), St(ag, B.ag), St(ab, B.ab), St(dcx, B.dcx), St(dcy, B.dcy), St(dcz, B.dcz);
     {  // the index, and the word holding smooth and shade
@@ -512,9 +517,9 @@ void SegmentStations(const SegmentSetupFrame& F, const SegmentSetupBatch& B, Seg
     const VF qz = hn::MulAdd(u, hn::Sub(G(B.p1cz), G(B.p0z)), G(B.p0z));
     VF dif, spec;
     Phong(d, F, mx, my, mz, qx, qy, qz, dif, spec);
-    hn::StoreU(hn::Mul(hn::MulAdd(G(B.cr), dif, spec), hn::Set(d, F.lightColor[0])), d, J.r + i);
-    hn::StoreU(hn::Mul(hn::MulAdd(G(B.cg), dif, spec), hn::Set(d, F.lightColor[1])), d, J.g + i);
-    hn::StoreU(hn::Mul(hn::MulAdd(G(B.cb), dif, spec), hn::Set(d, F.lightColor[2])), d, J.b + i);
+    hn::StoreU(Lit(G(B.cr), dif, spec, hn::Set(d, F.lightColor[0])), d, J.r + i);
+    hn::StoreU(Lit(G(B.cg), dif, spec, hn::Set(d, F.lightColor[1])), d, J.g + i);
+    hn::StoreU(Lit(G(B.cb), dif, spec, hn::Set(d, F.lightColor[2])), d, J.b + i);
   }
 }
 
