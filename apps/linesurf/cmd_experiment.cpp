@@ -21,6 +21,7 @@ struct ExperimentArgs {
   float deltaN = 0.008f;
   float contourScale = 1.0f;
   float contourSpacing = 0;
+  float contourDiagonalDivisions = ContourOptions{}.diagonalDivisions;
   bool contourVertexNormals = false;
   float contourMergeNormalDeviation = ContourOptions{}.mergeNormalDeviation;
   float contourMergeAngle = ContourOptions{}.mergeAngle;
@@ -57,6 +58,7 @@ void run(const ExperimentArgs& a) {
   o.shapeApprox.clustering.deltaN = a.deltaN;
   o.contour.spacingScale = a.contourScale;
   o.contour.spacing = a.contourSpacing;
+  o.contour.diagonalDivisions = a.contourDiagonalDivisions;
   o.contour.vertexNormals = a.contourVertexNormals;
   o.contour.mergeNormalDeviation = a.contourMergeNormalDeviation;
   o.contour.mergeAngle = a.contourMergeAngle;
@@ -118,8 +120,13 @@ RegisterCommand reg(70, [](CLI::App& app) {
   sub->add_option("--epsilon", a->epsilonRelative, "eps-delta: epsilon as a fraction of the average spacing (§7.2: 0.05)")->capture_default_str();
   sub->add_option("--delta", a->delta, "eps-delta: normal tolerance 1 - n.n (§7.2: 0.004)")->capture_default_str();
   sub->add_option("--delta-n", a->deltaN, "shape approximation: normal variation tolerance (§7.2: 0.008)")->capture_default_str();
-  sub->add_option("--contour-scale", a->contourScale, "contour: plane spacing d as a multiple of the mean edge length")
+  sub->add_option("--contour-scale", a->contourScale,
+                  "contour: plane spacing d as a multiple of min(mean edge length, diagonal / --contour-diagonal-divisions)")
       ->capture_default_str()->check(CLI::Range(1e-3, 1e3));
+  sub->add_option("--contour-diagonal-divisions", a->contourDiagonalDivisions,
+                  "contour: default d at most the bounding-box diagonal / N (0 = mean edge only; extract contour "
+                  "--diagonal-divisions)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1e6));
   sub->add_option("--contour-spacing", a->contourSpacing, "contour: plane spacing d in object units (0 = --contour-scale)")
       ->capture_default_str()->check(CLI::Range(0.0, 1e30));
   sub->add_flag("--contour-vertex-normals", a->contourVertexNormals,

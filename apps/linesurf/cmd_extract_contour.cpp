@@ -45,7 +45,9 @@ void run(ContourArgs& a) {
       longest += std::max({l[0], l[1], l[2]});
       area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
     }
-    const double d = o.spacing > 0 ? double(o.spacing) : double(o.spacingScale) * edgeSum / double(std::max<size_t>(edges, 1));
+    const Bounds3f box = mesh.bounds();
+    const double d = contourSpacing(o, edgeSum / double(std::max<size_t>(edges, 1)),
+                                    box.empty() ? 0.0 : double(box.diagonal().norm()));
     if (d > 0) {
       const double segments = longest / d + double(mesh.faces.size());
       const double points = o.allPoints || o.pointsBelow > 0 ? area / (d * d) + segments : 0;
@@ -68,7 +70,10 @@ void run(ContourArgs& a) {
   const double writeSeconds = t.seconds();
 
   say(fmt::format("contour planes (§3.3): d = {:.6g}{}, radius {:.6g}, seed {}", s.spacing,
-                  o.spacing > 0 ? "" : fmt::format(" ({} x mean edge {:.6g})", o.spacingScale, s.meanEdgeLength),
+                  o.spacing > 0             ? ""
+                  : s.spacingFromDiagonal ? fmt::format(" ({} x diagonal {:.6g} / {}; mean edge {:.6g})", o.spacingScale,
+                                                        s.diagonal, o.diagonalDivisions, s.meanEdgeLength)
+                                          : fmt::format(" ({} x mean edge {:.6g})", o.spacingScale, s.meanEdgeLength),
                   s.radius, o.seed));
   say(fmt::format("faces: {} cut by P=, {} by P|| ({} at d/2 or finer), {} between planes, {} degenerate skipped",
                   s.cutByFamily[0], s.cutByFamily[1], s.halvedSpacing, s.uncutTriangles, s.degenerateTriangles));
@@ -91,8 +96,11 @@ RegisterCommand reg(33, [](CLI::App& app) {
   sub->add_option("MESH", a->mesh, "Triangle mesh (.ply, or .obj with .mtl and texture image)")->required();
   sub->add_option("-o,--output", a->output, "Output model (.ply)")->required();
   bind(sub, "spacing", o.spacing,
-       "Largest distance d between neighbouring segments, object units (0: --spacing-scale x mean edge length)");
-  bind(sub, "spacingScale", o.spacingScale, "d as a multiple of the mesh's mean edge length, when --spacing is 0; > 0");
+       "Largest distance d between neighbouring segments, object units (0: --spacing-scale x min(mean edge, diagonal / --diagonal-divisions))");
+  bind(sub, "spacingScale", o.spacingScale,
+       "d as a multiple of min(mean edge length, diagonal / --diagonal-divisions), when --spacing is 0; > 0");
+  bind(sub, "diagonalDivisions", o.diagonalDivisions,
+       "Default d at most the bounding-box diagonal / N, so coarse meshes are cut finely enough (0 = mean edge only), [0, 1e6]");
   bind(sub, "seed", o.seed, "Seed of the random plane orientation and offsets");
   auto below = bind(sub, "pointsBelow", o.pointsBelow,
                     "Turn segments shorter than LEN (object units) into points: hybrid model (0 = none)");

@@ -941,7 +941,8 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
       "extract_contour",
       [](const TriangleMesh& mesh, float spacing, float spacing_scale, uint64_t seed, float radius_scale,
          float points_below, bool all_points, bool vertex_normals, float family_switch_sine, bool endpoint_normals,
-         float merge_normal_deviation, float merge_tangent_deviation, float merge_angle, int merge_max_pieces) {
+         float merge_normal_deviation, float merge_tangent_deviation, float merge_angle, int merge_max_pieces,
+         float diagonal_divisions) {
         ContourOptions o;
         o.spacing = spacing, o.spacingScale = spacing_scale, o.seed = seed, o.radiusScale = radius_scale;
         o.pointsBelow = points_below, o.allPoints = all_points, o.vertexNormals = vertex_normals;
@@ -949,6 +950,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         o.endpointNormals = endpoint_normals;
         o.mergeNormalDeviation = merge_normal_deviation, o.mergeTangentDeviation = merge_tangent_deviation;
         o.mergeAngle = merge_angle, o.mergeMaxPieces = merge_max_pieces;
+        o.diagonalDivisions = diagonal_divisions;
         validate(o);
         if (mesh.faces.empty()) throwBadOption("mesh", "holds no faces: contour extraction needs a triangle mesh");
         ContourStats st;
@@ -960,6 +962,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         py::dict stats;
         stats["triangles"] = st.triangles, stats["segments"] = st.segments, stats["points"] = st.points;
         stats["spacing"] = st.spacing, stats["radius"] = st.radius, stats["degenerate_triangles"] = st.degenerateTriangles;
+        stats["mean_edge_length"] = st.meanEdgeLength, stats["spacing_from_diagonal"] = st.spacingFromDiagonal;
         stats["converted_segments"] = st.convertedSegments;
         stats["segments_before_merge"] = st.segmentsBeforeMerge, stats["polylines"] = st.polylines;
         py::dict r;
@@ -973,9 +976,11 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
       py::arg("merge_normal_deviation") = ContourOptions{}.mergeNormalDeviation,
       py::arg("merge_tangent_deviation") = ContourOptions{}.mergeTangentDeviation,
       py::arg("merge_angle") = ContourOptions{}.mergeAngle, py::arg("merge_max_pieces") = ContourOptions{}.mergeMaxPieces,
+      py::arg("diagonal_divisions") = ContourOptions{}.diagonalDivisions,
       R"doc(Contour-plane extraction from a triangle Mesh, thesis §3.3 (= `linesurf extract contour`).
 
-spacing: largest distance d between neighbouring segments (0: spacing_scale x mean edge length);
+spacing: largest distance d between neighbouring segments (0: spacing_scale x min(mean edge length,
+bounding-box diagonal / diagonal_divisions); diagonal_divisions=0: the mean edge alone);
 endpoint_normals=False gives the thesis's one normal per segment (the CLI's --flat);
 merge_normal_deviation=0 keeps one segment per face and plane (no polyline merging).
 Returns a namespace with model and stats (dict: triangles, segments, points, spacing, radius, ...).)doc");

@@ -389,6 +389,7 @@ void writeExperimentJson(const ExperimentResults& results, const std::filesystem
                  {"delta", o.epsDelta.delta},
                  {"delta_n", o.shapeApprox.clustering.deltaN},
                  {"contour_spacing_scale", o.contour.spacingScale},
+                 {"contour_diagonal_divisions", o.contour.diagonalDivisions},
                  {"contour_seed", o.contour.seed}}},
                {"threads", results.threads},
                {"total_seconds", num(results.totalSeconds)},

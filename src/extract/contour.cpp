@@ -185,6 +185,8 @@ void checkContourOptions(const ContourOptions& o) {
     throwBadOption("spacing", fmt::format("must be a finite length >= 0 (0 = from the mean edge length), got {}", o.spacing));
   if (o.spacing == 0 && !(std::isfinite(o.spacingScale) && o.spacingScale > 0))
     throwBadOption("spacingScale", fmt::format("must be > 0, got {}", o.spacingScale));
+  if (!(std::isfinite(o.diagonalDivisions) && o.diagonalDivisions >= 0 && o.diagonalDivisions <= 1e6))
+    throwBadOption("diagonalDivisions", fmt::format("must be in [0, 1e6] (0 = no cap on d), got {}", o.diagonalDivisions));
   if (!(std::isfinite(o.radiusScale) && o.radiusScale > 0))
     throwBadOption("radiusScale", fmt::format("must be > 0 (> 0.5 for a hole-free model), got {}", o.radiusScale));
   if (!std::isfinite(o.pointsBelow) || o.pointsBelow < 0)
@@ -240,6 +242,20 @@ void blockedWithProgress(size_t n, const ProgressFn& progress, double from, doub
 }  // namespace
 
 void validate(const ContourOptions& options) { checkContourOptions(options); }
+
+double contourSpacing(const ContourOptions& options, double meanEdgeLength, double diagonal, bool* capped) {
+  if (capped) *capped = false;
+  if (options.spacing > 0) return double(options.spacing);
+  double base = meanEdgeLength;
+  if (options.diagonalDivisions > 0 && diagonal > 0 && std::isfinite(diagonal)) {
+    const double cap = diagonal / double(options.diagonalDivisions);
+    if (cap < base) {
+      base = cap;
+      if (capped) *capped = true;
+    }
+  }
+  return double(options.spacingScale) * base;
+}
 
 ContourPlanes randomContourPlanes(uint64_t seed, double spacing) {
   uint64_t state = seed ^ 0x6C696E6573757266ull;  // "linesurf"
@@ -304,7 +320,11 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
 
   HybridModel model;
   model.comments = mesh.comments;
-  const double d = options.spacing > 0 ? double(options.spacing) : double(options.spacingScale) * stats.meanEdgeLength;
+  {
+    const Bounds3f box = mesh.bounds();
+    stats.diagonal = box.empty() ? 0.0 : double(box.diagonal().norm());
+  }
+  const double d = contourSpacing(options, stats.meanEdgeLength, stats.diagonal, &stats.spacingFromDiagonal);
   stats.spacing = d;
   stats.radius = double(options.radiusScale) * d;
   if (!(d > 0) || !std::isfinite(d)) {  // nothing to cut: no non-degenerate face

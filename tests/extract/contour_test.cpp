@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/shapes.h"
 #include "linesurf/extract/contour.h"
@@ -173,12 +174,45 @@ TEST(Contour, SphereNeighbouringSegmentsAtMostDApart) {
     ContourStats st;
     ContourOptions o = withFaces();
     o.spacingScale = scale;
+    o.diagonalDivisions = 0;  // d from the mean edge alone
     o.seed = 7;
     HybridModel model = extractContour(mesh, o, &st);
     EXPECT_NEAR(st.spacing, scale * st.meanEdgeLength, 1e-9);
+    EXPECT_FALSE(st.spacingFromDiagonal);
     expectSpacingAtMostD(mesh, model, st);
     // Larger-sine family choice: max(sin θ) >= 1/√2, so the level is 0 or 1 (spacing d or d/2).
     EXPECT_LE(st.halvedSpacing, mesh.faces.size());
+  }
+}
+
+TEST(Contour, DefaultSpacingCappedByTheDiagonalOnCoarseMeshes) {
+  // A coarse icosphere (mean edge ~0.15 of a unit sphere, diagonal 2 sqrt 3): the default d is
+  // diagonal / 200, with the spacing contract intact; a cap above the mean edge leaves the edge.
+  TriangleMesh mesh = shapes::sphereMesh(1.0f, 3);
+  ContourStats capped, edge, half;
+  ContourOptions o = withFaces();
+  o.seed = 3;
+  HybridModel fine = extractContour(mesh, o, &capped);
+  EXPECT_TRUE(capped.spacingFromDiagonal);
+  EXPECT_NEAR(capped.diagonal, 2 * std::sqrt(3.0), 1e-5);
+  EXPECT_NEAR(capped.spacing, capped.diagonal / 200, 1e-9);
+  EXPECT_LT(capped.spacing, capped.meanEdgeLength);
+  expectSpacingAtMostD(mesh, fine, capped);
+  o.diagonalDivisions = 1;  // cap = the diagonal: the mean edge is smaller
+  HybridModel coarse = extractContour(mesh, o, &edge);
+  EXPECT_FALSE(edge.spacingFromDiagonal);
+  EXPECT_NEAR(edge.spacing, edge.meanEdgeLength, 1e-9);
+  EXPECT_GT(fine.segments.size(), 4 * coarse.segments.size());
+  o.diagonalDivisions = 200, o.spacingScale = 0.5f;  // the scale multiplies the capped d
+  extractContour(mesh, o, &half);
+  EXPECT_NEAR(half.spacing, 0.5 * capped.spacing, 1e-9);
+  EXPECT_NEAR(contourSpacing(o, edge.meanEdgeLength, capped.diagonal), half.spacing, 1e-12);
+  o.spacing = 0.25f;  // an explicit d wins
+  EXPECT_EQ(contourSpacing(o, edge.meanEdgeLength, capped.diagonal), 0.25);
+  for (float bad : {-1.0f, std::numeric_limits<float>::quiet_NaN(), 2e6f}) {
+    ContourOptions b;
+    b.diagonalDivisions = bad;
+    EXPECT_THROW(validate(b), OptionError) << bad;
   }
 }
 

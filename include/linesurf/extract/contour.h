@@ -38,6 +38,12 @@ struct ContourOptions {
   /// radius of the rendering kernel (§3.3); the output radius below is derived from it.
   float spacing = 0;
   float spacingScale = 1.0f;  ///< used when spacing == 0; > 0
+  /// Cap on the default d (beyond the thesis, issue 14): when spacing == 0, d = spacingScale ×
+  /// min(mean edge length, bounding-box diagonal / diagonalDivisions). The mean edge alone makes a
+  /// coarse mesh's model coarser than the thesis's own (Al, 7k faces: mean edge = diagonal / 52,
+  /// 27,625 contour points; the thesis's Al has 163,205; at the cap 163,909), and its splats blur
+  /// every feature the size of an edge. 0 = no cap. See contourSpacing.
+  float diagonalDivisions = 200;
   uint64_t seed = 1;          ///< orientation and offsets of the planes
   std::optional<ContourPlanes> planes;  ///< explicit plane families (overrides seed)
   /// Family choice per triangle: P= is used unless its sin θ is below this value and P‖ cuts at a
@@ -117,6 +123,8 @@ struct ContourStats {
   size_t convertedSegments = 0;    ///< segments turned into points
   double spacing = 0;              ///< d used
   double meanEdgeLength = 0;       ///< over non-degenerate faces (each face's three edges)
+  double diagonal = 0;             ///< of the mesh's bounding box (all vertices)
+  bool spacingFromDiagonal = false;  ///< d came from diagonal / diagonalDivisions (the cap)
   double radius = 0;               ///< primitive radius written
   double seconds = 0;              ///< wall time of extractContour
   ContourPlanes planes;            ///< the plane families used
@@ -126,6 +134,11 @@ struct ContourStats {
 
 /// Throws OptionError (core/options.h) naming the first bad field; NaN is always rejected.
 void validate(const ContourOptions& options);
+
+/// The plane spacing d that extractContour uses: options.spacing when > 0, else spacingScale ×
+/// min(meanEdgeLength, diagonal / diagonalDivisions) (no cap when diagonalDivisions is 0 or the
+/// diagonal is not positive). `capped` (optional) says whether the diagonal gave it.
+double contourSpacing(const ContourOptions& options, double meanEdgeLength, double diagonal, bool* capped = nullptr);
 
 /// Cuts `mesh` into a line-segment (or hybrid, or point) model, thesis §3.3.
 /// Segments carry the triangle's unit normal (or interpolated vertex normals), a colour (texture
