@@ -46,12 +46,16 @@ void run(ContourArgs& a) {
       area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
     }
     const Bounds3f box = mesh.bounds();
+    bool capped = false;
     const double d = contourSpacing(o, edgeSum / double(std::max<size_t>(edges, 1)),
-                                    box.empty() ? 0.0 : double(box.diagonal().norm()));
+                                    box.empty() ? 0.0 : double(box.diagonal().norm()), &capped);
     if (d > 0) {
       const double segments = longest / d + double(mesh.faces.size());
       const double points = o.allPoints || o.pointsBelow > 0 ? area / (d * d) + segments : 0;
-      checkSize(o.spacing > 0 ? "--spacing" : "--spacing-scale", 120.0 * segments + 60.0 * points,
+      const char* flag = o.spacing > 0                          ? "--spacing"
+                         : capped && o.spacingScale == 1.0f ? "--diagonal-divisions"
+                                                            : "--spacing-scale";
+      checkSize(flag, 120.0 * segments + 60.0 * points,
                 fmt::format("contour output at d = {:.3g} (about {:.3g} segments{})", d, segments,
                             points > 0 ? fmt::format(", {:.3g} points", points) : std::string()));
     }

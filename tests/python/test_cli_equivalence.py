@@ -50,6 +50,20 @@ def test_contour_counts_equal_cli(cli, tmp_path):
     np.testing.assert_array_equal(got.model.segments, ref.segments)
 
 
+def test_contour_diagonal_cap_equals_cli(cli, tmp_path):
+    # Al is coarse (mean edge = diagonal / 52): the default d is the diagonal / 200; without the
+    # cap (0) it is the mean edge, ~3.9x larger, and both routes agree on either.
+    mesh = linesurf.read_mesh(str(DATA / "al_mesh.ply"))
+    capped = linesurf.extract_contour(mesh)
+    edge = linesurf.extract_contour(mesh, diagonal_divisions=0)
+    assert capped.stats["spacing_from_diagonal"] and not edge.stats["spacing_from_diagonal"]
+    assert edge.stats["spacing"] == pytest.approx(edge.stats["mean_edge_length"])
+    assert 3.5 < edge.stats["spacing"] / capped.stats["spacing"] < 4.2
+    out = tmp_path / "c0.ply"
+    assert cli("-q", "extract", "contour", DATA / "al_mesh.ply", "-o", out, "--diagonal-divisions", "0").returncode == 0
+    np.testing.assert_array_equal(edge.model.segments, linesurf.read(str(out)).segments)
+
+
 def test_certificate_check_agrees_with_cli(cli, tmp_path, santa):
     out = tmp_path / "p.ply"
     assert cli("-q", "extract", "eps-delta", DATA / "santa_points.ply", "-o", out, "--provenance").returncode == 0

@@ -263,6 +263,8 @@ const std::vector<Case> kCases = {
   {"ContourTinySpacing", "extract contour mesh.ply -o out.ply --spacing 1e-6", 1, {"--spacing", "--max-mb"}},
   {"ContourTinySpacingAllPoints", "extract contour mesh.ply -o out.ply --spacing 1e-4 --all-points", 1, {"--spacing", "--max-mb"}},
   {"ContourTinySpacingScale", "extract contour mesh.ply -o out.ply --spacing-scale 1e-6", 1, {"--spacing-scale"}},
+  {"ContourNegativeDiagonalDivisions", "extract contour mesh.ply -o out.ply --diagonal-divisions -1", 1, {"--diagonal-divisions"}},
+  {"ContourHugeDiagonalDivisions", "extract contour mesh.ply -o out.ply --diagonal-divisions 1e6 --max-mb 64", 1, {"--diagonal-divisions"}},
   {"CompareHugeHeaderSizeMismatch", "compare a.png huge.png", 2, {"huge.png", "16384x16384"}},
   {"CompareHugeHeaders", "compare huge.png huge2.png --diff diff.png", 1, {"huge.png", "--max-mb"}},
   {"InfoFifo", "info fifo.ply", 2, {"fifo.ply", "not a regular file"}},
