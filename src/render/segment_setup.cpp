@@ -196,8 +196,110 @@ HWY_NOINLINE void SegmentToCamera(const SegmentSetupFrame& F, SegmentSetupBatch&
 #endif
 #undef LINESURF_NO_CONTRACT
 
+// Stage 1 of one vector of lanes (camera-space input): the strip's axis and plane, and the
+// culling decisions, as SegmentCull and SegmentSetup both take them.
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+struct Strip {
+  VF len, iL, ex, ey, ez, zmin, nx, ny, nz, D;
+  // three kinds of lanes for the exact path, in the order of its tests: unusual input (it may be
+  // Degenerate), undecided before the culling tests (early), undecided after them
+  MF badInput, outside, early, culled;
+};
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+HWY_INLINE Strip<DF> StripOf(DF d, const SegmentSetupFrame& F, VF cx, VF cy, VF cz, VF qx1, VF qy1, VF qz1, VF wx,
+                             VF wy, VF wz, VF rad) {
+  const PointSetupFrame& V = F.view;
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  auto dot3 = [](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
+  const VF inf = S(INFINITY);
+  auto finite = [&](VF v) { return hn::Lt(hn::Abs(v), inf); };
+  Strip<DF> st;
+  const VF dx = hn::Sub(qx1, cx), dy = hn::Sub(qy1, cy), dz = hn::Sub(qz1, cz);
+  const VF len = hn::Sqrt(dot3(dx, dy, dz, dx, dy, dz));
+  MF badInput = hn::Not(hn::And(hn::Gt(rad, zero), finite(rad)));
+  for (VF v : {cx, cy, cz, qx1, qy1, qz1, wx, wy, wz}) badInput = hn::Or(badInput, hn::Not(finite(v)));
+  badInput = hn::Or(badInput, hn::Not(hn::And(hn::Gt(len, hn::Mul(S(2e-6f), rad)), finite(len))));
+  const VF iL = hn::Div(one, len);
+  const VF ex = hn::Mul(dx, iL), ey = hn::Mul(dy, iL), ez = hn::Mul(dz, iL);
+  // depth rejection with the largest possible footprint
+  const VF reach = hn::Mul(S(F.reach), rad);
+  const VF zmin = hn::Min(hn::Neg(cz), hn::Neg(qz1)), zmax = hn::Max(hn::Neg(cz), hn::Neg(qz1));
+  const VF dmin = hn::Sub(zmin, reach), dmax = hn::Add(zmax, reach);
+  const VF tolD = hn::Mul(S(1e-4f), hn::Add(hn::Add(hn::Abs(zmax), reach), S(V.nearD)));
+  const MF outside = hn::Or(hn::Lt(hn::Add(dmax, tolD), S(V.nearD)), hn::Gt(hn::Sub(dmin, tolD), S(V.farD)));
+  MF early = hn::AndNot(outside, hn::Or(hn::Lt(hn::Sub(dmax, tolD), S(V.nearD)), hn::Gt(hn::Add(dmin, tolD), S(V.farD))));
+  // the plane normal perpendicular to e, facing the eye
+  VF nx = wx, ny = wy, nz = wz;
+  const VF ne = dot3(nx, ny, nz, ex, ey, ez);
+  nx = hn::NegMulAdd(ne, ex, nx), ny = hn::NegMulAdd(ne, ey, ny), nz = hn::NegMulAdd(ne, ez, nz);
+  const VF nn2 = dot3(nx, ny, nz, nx, ny, nz);
+  early = hn::Or(early, hn::Not(hn::Gt(nn2, S(4e-6f))));  // |n| <= 2e-3: the exact stage decides
+  const VF inn = hn::Div(one, hn::Sqrt(nn2));
+  VF D = hn::Mul(hn::Neg(dot3(nx, ny, nz, cx, cy, cz)), inn);
+  const MF back = hn::Lt(D, zero);
+  const VF sgn = hn::IfThenElse(back, hn::Neg(inn), inn);
+  nx = hn::Mul(nx, sgn), ny = hn::Mul(ny, sgn), nz = hn::Mul(nz, sgn);
+  D = hn::Abs(D);
+  MF culled = V.backfaceCulling ? back : hn::Lt(one, zero);
+  {  // grazing everywhere: D / dist < kMinFacing at the point nearest to the eye
+    const VF t = hn::Min(hn::Max(hn::Neg(dot3(cx, cy, cz, ex, ey, ez)), zero), len);
+    const VF qx = hn::MulAdd(t, ex, cx), qy = hn::MulAdd(t, ey, cy), qz = hn::MulAdd(t, ez, cz);
+    const VF g = hn::Mul(S(kMinFacing * kMinFacing), dot3(qx, qy, qz, qx, qy, qz)), D2 = hn::Mul(D, D);
+    const MF graze = hn::Lt(D2, g);
+    early = hn::Or(early, hn::AndNot(culled, hn::Lt(hn::Abs(hn::Sub(D2, g)), hn::Mul(S(1e-3f), g))));
+    culled = hn::Or(culled, graze);
+  }
+  st.len = len, st.iL = iL, st.ex = ex, st.ey = ey, st.ez = ez, st.zmin = zmin;
+  st.nx = nx, st.ny = ny, st.nz = nz, st.D = D;
+  st.badInput = badInput, st.outside = outside, st.early = early, st.culled = culled;
+  return st;
+}
+
+// World to camera space and stage 1 over lanes [0, n) (issue 13, i13prep2): the lanes it
+// decides (unusual input or undecided: the exact path; outside; culled) get their status in
+// B.decided, the others (-1 there) are compacted to lanes [0, m) of the batch's input arrays,
+// B.lane[k] the original lane of lane k, so that SegmentSetup runs on full vectors of them.
+// Returns m.
+int SegmentCull(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
+  using DF = hn::ScalableTag<float>;
+  const DF d;
+  const hn::RebindToSigned<DF> di;
+  const int lanes = int(hn::Lanes(d));
+  auto S = [&](float v) { return hn::Set(d, v); };
+  float* const arrays[] = {B.p0x, B.p0y, B.p0z, B.p1x, B.p1y, B.p1z, B.wx, B.wy, B.wz, B.radius, B.smooth,
+                           B.cr,  B.cg,  B.cb,  B.ca,  B.m0x, B.m0y, B.m0z, B.m1x, B.m1y, B.m1z};
+  const int count = F.smoothFrame ? 21 : 15;
+  size_t m = 0;
+  for (int i = 0; i < n; i += lanes) {
+    auto L = [&](const float* a) { return hn::LoadU(d, a + i); };
+    const Strip<DF> st = StripOf(d, F, L(B.p0x), L(B.p0y), L(B.p0z), L(B.p1x), L(B.p1y), L(B.p1z), L(B.wx), L(B.wy),
+                                 L(B.wz), L(B.radius));
+    hn::StoreU(hn::IfThenElse(hn::Or(st.badInput, hn::AndNot(st.outside, st.early)), S(2.0f),
+                              hn::IfThenElse(st.outside, S(4.0f), hn::IfThenElse(st.culled, S(1.0f), S(-1.0f)))),
+               d, B.decided + i);
+    const auto keep = hn::AndNot(hn::Or(hn::Or(st.badInput, st.outside), hn::Or(st.early, st.culled)),
+                                 hn::FirstN(d, size_t(n - i)));
+    // in place: lanes [m, m + kept) with m <= i, after their loads
+    for (int a = 0; a < count; ++a) hn::CompressBlendedStore(hn::LoadU(d, arrays[a] + i), keep, d, arrays[a] + m);
+    hn::CompressBlendedStore(hn::Iota(di, i), hn::RebindMask(di, keep), di, B.lane + m);
+    m += hn::CountTrue(d, keep);
+  }
+  // harmless padding lanes to the last vector's end
+  for (size_t j = m; j < size_t(kSegmentBatch) && j < (m + size_t(lanes) - 1) / size_t(lanes) * size_t(lanes); ++j) {
+    B.p0x[j] = B.p0y[j] = B.p0z[j] = B.p1y[j] = B.wx[j] = B.wy[j] = 0;
+    B.p1x[j] = 1, B.p1z[j] = B.p0z[j] = -2, B.wz[j] = 1, B.radius[j] = 1;
+    B.smooth[j] = 0;
+    B.m0x[j] = B.m0y[j] = B.m1x[j] = B.m1y[j] = 0;
+    B.m0z[j] = B.m1z[j] = 1;
+    B.cr[j] = B.cg[j] = B.cb[j] = B.ca[j] = 0;
+    B.lane[j] = int32_t(j);
+  }
+  return int(m);
+}
+
+// Stages 1-6 over lanes [0, n) of camera-space input (SegmentCull's compacted lanes).
 void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
-  SegmentToCamera(F, B, n);
   const PointSetupFrame& V = F.view;
   using DF = hn::ScalableTag<float>;
   using VF = hn::Vec<DF>;
@@ -221,51 +323,11 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     // stage 1: the strip (the batch holds camera-space input, rounded as Camera::toCamera rounds
     // for the exact path: a short segment far away gets its direction, not one of other rounding)
     const VF cx = px0, cy = py0, cz = pz0, qx1 = px1, qy1 = py1, qz1 = pz1;
-    const VF dx = hn::Sub(qx1, cx), dy = hn::Sub(qy1, cy), dz = hn::Sub(qz1, cz);
-    const VF len = hn::Sqrt(dot3(dx, dy, dz, dx, dy, dz));
-    // three kinds of lanes for the exact path, in the order of its tests: unusual input (it may
-    // be Degenerate), undecided before the culling tests, undecided after them
-    MF badInput = hn::Not(hn::And(hn::Gt(rad, zero), finite(rad)));
-    for (VF v : {px0, py0, pz0, px1, py1, pz1, wx, wy, wz}) badInput = hn::Or(badInput, hn::Not(finite(v)));
-    badInput = hn::Or(badInput, hn::Not(hn::And(hn::Gt(len, hn::Mul(S(2e-6f), rad)), finite(len))));
-    const VF iL = hn::Div(one, len);
-    const VF ex = hn::Mul(dx, iL), ey = hn::Mul(dy, iL), ez = hn::Mul(dz, iL);
-    // depth rejection with the largest possible footprint
-    const VF reach = hn::Mul(S(F.reach), rad);
-    const VF zmin = hn::Min(hn::Neg(cz), hn::Neg(qz1)), zmax = hn::Max(hn::Neg(cz), hn::Neg(qz1));
-    const VF dmin = hn::Sub(zmin, reach), dmax = hn::Add(zmax, reach);
-    const VF tolD = hn::Mul(S(1e-4f), hn::Add(hn::Add(hn::Abs(zmax), reach), S(V.nearD)));
-    const MF outside = hn::Or(hn::Lt(hn::Add(dmax, tolD), S(V.nearD)), hn::Gt(hn::Sub(dmin, tolD), S(V.farD)));
-    MF early = hn::AndNot(outside, hn::Or(hn::Lt(hn::Sub(dmax, tolD), S(V.nearD)), hn::Gt(hn::Add(dmin, tolD), S(V.farD))));
-    // the plane normal perpendicular to e, facing the eye
-    VF nx = wx, ny = wy, nz = wz;
-    const VF ne = dot3(nx, ny, nz, ex, ey, ez);
-    nx = hn::NegMulAdd(ne, ex, nx), ny = hn::NegMulAdd(ne, ey, ny), nz = hn::NegMulAdd(ne, ez, nz);
-    const VF nn2 = dot3(nx, ny, nz, nx, ny, nz);
-    early = hn::Or(early, hn::Not(hn::Gt(nn2, S(4e-6f))));  // |n| <= 2e-3: the exact stage decides
-    const VF inn = hn::Div(one, hn::Sqrt(nn2));
-    VF D = hn::Mul(hn::Neg(dot3(nx, ny, nz, cx, cy, cz)), inn);
-    const MF back = hn::Lt(D, zero);
-    const VF sgn = hn::IfThenElse(back, hn::Neg(inn), inn);
-    nx = hn::Mul(nx, sgn), ny = hn::Mul(ny, sgn), nz = hn::Mul(nz, sgn);
-    D = hn::Abs(D);
-    MF culled = V.backfaceCulling ? back : hn::Lt(one, zero);
-    {  // grazing everywhere: D / dist < kMinFacing at the point nearest to the eye
-      const VF t = hn::Min(hn::Max(hn::Neg(dot3(cx, cy, cz, ex, ey, ez)), zero), len);
-      const VF qx = hn::MulAdd(t, ex, cx), qy = hn::MulAdd(t, ey, cy), qz = hn::MulAdd(t, ez, cz);
-      const VF g = hn::Mul(S(kMinFacing * kMinFacing), dot3(qx, qy, qz, qx, qy, qz)), D2 = hn::Mul(D, D);
-      const MF graze = hn::Lt(D2, g);
-      early = hn::Or(early, hn::AndNot(culled, hn::Lt(hn::Abs(hn::Sub(D2, g)), hn::Mul(S(1e-3f), g))));
-      culled = hn::Or(culled, graze);
-    }
-    {  // a vector whose lanes are all decided outside or culled skips the rest (contour lines come
-       // in polylines: neighbours in the batch mostly face the same way)
-      const MF done = hn::AndNot(badInput, hn::Or(outside, hn::AndNot(early, culled)));
-      if (hn::AllTrue(d, hn::Or(done, hn::Not(hn::FirstN(d, size_t(n - i)))))) {
-        St(hn::IfThenElse(badInput, S(2.0f), hn::IfThenElse(outside, S(4.0f), hn::IfThenElse(early, S(2.0f), one))), B.status);
-        continue;
-      }
-    }
+    const Strip<DF> st = StripOf(d, F, cx, cy, cz, qx1, qy1, qz1, wx, wy, wz, rad);
+    const VF len = st.len, iL = st.iL, ex = st.ex, ey = st.ey, ez = st.ez, zmin = st.zmin;
+    const VF nx = st.nx, ny = st.ny, nz = st.nz, D = st.D;
+    const MF badInput = st.badInput, outside = st.outside, culled = st.culled;
+    MF early = st.early;
     // near grazing at an end: the float covariance is not accurate enough there
     const VF end2 = hn::Max(dot3(cx, cy, cz, cx, cy, cz), dot3(qx1, qy1, qz1, qx1, qy1, qz1));
     MF exact = hn::Lt(hn::Mul(D, D), hn::Mul(S(4e-4f), end2));
@@ -456,7 +518,7 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     {  // the index, and the word holding smooth and shade
       const hn::RebindToUnsigned<DF> du;
       using VU = hn::Vec<decltype(du)>;
-      hn::StoreU(hn::Iota(du, B.first + uint32_t(i)), du, B.index + i);
+      hn::StoreU(hn::Add(hn::Set(du, B.first), hn::BitCast(du, hn::LoadU(di, B.lane + i))), du, B.index + i);
       const VU shade = hn::IfThenElse(hn::RebindMask(du, turning), hn::Set(du, uint32_t(SegmentShade::Stations)),
                                       hn::IfThenElse(hn::RebindMask(du, sm), hn::Set(du, uint32_t(SegmentShade::Smooth)),
                                                      hn::Set(du, uint32_t(F.perPixelLighting ? SegmentShade::Constant
@@ -482,9 +544,9 @@ void SegmentRecords(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   const char* base = reinterpret_cast<const char*>(&B);
   const int lanes = int(hn::Lanes(d));
   for (int i = 0; i < n; i += lanes) {
-    // no record for a vector of segments not drawn (culled, outside: SegmentSetup skipped them)
+    // no record for a vector of segments not drawn (culled, outside, for the exact path)
     const hn::Vec<DF> status = hn::LoadU(d, B.status + i);
-    if (hn::AllTrue(d, hn::Or(hn::Eq(status, hn::Set(d, 1.0f)), hn::Eq(status, hn::Set(d, 4.0f))))) continue;
+    if (hn::AllFalse(d, hn::Or(hn::Eq(status, hn::Zero(d)), hn::Eq(status, hn::Set(d, 3.0f))))) continue;
     for (int c = 0; c < kRecordChunks; ++c) {
       hn::Vec<DF> v[4];
       for (int k = 0; k < 4; ++k) {
@@ -529,9 +591,17 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace linesurf::detail {
+HWY_EXPORT(SegmentToCamera);
+HWY_EXPORT(SegmentCull);
 HWY_EXPORT(SegmentSetup);
 HWY_EXPORT(SegmentRecords);
 HWY_EXPORT(SegmentStations);
+void segmentToCamera(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
+  HWY_DYNAMIC_DISPATCH(SegmentToCamera)(frame, batch, n);
+}
+int segmentCull(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
+  return HWY_DYNAMIC_DISPATCH(SegmentCull)(frame, batch, n);
+}
 void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
   HWY_DYNAMIC_DISPATCH(SegmentSetup)(frame, batch, n);
 }
@@ -677,22 +747,39 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       b.cr[j] = b.cg[j] = b.cb[j] = b.ca[j] = 0;
     }
     b.first = uint32_t(first + base);
-    detail::segmentSetup(F, b, n);
-    for (int j = 0; j < n; ++j) {
+    detail::segmentToCamera(F, b, n);
+    const int m = detail::segmentCull(F, b, n);  // lanes [0, m): b.lane[k] of [0, n), not decided yet
+    for (int j = 0; j < n; ++j) {  // the lanes stage 1 decided
+      const size_t i = base + size_t(j);
+      switch (int(b.decided[j])) {
+        case 1: status[i] = PrimitiveStatus::Culled; break;
+        case 4: status[i] = PrimitiveStatus::Outside; break;
+        case 2: {
+          const uint32_t index = uint32_t(first + i);
+          status[i] = prepareSegment(segments[index], index, frame, out[i]);
+          ++scalar;
+          break;
+        }
+        default: break;
+      }
+    }
+    if (m == 0) continue;
+    detail::segmentSetup(F, b, m);
+    for (int k = 0; k < m; ++k) {
       // the SegmentExtra of each turning lane's slot (its station colours below), where the slot
       // has one from an earlier frame: fetched while the records' images are made
-      if (!(b.status[j] == 0.0f || b.status[j] == 3.0f) || !(b.stations[j] >= 0)) continue;  // drawn lanes only
-      if (const SegmentExtra* x = out[base + size_t(j)].extra.get()) {
+      if (!(b.status[k] == 0.0f || b.status[k] == 3.0f) || !(b.stations[k] >= 0)) continue;  // drawn lanes only
+      if (const SegmentExtra* x = out[base + size_t(b.lane[k])].extra.get()) {
         const char* c = reinterpret_cast<const char*>(&x->colour);
         __builtin_prefetch(c, 1);
         __builtin_prefetch(c + sizeof(x->colour) + 2 * sizeof(Vec2f) + 2 * sizeof(int), 1);
       }
     }
-    detail::segmentRecords(F, b, n);
-    for (int j = 0; j < n; ++j) {
-      const size_t i = base + size_t(j);
+    detail::segmentRecords(F, b, m);
+    for (int k = 0; k < m; ++k) {
+      const size_t i = base + size_t(b.lane[k]);
       const uint32_t index = uint32_t(first + i);
-      switch (int(b.status[j])) {
+      switch (int(b.status[k])) {
         case 0: status[i] = PrimitiveStatus::Drawn; break;
         case 1: status[i] = PrimitiveStatus::Culled; continue;
         case 3: status[i] = PrimitiveStatus::Clipped; break;
@@ -705,18 +792,18 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       // the lane's record image (all but `extra`, which the common case neither reads nor resets)
       PreparedSegment& rec = out[i];
       char* dst = reinterpret_cast<char*>(&rec);
-      std::memcpy(dst + 8, b.rec[0] + 4 * j + 2, 8);
-      for (int c = 1; c < detail::kRecordChunks; ++c) std::memcpy(dst + 16 * c, b.rec[c] + 4 * j, 16);
-      const int stations = int(b.stations[j]);
+      std::memcpy(dst + 8, b.rec[0] + 4 * k + 2, 8);
+      for (int c = 1; c < detail::kRecordChunks; ++c) std::memcpy(dst + 16 * c, b.rec[c] + 4 * k, 16);
+      const int stations = int(b.stations[k]);
       if (stations >= 0) {  // turning: shade Stations (SegmentExtra), lit at the stations
         if (jobs.count + stations > detail::kStationJobs) flushStations(F, b, jobs);
         SegmentExtra& x = stationsExtra(rec, segments[index], false, stations);
-        if (stations > 0) stationColours(b, j, frame, F, stations, x, jobs);
+        if (stations > 0) stationColours(b, k, frame, F, stations, x, jobs);
       } else if (!F.light && !F.perPixelLighting) {  // Gouraud between the ends, lit per lane
-        const Vec3f albedo(b.cr[j], b.cg[j], b.cb[j]);
+        const Vec3f albedo(b.cr[k], b.cg[k], b.cb[k]);
         const Vec3f n1 = rec.n0 + rec.dn;
-        const Vec3f k0 = frame.shade(albedo, rec.n0, Vec3f(b.p0x[j], b.p0y[j], b.p0z[j]));
-        const Vec3f k1 = frame.shade(albedo, n1, Vec3f(b.p1cx[j], b.p1cy[j], b.p1cz[j]));
+        const Vec3f k0 = frame.shade(albedo, rec.n0, Vec3f(b.p0x[k], b.p0y[k], b.p0z[k]));
+        const Vec3f k1 = frame.shade(albedo, n1, Vec3f(b.p1cx[k], b.p1cy[k], b.p1cz[k]));
         float* a = rec.attr;
         a[Z3Tile::kR] = k0.x(), a[Z3Tile::kG] = k0.y(), a[Z3Tile::kB] = k0.z();
         rec.dc = k1 - k0;

@@ -67,7 +67,11 @@ struct SegmentSetupBatch {
   alignas(64) float m1x[kSegmentBatch], m1y[kSegmentBatch], m1z[kSegmentBatch];
   /// the colour (FrameContext::primitiveColor)
   alignas(64) float cr[kSegmentBatch], cg[kSegmentBatch], cb[kSegmentBatch], ca[kSegmentBatch];
-  uint32_t first = 0;  ///< the index of lane 0's segment
+  uint32_t first = 0;  ///< the index of lane 0's segment before segmentCull
+  /// segmentCull: the status of each lane [0, n) stage 1 decides (as `status` below), -1 for the
+  /// others, which it moves to lanes [0, m), lane[k] the original lane of lane k
+  alignas(64) float decided[kSegmentBatch];
+  alignas(64) int32_t lane[kSegmentBatch];
   // output: 0 = drawn; 1 = culled; 2 = needs the exact path; 3 = drawn, bounds cut by the
   // viewport (Clipped); 4 = outside
   alignas(64) float status[kSegmentBatch];
@@ -102,7 +106,18 @@ struct SegmentSetupBatch {
   alignas(64) float rec[kRecordChunks][4 * kSegmentBatch];
 };
 
-/// The SIMD set-up of n <= kSegmentBatch segments (runtime dispatch).
+/// World to camera space of the batch's input in place (Camera::toCamera as it rounds), the smooth
+/// flags and the plane normals (runtime dispatch).
+void segmentToCamera(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
+
+/// Stage 1 (culling) over lanes [0, n) of camera-space input (issue 13, i13prep2): the lanes it
+/// decides (culled, outside, or for the exact path) get their status in `decided`; the others
+/// are compacted to lanes [0, m) (`lane`: their original lanes), m returned, so that segmentSetup
+/// runs on full vectors of them (runtime dispatch).
+int segmentCull(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
+
+/// The SIMD set-up of lanes [0, n) of camera-space input (segmentCull's survivors; runtime
+/// dispatch). The index of lane k's segment is first + lane[k].
 void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
 
 /// The records' images of lanes [0, n) of a batch segmentSetup has set up (rec; runtime dispatch).

@@ -280,7 +280,7 @@ TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
 }
 
 TEST(SegmentPrepare, BatchesTakeCameraSpaceAsToCameraRoundsIt) {
-  // segmentSetup's world -> camera transform rounds as Camera::toCamera and rotation() products
+  // segmentToCamera's world -> camera transform rounds as Camera::toCamera and rotation() products
   // do (the exact path's input: a short segment far away keeps its direction), bit for bit, on
   // every SIMD target the machine runs; the smooth flags and plane normals as stage 1 takes them
   const Vec3f eye(3.1f, -7.3f, 11.7f);
@@ -306,7 +306,7 @@ TEST(SegmentPrepare, BatchesTakeCameraSpaceAsToCameraRoundsIt) {
       b.m1x[j] = s.normal1.x(), b.m1y[j] = s.normal1.y(), b.m1z[j] = s.normal1.z();
       b.cr[j] = b.cg[j] = b.cb[j] = b.ca[j] = 1;
     }
-    detail::segmentSetup(F, b, n);
+    detail::segmentToCamera(F, b, n);
     for (int j = 0; j < n; ++j) {
       const Segment& s = segs[size_t(j)];
       const Vec3f c0 = cam.toCamera(s.p0), c1 = cam.toCamera(s.p1);
