@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstddef>
 #include <cmath>
 #include <cstring>
 #include <new>
@@ -131,6 +132,84 @@ const std::array<int32_t, kRecordSlots>& recordSources() {
     return t;
   }();
   return table;
+}
+
+// The batch's input from segments [0, n) (AoS -> SoA, world space) and the prefetches of the
+// input a batch ahead and of the record slots whose plane faces the eye (issue 13, i13prep2):
+// 16 segments at once, each 16-byte block of the Segment (p0x p0y p0z p1x | p1y p1z nx ny | nz
+// n0x n0y n0z | n1x n1y n1z - | r g b a | radius ...) of 4 x 4 segments transposed to 4 field
+// vectors. Only with 512-bit vectors; false elsewhere (the caller copies lane by lane).
+bool SegmentLoad(const SegmentSetupFrame& F, SegmentSetupBatch& B, const Segment* seg, int n, const PreparedSegment* out) {
+#if HWY_TARGET <= HWY_AVX3 && HWY_ARCH_X86
+  static_assert(sizeof(Segment) == 112 && alignof(Segment) % 16 == 0 && offsetof(Segment, p0) == 0 &&
+                    offsetof(Segment, p1) == 12 && offsetof(Segment, normal) == 24 && offsetof(Segment, normal0) == 36 &&
+                    offsetof(Segment, normal1) == 48 && offsetof(Segment, color) == 64 && offsetof(Segment, radius) == 80,
+                "the Segment's 16-byte blocks");
+  const float* const base = reinterpret_cast<const float*>(seg);
+  const __m512 eye[3] = {_mm512_set1_ps(F.view.eye[0]), _mm512_set1_ps(F.view.eye[1]), _mm512_set1_ps(F.view.eye[2])};
+  for (int i = 0; i < n; i += 16) {
+    {  // the input a batch ahead, every line it spans (a hint: an address past the array is harmless)
+      const uintptr_t next = reinterpret_cast<uintptr_t>(seg + i) + kSegmentBatch * sizeof(Segment);
+      for (size_t o = 0; o < 16 * sizeof(Segment); o += 64) __builtin_prefetch(reinterpret_cast<const void*>(next + o));
+    }
+    const float* at[16];  // lanes past n read segment 0 (their values are not used)
+    for (int j = 0; j < 16; ++j) at[j] = base + 28 * (i + j < n ? i + j : 0);
+    // block k of the 16 segments as 4 vectors of field 4 k .. 4 k + 3
+    auto block = [&](int k, __m512* f) {
+      __m512 t[4];
+      for (int q = 0; q < 4; ++q) {
+        __m512 v = _mm512_castps128_ps512(_mm_load_ps(at[q] + 4 * k));
+        v = _mm512_insertf32x4(v, _mm_load_ps(at[4 + q] + 4 * k), 1);
+        v = _mm512_insertf32x4(v, _mm_load_ps(at[8 + q] + 4 * k), 2);
+        t[q] = _mm512_insertf32x4(v, _mm_load_ps(at[12 + q] + 4 * k), 3);
+      }
+      const __m512d l01 = _mm512_castps_pd(_mm512_unpacklo_ps(t[0], t[1])), l23 = _mm512_castps_pd(_mm512_unpacklo_ps(t[2], t[3]));
+      const __m512d h01 = _mm512_castps_pd(_mm512_unpackhi_ps(t[0], t[1])), h23 = _mm512_castps_pd(_mm512_unpackhi_ps(t[2], t[3]));
+      f[0] = _mm512_castpd_ps(_mm512_unpacklo_pd(l01, l23)), f[1] = _mm512_castpd_ps(_mm512_unpackhi_pd(l01, l23));
+      f[2] = _mm512_castpd_ps(_mm512_unpacklo_pd(h01, h23)), f[3] = _mm512_castpd_ps(_mm512_unpackhi_pd(h01, h23));
+    };
+    __m512 f[4];
+    block(0, f);
+    _mm512_store_ps(B.p0x + i, f[0]), _mm512_store_ps(B.p0y + i, f[1]), _mm512_store_ps(B.p0z + i, f[2]);
+    _mm512_store_ps(B.p1x + i, f[3]);
+    const __m512 tx = _mm512_sub_ps(eye[0], f[0]), ty = _mm512_sub_ps(eye[1], f[1]), tz = _mm512_sub_ps(eye[2], f[2]);
+    block(1, f);
+    _mm512_store_ps(B.p1y + i, f[0]), _mm512_store_ps(B.p1z + i, f[1]), _mm512_store_ps(B.wx + i, f[2]);
+    _mm512_store_ps(B.wy + i, f[3]);
+    __m512 facing = _mm512_add_ps(_mm512_mul_ps(f[2], tx), _mm512_mul_ps(f[3], ty));
+    block(2, f);
+    _mm512_store_ps(B.wz + i, f[0]);
+    facing = _mm512_add_ps(facing, _mm512_mul_ps(f[0], tz));
+    if (F.smoothFrame) {
+      _mm512_store_ps(B.m0x + i, f[1]), _mm512_store_ps(B.m0y + i, f[2]), _mm512_store_ps(B.m0z + i, f[3]);
+      block(3, f);
+      _mm512_store_ps(B.m1x + i, f[0]), _mm512_store_ps(B.m1y + i, f[1]), _mm512_store_ps(B.m1z + i, f[2]);
+    }
+    if (F.modelColors) {
+      block(4, f);
+    } else {
+      for (int c = 0; c < 4; ++c) f[c] = _mm512_set1_ps(F.defaultColor[c]);
+    }
+    if (F.alphaOverride >= 0) f[3] = _mm512_set1_ps(F.alphaOverride);
+    _mm512_store_ps(B.cr + i, f[0]), _mm512_store_ps(B.cg + i, f[1]), _mm512_store_ps(B.cb + i, f[2]);
+    _mm512_store_ps(B.ca + i, f[3]);
+    block(5, f);
+    _mm512_store_ps(B.radius + i, f[0]);
+    // the lanes' record slots, all their lines, into L2 unless the plane clearly faces away (issue
+    // 13, i13segprep: the records stream through memory once per frame; fetched a few lanes
+    // before their writing, the writes stalled; from here the batch's set-up passes meanwhile)
+    unsigned bits = F.view.backfaceCulling ? unsigned(_mm512_cmp_ps_mask(facing, _mm512_setzero_ps(), _CMP_NLT_UQ)) : 0xFFFFu;
+    bits &= n - i >= 16 ? 0xFFFFu : (1u << (n - i)) - 1u;
+    for (; bits; bits &= bits - 1) {
+      const char* slot = reinterpret_cast<const char*>(out + i + std::countr_zero(bits));
+      for (size_t o = 0; o < sizeof(PreparedSegment); o += 64) __builtin_prefetch(slot + o, 0, 2);
+    }
+  }
+  return true;
+#else
+  (void)F, (void)B, (void)seg, (void)n, (void)out;
+  return false;
+#endif
 }
 
 // World to camera space in place over lanes [0, n) of the batch, rounded as the exact path's
@@ -591,11 +670,16 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace linesurf::detail {
+HWY_EXPORT(SegmentLoad);
 HWY_EXPORT(SegmentToCamera);
 HWY_EXPORT(SegmentCull);
 HWY_EXPORT(SegmentSetup);
 HWY_EXPORT(SegmentRecords);
 HWY_EXPORT(SegmentStations);
+bool segmentLoad(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, const Segment* segments, int n,
+                 const PreparedSegment* out) {
+  return HWY_DYNAMIC_DISPATCH(SegmentLoad)(frame, batch, segments, n, out);
+}
 void segmentToCamera(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
   HWY_DYNAMIC_DISPATCH(SegmentToCamera)(frame, batch, n);
 }
@@ -622,6 +706,9 @@ detail::SegmentSetupFrame segmentSetupFrame(const FrameContext& frame) {
   f.invF = 1 / f.view.f;
   f.reach = float(double(opt.cutoffRadius) * opt.reconstructionScale * detail::kMaxStretch);
   f.smoothFrame = frame.endpointNormals;
+  f.modelColors = frame.modelHasColors;
+  for (int c = 0; c < 4; ++c) f.defaultColor[c] = opt.defaultColor[c];
+  f.alphaOverride = opt.alphaOverride >= 0 ? opt.alphaOverride : -1.0f;
   f.perPixelLighting = opt.perPixelLighting;
   f.specularTable = frame.specularPow ? frame.specularPow->data() : nullptr;
   f.light = !opt.perPixelLighting && (f.specularTable || !(opt.material.specular > 0));
@@ -712,7 +799,8 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
   detail::SegmentStationJobs jobs;
   for (size_t base = 0; base < count; base += detail::kSegmentBatch) {
     const int n = int(std::min<size_t>(detail::kSegmentBatch, count - base));
-    for (int j = 0; j < n; ++j) {  // AoS -> SoA
+    const bool loaded = detail::segmentLoad(F, b, segments + first + base, n, out + base);
+    for (int j = 0; j < n && !loaded; ++j) {  // AoS -> SoA
       const Segment& s = segments[first + base + size_t(j)];
       // the input a batch ahead, every line it spans (a hint: an address past the array is harmless)
       const uintptr_t next = reinterpret_cast<uintptr_t>(&s) + detail::kSegmentBatch * sizeof(Segment);

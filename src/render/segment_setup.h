@@ -42,6 +42,11 @@ struct SegmentSetupFrame {
   float invF = 1;     ///< 1 / focal length
   float reach = 0;    ///< cutoff reconstructionScale kMaxStretch: the widest kernel per unit radius
   bool smoothFrame = false;  ///< the model's segments carry endpoint normals
+  /// FrameContext::primitiveColor: the segment's colour (modelColors) else defaultColor, its
+  /// alpha alphaOverride where that is >= 0
+  bool modelColors = true;
+  float defaultColor[4] = {1, 1, 1, 1};
+  float alphaOverride = -1;
   /// Phong factors in SIMD (FrameContext::shade with its specular table); with light false and
   /// perPixelLighting false the batch calls FrameContext::shade per segment instead.
   bool light = false, perPixelLighting = false;
@@ -105,6 +110,12 @@ struct SegmentSetupBatch {
   /// the records' images: chunk c of lane j at rec[c][4 j .. 4 j + 4) (segmentRecords)
   alignas(64) float rec[kRecordChunks][4 * kSegmentBatch];
 };
+
+/// The batch's input (world space) from segments [0, n), and the prefetches of the input a batch
+/// ahead and of the records out[0, n) whose plane faces the eye, with 512-bit vectors (runtime
+/// dispatch); false on other targets, where the caller copies lane by lane.
+bool segmentLoad(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, const Segment* segments, int n,
+                 const PreparedSegment* out);
 
 /// World to camera space of the batch's input in place (Camera::toCamera as it rounds), the smooth
 /// flags and the plane normals (runtime dispatch).
