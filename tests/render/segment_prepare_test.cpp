@@ -279,6 +279,51 @@ TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
   EXPECT_EQ(st[6], PrimitiveStatus::Drawn);
 }
 
+TEST(SegmentPrepare, BatchInputIsTheSegmentsFields) {
+  // segmentLoad (512-bit vectors: 4 x 4 Segment blocks transposed) gives the batch the fields the
+  // lane-by-lane copy gives it, bit for bit, the colours as FrameContext::primitiveColor, for a
+  // batch not a multiple of the vector length; on targets without it, it declines
+  const Vec3f eye(3.1f, -7.3f, 11.7f);
+  const Camera cam = Camera::lookAt(eye, Vec3f(0.2f, 0.1f, -0.3f), Vec3f(0, 1, 0), 40, 320, 240);
+  std::vector<Segment> segs = randomSegments(2 * detail::kSegmentBatch, eye, true, 13);
+  for (size_t j = 0; j < segs.size(); ++j) segs[j].color = Color(0.01f * float(j), 0.5f, 1 - 0.003f * float(j), 0.25f + 0.001f * float(j));
+  std::vector<PreparedSegment> out(segs.size());
+  int loaded = 0;
+  for (int variant = 0; variant < 3; ++variant) {
+    RenderOptions o;
+    o.defaultColor = Color(0.3f, 0.6f, 0.9f, 0.8f);
+    if (variant == 2) o.alphaOverride = 0.4f;
+    FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1.5f}, /*modelHasColors=*/variant != 1);
+    frame.endpointNormals = variant != 2;
+    const detail::SegmentSetupFrame F = segmentSetupFrame(frame);
+    for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+      hwy::SetSupportedTargetsForTest(target);
+      for (int n : {detail::kSegmentBatch, 37}) {
+        detail::SegmentSetupBatch b;
+        const Segment* in = segs.data() + 5;
+        if (!detail::segmentLoad(F, b, in, n, out.data())) continue;
+        ++loaded;
+        for (int j = 0; j < n; ++j) {
+          const Segment& s = in[j];
+          const Color c = frame.primitiveColor(s.color);
+          const float want[] = {s.p0.x(), s.p0.y(), s.p0.z(), s.p1.x(), s.p1.y(), s.p1.z(), s.normal.x(), s.normal.y(),
+                                s.normal.z(), s.radius, c.x(), c.y(), c.z(), c.w()};
+          const float got[] = {b.p0x[j], b.p0y[j], b.p0z[j], b.p1x[j], b.p1y[j], b.p1z[j], b.wx[j], b.wy[j],
+                               b.wz[j], b.radius[j], b.cr[j], b.cg[j], b.cb[j], b.ca[j]};
+          for (int k = 0; k < 14; ++k) EXPECT_EQ(got[k], want[k]) << "field " << k << " lane " << j << " variant " << variant;
+          if (frame.endpointNormals) {
+            const float wantN[] = {s.normal0.x(), s.normal0.y(), s.normal0.z(), s.normal1.x(), s.normal1.y(), s.normal1.z()};
+            const float gotN[] = {b.m0x[j], b.m0y[j], b.m0z[j], b.m1x[j], b.m1y[j], b.m1z[j]};
+            for (int k = 0; k < 6; ++k) EXPECT_EQ(gotN[k], wantN[k]) << "normal field " << k << " lane " << j;
+          }
+        }
+      }
+    }
+    hwy::SetSupportedTargetsForTest(0);
+  }
+  if (hwy::SupportedTargets() & HWY_AVX3) EXPECT_GT(loaded, 0);  // the AVX-512 code ran
+}
+
 TEST(SegmentPrepare, BatchesTakeCameraSpaceAsToCameraRoundsIt) {
   // segmentToCamera's world -> camera transform rounds as Camera::toCamera and rotation() products
   // do (the exact path's input: a short segment far away keeps its direction), bit for bit, on
