@@ -22,6 +22,11 @@ namespace linesurf::detail {
 inline constexpr int kFlagSlot = int((offsetof(PreparedSegment, smooth) - kRecordBegin) / 4);
 inline constexpr int kSmoothShift = int(8 * ((offsetof(PreparedSegment, smooth) - kRecordBegin) % 4));
 inline constexpr int kShadeShift = int(8 * ((offsetof(PreparedSegment, shade) - kRecordBegin) % 4));
+// The word holding `stationCount` (its first byte; the others padding, zero)
+inline constexpr int kStationCountSlot = int((offsetof(PreparedSegment, stationCount) - kRecordBegin) / 4);
+static_assert((offsetof(PreparedSegment, stationCount) - kRecordBegin) % 4 == 0 && kStationCountSlot != kFlagSlot &&
+                  offsetof(PreparedSegment, raster) >= offsetof(PreparedSegment, stationCount) + 4,
+              "stationCount: the first byte of a word of its own");
 static_assert(int((offsetof(PreparedSegment, shade) - kRecordBegin) / 4) == kFlagSlot && sizeof(SegmentShade) == 1 &&
                   sizeof(bool) == 1 && std::endian::native == std::endian::little,
               "smooth and shade: bytes of one word of the record image");
@@ -98,6 +103,7 @@ const std::array<int32_t, kRecordSlots>& recordSources() {
     put(b + offsetof(PixelRect, x1), offsetof(B, x1)), put(b + offsetof(PixelRect, y1), offsetof(B, y1));
     put(offsetof(P, index), offsetof(B, index));
     put(kRecordBegin + 4 * size_t(kFlagSlot), offsetof(B, flags));
+    put(kRecordBegin + 4 * size_t(kStationCountSlot), offsetof(B, stationCount));
     auto affine = [&](size_t at, size_t x, size_t y, size_t c) {
       put(at + offsetof(Affine2, dx), x), put(at + offsetof(Affine2, dy), y), put(at + offsetof(Affine2, c), c);
     };
@@ -606,6 +612,11 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       const uint32_t keep = F.record.word[kFlagSlot] & ~((0xFFu << kSmoothShift) | (0xFFu << kShadeShift));
       const VU flags = hn::Or(hn::Set(du, keep), hn::Or(hn::ShiftLeftSame(smooth, kSmoothShift), hn::ShiftLeftSame(shade, kShadeShift)));
       hn::StoreU(flags, du, B.flags + i);
+      // stationCount (untexturedStations): 0 where lighting is deferred, kInlineStations for two
+      // intervals, else -1 (in SegmentExtra)
+      const auto inl = hn::And(turning, hn::Or(hn::Eq(stations, zero), hn::Eq(stations, S(float(kInlineStations - 1)))));
+      const VF count = hn::IfThenElse(inl, hn::IfThenElseZero(hn::Gt(stations, zero), S(float(kInlineStations))), S(-1.0f));
+      hn::StoreU(hn::And(hn::BitCast(du, hn::ConvertTo(di, count)), hn::Set(du, 0xFFu)), du, B.stationCount + i);
     }
     const VF status = hn::IfThenElse(empty, S(4.0f), hn::IfThenElseZero(cut, S(3.0f)));
     const VF two = S(2.0f);
@@ -744,8 +755,7 @@ namespace {
 // the ends from the batch's Phong factors, the stations between them queued for
 // segmentStations (F.light); else every station by FrameContext::shade.
 void stationColours(const detail::SegmentSetupBatch& b, int j, const FrameContext& frame,
-                    const detail::SegmentSetupFrame& F, int stations, SegmentExtra& x, detail::SegmentStationJobs& jobs) {
-  float* colour = x.colour.data();
+                    const detail::SegmentSetupFrame& F, int stations, float* colour, detail::SegmentStationJobs& jobs) {
   const int n = stations + 1;
   if (F.light) {
     for (int c = 0; c < 3; ++c) {
@@ -857,6 +867,7 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       // the SegmentExtra of each turning lane's slot (its station colours below), where the slot
       // has one from an earlier frame: fetched while the records' images are made
       if (!(b.status[k] == 0.0f || b.status[k] == 3.0f) || !(b.stations[k] >= 0)) continue;  // drawn lanes only
+      if (stationsInline(int(b.stations[k]))) continue;  // their stations in the record
       if (const SegmentExtra* x = out[base + size_t(b.lane[k])].extra.get()) {
         const char* c = reinterpret_cast<const char*>(&x->colour);
         __builtin_prefetch(c, 1);
@@ -883,10 +894,10 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       std::memcpy(dst + 8, b.rec[0] + 4 * k + 2, 8);
       for (int c = 1; c < detail::kRecordChunks; ++c) std::memcpy(dst + 16 * c, b.rec[c] + 4 * k, 16);
       const int stations = int(b.stations[k]);
-      if (stations >= 0) {  // turning: shade Stations (SegmentExtra), lit at the stations
+      if (stations >= 0) {  // turning: shade Stations (in the record or SegmentExtra), lit at the stations
         if (jobs.count + stations > detail::kStationJobs) flushStations(F, b, jobs);
-        SegmentExtra& x = stationsExtra(rec, segments[index], false, stations);
-        if (stations > 0) stationColours(b, k, frame, F, stations, x, jobs);
+        float* colour = untexturedStations(rec, segments[index], stations);
+        if (stations > 0) stationColours(b, k, frame, F, stations, colour, jobs);
       } else if (!F.light && !F.perPixelLighting) {  // Gouraud between the ends, lit per lane
         const Vec3f albedo(b.cr[k], b.cg[k], b.cb[k]);
         const Vec3f n1 = rec.n0 + rec.dn;

@@ -104,6 +104,7 @@ struct SegmentSetupBatch {
   alignas(64) float dcx[kSegmentBatch], dcy[kSegmentBatch], dcz[kSegmentBatch];
   alignas(64) float dnx[kSegmentBatch], dny[kSegmentBatch], dnz[kSegmentBatch];
   alignas(64) uint32_t index[kSegmentBatch], flags[kSegmentBatch];
+  alignas(64) uint32_t stationCount[kSegmentBatch];  ///< the word holding PreparedSegment::stationCount
   /// Gouraud intervals of a turning smooth lane (shade Stations): > 0, or 0 where lighting is
   /// deferred; -1 for a lane that does not turn
   alignas(64) float stations[kSegmentBatch];

@@ -306,15 +306,18 @@ void shading(const Segment& seg, const Strip& st, int K, const FrameContext& fra
     return;
   }
   out.shade = SegmentShade::Stations;
+  if (!textured) {  // the lit colours themselves
+    float* colour = untexturedStations(out, seg, S);
+    for (int k = 0; S > 0 && k <= S; ++k) {
+      const Vec3f c = frame.shade(albedo, normalAt(float(k) / float(S)), pointAt(k));
+      for (int ch = 0; ch < 3; ++ch) colour[ch * (S + 1) + k] = c[ch];
+    }
+    return;
+  }
   SegmentExtra& x = stationsExtra(out, seg, textured, S);
   for (int k = 0; S > 0 && k <= S; ++k) {
     const Vec3f nf = normalAt(float(k) / float(S));
     const Vec3f p = pointAt(k);
-    if (!textured) {  // the lit colour itself
-      const Vec3f c = frame.shade(albedo, nf, p);
-      for (int ch = 0; ch < 3; ++ch) x.colour[size_t(ch * x.stations + k)] = c[ch];
-      continue;
-    }
     x.specular.push_back(frame.shade(Vec3f::Zero(), nf, p));
     x.diffuse.push_back(frame.shade(Vec3f::Ones(), nf, p) - x.specular.back());
   }
@@ -327,6 +330,7 @@ PrimitiveStatus prepareSegment(const Segment& seg, uint32_t index, const FrameCo
   out.bounds = {};
   out.fallback = false;
   out.smooth = false;
+  out.stationCount = -1;
   resetExtra(out.extra);
   Strip st;
   const PrimitiveStatus culled = stripFrame(seg, frame, st);
@@ -572,21 +576,18 @@ struct FragmentAttributes {
   }
   // several lighting stations or a texture (§5.2.4: uv interpolated between the endpoints)
   void stations(float u) {
-    const SegmentExtra& x = *sp.extra;
     Vec3f c(sp.attr[Z3Tile::kR], sp.attr[Z3Tile::kG], sp.attr[Z3Tile::kB]);
+    if (sp.stationCount >= 0) {  // untextured, the stations in the record
+      if (sp.stationCount >= 2) c = piecewise(sp.stationColour, sp.stationCount, u);
+      return stationsDone(c, u);
+    }
+    const SegmentExtra& x = *sp.extra;
     if (x.textured) {
       const Vec2f uv = x.uv0 + u * (x.uv1 - x.uv0);
       c = frame.texture->sampleBilinear(uv.x(), uv.y()).head<3>();
     }
     if (!x.colour.empty()) {  // untextured: the stations' colours, piecewise linear
-      const int n = x.stations;
-      const float fs = u * float(n - 1);
-      const int k = std::min(int(fs), n - 2);
-      const float v = fs - float(k);
-      for (int ch = 0; ch < 3; ++ch) {
-        const float* cc = x.colour.data() + ch * n;
-        c[ch] = cc[k] + v * (cc[k + 1] - cc[k]);
-      }
+      c = piecewise(x.colour.data(), x.stations, u);
     } else if (!x.diffuse.empty()) {
       const int n = int(x.diffuse.size());
       const float fs = u * float(n - 1);
@@ -596,6 +597,21 @@ struct FragmentAttributes {
       const Vec3f spec = (1 - v) * x.specular[k] + v * x.specular[k + 1];
       c = c.cwiseProduct(dif) + spec;
     }
+    stationsDone(c, u);
+  }
+  // the colour of n stations (channel ch of station k at colour[ch * n + k]) at u, piecewise linear
+  static Vec3f piecewise(const float* colour, int n, float u) {
+    const float fs = u * float(n - 1);
+    const int k = std::min(int(fs), n - 2);
+    const float v = fs - float(k);
+    Vec3f c;
+    for (int ch = 0; ch < 3; ++ch) {
+      const float* cc = colour + ch * n;
+      c[ch] = cc[k] + v * (cc[k + 1] - cc[k]);
+    }
+    return c;
+  }
+  void stationsDone(const Vec3f& c, float u) {
     attr[Z3Tile::kR] = c.x(), attr[Z3Tile::kG] = c.y(), attr[Z3Tile::kB] = c.z();
     if (sp.smooth) {
       const Vec3f m = sp.n0 + u * sp.dn;
@@ -606,7 +622,9 @@ struct FragmentAttributes {
 };
 
 // Whether the SIMD rows shade the segment's fragments (all but textured ones).
-bool shadedInRows(const PreparedSegment& sp) { return sp.shade != SegmentShade::Stations || !sp.extra->textured; }
+bool shadedInRows(const PreparedSegment& sp) {
+  return sp.shade != SegmentShade::Stations || sp.stationCount >= 0 || !sp.extra->textured;
+}
 
 // The rows' shading of an untextured segment (detail::SegmentShadeRows).
 detail::SegmentShadeRows shadeRows(const PreparedSegment& sp) {
@@ -617,7 +635,10 @@ detail::SegmentShadeRows shadeRows(const PreparedSegment& sp) {
   shade.dn2 = sp.dn.squaredNorm();
   shade.smooth = sp.smooth && (sp.shade == SegmentShade::Smooth || stations);
   shade.exactNormal = stations;
-  if (stations && sp.extra->stations >= 2) {
+  if (stations && sp.stationCount >= 2) {  // in the record
+    shade.stations = sp.stationCount;
+    shade.stationColour = sp.stationColour;
+  } else if (stations && sp.stationCount < 0 && sp.extra->stations >= 2) {
     shade.stations = sp.extra->stations;
     shade.stationColour = sp.extra->colour.data();
   }

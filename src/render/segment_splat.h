@@ -122,6 +122,9 @@ enum class SegmentShade : uint8_t {
   Stations,  ///< several stations (SIMD rows, untextured) or a texture (per fragment): SegmentExtra
 };
 
+/// The most lighting stations a record holds itself (PreparedSegment::stationColour).
+inline constexpr int kInlineStations = 3;
+
 /// The record is aligned to cache lines and ordered hot first (issue 13, i13hot): what the rows of
 /// the common case read (extra, bounds, flags, raster, attr, dc, n0, dn) fills its first
 /// kSegmentHotBytes; screenQuad (only the box walk reads it) comes last. Stage 3 prefetches only
@@ -140,6 +143,9 @@ struct alignas(64) PreparedSegment {
   bool useSpans = false; ///< screenQuad holds the projected footprint box (not depth-clipped)
   bool smooth = false;   ///< shading normals interpolated between the endpoints
   SegmentShade shade = SegmentShade::Constant;
+  /// shade Stations, untextured (issue 13, i13prep2): how many stations' colours stationColour
+  /// holds, 0 for none (lighting deferred); -1: the stations are in extra
+  int8_t stationCount = -1;
   /// The strip's plane, footprint box, first sub-segment and z thresholds as per-pixel
   /// constants (what the SIMD rows evaluate; the scalar paths intersect the plane with it too).
   detail::SegmentRaster raster;
@@ -150,6 +156,9 @@ struct alignas(64) PreparedSegment {
   /// The footprint box projected to the screen (pixels): rasterisation visits only each row's
   /// span inside it (the box walk; cold: the common case's tight spans do not read it).
   Vec2f screenQuad[4];
+  /// shade Stations with stationCount > 0: channel c of station k at [c * stationCount + k]
+  /// (most turning segments need 3 stations: their colours here, no SegmentExtra to touch)
+  float stationColour[3 * kInlineStations];
 
   /// Number of ScreenSpace sub-segments (K > 1: their pieces in extra).
   int pieceCount() const { return raster.pieceCount; }
@@ -173,12 +182,29 @@ inline int stationIntervals(float turn, int minIntervals) {
 /// deferred, no stations); the untextured colours are sized, not filled.
 inline SegmentExtra& stationsExtra(PreparedSegment& out, const Segment& seg, bool textured, int intervals) {
   SegmentExtra& x = extraOf(out);
+  out.stationCount = -1;
   x.textured = textured;
   x.uv0 = seg.uv0;
   x.uv1 = seg.uv1;
   x.stations = intervals > 0 ? intervals + 1 : 0;
   if (!textured) x.colour.resize(3 * size_t(x.stations));
   return x;
+}
+
+/// Whether an untextured segment with `intervals` Gouraud intervals (0: lighting deferred) keeps
+/// its stations in the record (PreparedSegment::stationColour) rather than in extra.
+inline bool stationsInline(int intervals) { return intervals == 0 || intervals + 1 == kInlineStations; }
+
+/// Shade Stations of an untextured segment with `intervals` Gouraud intervals (0: lighting
+/// deferred): where its colours go (channel c of station k at [c * (intervals + 1) + k]; sized,
+/// not filled), in the record when they fit (stationsInline), else in the slot's SegmentExtra.
+/// Shared by the exact path and the SIMD batches, which must agree.
+inline float* untexturedStations(PreparedSegment& out, const Segment& seg, int intervals) {
+  if (stationsInline(intervals)) {
+    out.stationCount = int8_t(intervals > 0 ? intervals + 1 : 0);
+    return out.stationColour;
+  }
+  return stationsExtra(out, seg, false, intervals).colour.data();
 }
 
 /// The bytes of a PreparedSegment the common case's rows read (its first lines).

@@ -119,11 +119,19 @@ std::string agree(const PreparedSegment& f, const PreparedSegment& x, const Vec2
   if (x.smooth)
     for (int c = 0; c < 3; ++c) rel("n0", f.n0[c], x.n0[c], 1, 1e-4f), rel("dn", f.dn[c], x.dn[c], 1, 1e-4f);
   if (x.shade == SegmentShade::Stations && f.shade == SegmentShade::Stations) {  // the lighting stations
-    if (!f.extra || !x.extra || f.extra->textured || f.extra->stations != x.extra->stations ||
-        f.extra->colour.size() != x.extra->colour.size())
+    // in the record (stationCount >= 0: none, or kInlineStations) or in extra, the same in both
+    auto stations = [](const PreparedSegment& s, int& count, const float*& colour) {
+      if (s.stationCount >= 0) return count = s.stationCount, colour = s.stationColour, true;
+      if (!s.extra || s.extra->textured || s.extra->colour.size() != 3 * size_t(s.extra->stations)) return false;
+      return count = s.extra->stations, colour = s.extra->colour.data(), true;
+    };
+    int nf = -2, nx = -2;
+    const float *cf = nullptr, *cx = nullptr;
+    if (!stations(f, nf, cf) || !stations(x, nx, cx) || nf != nx || (f.stationCount >= 0) != (x.stationCount >= 0) ||
+        (x.stationCount >= 0) != (nx == 0 || nx == kInlineStations))
       err += "stations; ";
     else
-      for (size_t k = 0; k < x.extra->colour.size(); ++k) rel("station", f.extra->colour[k], x.extra->colour[k], 1, 2e-3f);
+      for (int k = 0; k < 3 * nx; ++k) rel("station", cf[k], cx[k], 1, 2e-3f);
   }
   return err;
 }
@@ -321,7 +329,9 @@ TEST(SegmentPrepare, BatchInputIsTheSegmentsFields) {
     }
     hwy::SetSupportedTargetsForTest(0);
   }
-  if (hwy::SupportedTargets() & HWY_AVX3) EXPECT_GT(loaded, 0);  // the AVX-512 code ran
+  if (hwy::SupportedTargets() & HWY_AVX3) {
+    EXPECT_GT(loaded, 0);  // the AVX-512 code ran
+  }
 }
 
 TEST(SegmentPrepare, BatchesTakeCameraSpaceAsToCameraRoundsIt) {
