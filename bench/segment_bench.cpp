@@ -11,7 +11,7 @@
 //    models that contour extraction (§3.3, Table 5) cuts from a shared mesh with its defaults, at
 //    512^2 on 2 threads, 8 views; counters: the stages' milliseconds per frame (prepare: wall;
 //    raster, resolve: CPU of all threads) and fragments.
-//  - BM_ContourTileRaster/<0|1>: the bunny line model's rasterisation alone, ns per (segment, tile).
+//  - BM_ContourTileRaster/<0|1>/<mesh>: a contour line model's rasterisation alone, ns per (segment, tile).
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -366,15 +366,17 @@ BENCHMARK(BM_ContourFrame)
 
 }  // namespace
 namespace {
-// The rasterisation of the bunny's contour line model alone, one thread, one view (512^2, 64-pixel
-// tiles, the renderer's batches of kRasterBatch): every tile of the frame in turn (arg 0) or the
-// busiest tile 64 times (arg 1: the records in the cache); counters: ns per (segment, tile) pair
-// and pairs per frame. What a short segment's fixed cost is (issue 13, i13segraster); under
+// The rasterisation of a contour line model alone (range(1): kMeshes, bunny, horse, al, buddha),
+// one thread, one view (512^2, 64-pixel tiles, the renderer's batches of kRasterBatch, but not its
+// record prefetches): every tile of the frame in turn (arg 0) or the busiest tile 64 times (arg 1:
+// fewer records to fetch); counters: ns per (segment, tile) pair, pairs per frame, pixels walked
+// and row spans per pair, the share of pairs with several pieces and with lighting stations.
+// What a short segment's fixed cost is (issue 13, i13segraster, i13raster2); under
 // `valgrind --tool=callgrind --toggle-collect='linesurf::rasterizeSegments*'` it counts
 // instructions per pair (AVX2 there: valgrind runs no AVX-512).
 void BM_ContourTileRaster(benchmark::State& state) {
   std::string error;
-  const HybridModel* m = contourModel(0, 1, error);
+  const HybridModel* m = contourModel(int(state.range(1)), 1, error);
   if (!m) return state.SkipWithError(error.c_str());
   RenderOptions o;
   o.alphaBuffer = true;
@@ -412,6 +414,21 @@ void BM_ContourTileRaster(benchmark::State& state) {
   }
   state.counters["ns/pair"] = benchmark::Counter(pairs, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["pairs"] = pairs / double(state.iterations());
+  // the pairs' shape: pixels walked and row spans per pair, the share of multi-piece and
+  // Stations segments (over every tile once)
+  double walked = 0, rows = 0, n = 0, multi = 0, stations = 0;
+  for (int t = 0; t < 64; ++t) {
+    const PixelRect rect{(t % 8) * T, (t / 8) * T, (t % 8 + 1) * T, (t / 8 + 1) * T};
+    for (const PreparedSegment* sp : bins[size_t(t)]) {
+      for (const detail::RowSpan& s : segmentRowSpans(*sp, rect, true)) walked += s.x1 - s.x0, rows += 1;
+      n += 1, multi += sp->pieceCount() > 1, stations += sp->shade == SegmentShade::Stations;
+    }
+  }
+  state.counters["px/pair"] = walked / std::max(1.0, n);
+  state.counters["spans/pair"] = rows / std::max(1.0, n);
+  state.counters["multi"] = multi / std::max(1.0, n);
+  state.counters["stations"] = stations / std::max(1.0, n);
+  state.SetLabel(std::string(kMeshes[state.range(1)]) + " contour lines simd=" + renderSimdTarget());
 }
 }  // namespace
-BENCHMARK(BM_ContourTileRaster)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ContourTileRaster)->ArgsProduct({{0, 1}, {0, 2, 4, 5}})->Unit(benchmark::kMillisecond);
