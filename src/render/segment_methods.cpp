@@ -402,8 +402,9 @@ float screenSpaceWeight(const SegmentPiece* pieces, int K, float pieceInvLength,
     // (tau - tau*) times it
     // exp(-qmin/2) exp(-u^2) = exp(-q/2) with q = qmin + 2 u^2 in [0, R^2]: table lookups
     const float i0 = p.erfScale * (fastErf(u1) - fastErf(u0));
-    float sum = (p.scale0 + p.slope * tauStar) * i0 * gaussHalf(qmin);
-    if (p.slope != 0) sum += p.slope * p.invM00 * (gaussHalf(qmin + 2 * u0 * u0) - gaussHalf(qmin + 2 * u1 * u1));
+    const detail::PieceScale sc = detail::pieceScale(p.scale0, p.slope, len);  // as the SIMD kernel
+    float sum = (sc.scale0 + sc.slope * tauStar) * i0 * gaussHalf(qmin);
+    if (sc.slope != 0) sum += sc.slope * p.invM00 * (gaussHalf(qmin + 2 * u0 * u0) - gaussHalf(qmin + 2 * u1 * u1));
     w += sum;
   }
   return w;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <new>
 
 #include "detail/splat_math.h"
@@ -621,28 +622,32 @@ struct FragmentAttributes {
   }
 };
 
-// Whether the SIMD rows shade the segment's fragments (all but textured ones).
-bool shadedInRows(const PreparedSegment& sp) {
-  return sp.shade != SegmentShade::Stations || sp.stationCount >= 0 || !sp.extra->textured;
+// Whether the SIMD rows shade the segment's fragments (all but textured ones). A segment's
+// stations are textured exactly when the frame is (prepareSegment; the SIMD batches take only
+// untextured frames), so the record's SegmentExtra (a cache miss) is not read for it.
+bool shadedInRows(const PreparedSegment& sp, const FrameContext& frame) {
+  return sp.shade != SegmentShade::Stations || !frame.texture;
 }
 
-// The rows' shading of an untextured segment (detail::SegmentShadeRows).
-detail::SegmentShadeRows shadeRows(const PreparedSegment& sp) {
+// The rows' shading of an untextured segment (detail::SegmentShadeRows), written field by field
+// into `shade` (a whole struct built on the stack and copied cost store-forwarding stalls per
+// segment: issue 13, i13raster2).
+void shadeRows(const PreparedSegment& sp, detail::SegmentShadeRows& shade) {
   const bool stations = sp.shade == SegmentShade::Stations;
-  detail::SegmentShadeRows shade;
   shade.attr = sp.attr;
   shade.dc = sp.dc.data(), shade.n0 = sp.n0.data(), shade.dn = sp.dn.data();
   shade.dn2 = sp.dn.squaredNorm();
   shade.smooth = sp.smooth && (sp.shade == SegmentShade::Smooth || stations);
   shade.exactNormal = stations;
+  shade.stations = 0, shade.stationColour = nullptr, shade.stationPadded = false;
   if (stations && sp.stationCount >= 2) {  // in the record
     shade.stations = sp.stationCount;
     shade.stationColour = sp.stationColour;
-  } else if (stations && sp.stationCount < 0 && sp.extra->stations >= 2) {
+  } else if (stations && sp.stationCount < 0 && sp.extra->stations >= 2) {  // padded (SegmentExtra::colour)
+    shade.stationPadded = true;
     shade.stations = sp.extra->stations;
     shade.stationColour = sp.extra->colour.data();
   }
-  return shade;
 }
 
 // ScreenSpace segments: the closed form evaluated in SIMD over the rows' spans of the cutoff
@@ -656,8 +661,9 @@ void rasterizeRows(const PreparedSegment& sp, const SplatContext& ctx, const Pix
   detail::RowSpan spans[detail::kBlock];
   int spanCount = 0;
   uint64_t inserted = 0;
-  if (shadedInRows(sp)) {  // straight into the Z^3 tile, attributes in SIMD
-    const detail::SegmentShadeRows shade = shadeRows(sp);
+  if (shadedInRows(sp, ctx.frame)) {  // straight into the Z^3 tile, attributes in SIMD
+    detail::SegmentShadeRows shade;
+    shadeRows(sp, shade);
     if (given && givenCount <= detail::kBlock) {  // the batch's spans as they are (no copy)
       if (givenCount > 0) inserted = detail::segmentRowsZ3(sp.raster, shade, given, givenCount, ctx.tile);
       ctx.tile.addFragments(inserted);
@@ -762,6 +768,15 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
     slot[i] = m;
     batch[m] = &sp.raster;
     rects[m++] = r;
+    if (sp.shade == SegmentShade::Stations) {  // its stations, read after the spans
+      if (sp.stationCount >= 0) {
+        __builtin_prefetch(sp.stationColour);  // (the record's cold line)
+      } else {  // the SegmentExtra's fields (its colours when the item is built)
+        const char* x = reinterpret_cast<const char*>(sp.extra.get());
+        __builtin_prefetch(x + offsetof(SegmentExtra, colour));
+        __builtin_prefetch(x + offsetof(SegmentExtra, stations));
+      }
+    }
   }
   thread_local std::vector<detail::RowSpan> spans;
   if (m > 0) {
@@ -778,8 +793,18 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
   for (int i = 0; i < n; ++i) {
     const int k = slot[i];
     const PreparedSegment& sp = *segs[i];
-    if (k >= 0 && counts[k] >= 0 && shadedInRows(sp)) {
-      if (counts[k] > 0) items[runLength++] = {&sp.raster, shadeRows(sp), spans.data() + size_t(k) * size_t(stride), counts[k]};
+    if (k >= 0 && counts[k] >= 0 && shadedInRows(sp, ctx.frame)) {
+      if (counts[k] > 0) {
+        detail::SegmentRowsItem& item = items[runLength++];
+        item.raster = &sp.raster;
+        shadeRows(sp, item.shade);
+        item.spans = spans.data() + size_t(k) * size_t(stride);
+        item.count = counts[k];
+        if (item.shade.stationPadded) {  // read by the rows
+          __builtin_prefetch(item.shade.stationColour);
+          __builtin_prefetch(item.shade.stationColour + 3 * item.shade.stations - 1);
+        }
+      }
       continue;
     }
     flush();

@@ -81,7 +81,8 @@ struct SegmentExtra {
   /// untextured; textured, colour = albedo * diffuse + specular with the albedo from the
   /// texture (§5.2.4: uv interpolated between the endpoints).
   std::vector<Vec3f> diffuse, specular;
-  /// untextured: the lit colour of station k, channel c at [c * stations + k]
+  /// untextured: the lit colour of station k, channel c at [c * stations + k], then
+  /// detail::kMaxLanes floats of padding (the SIMD rows load whole vectors of a channel)
   std::vector<float> colour;
   int stations = 0;
   bool textured = false;
@@ -187,7 +188,7 @@ inline SegmentExtra& stationsExtra(PreparedSegment& out, const Segment& seg, boo
   x.uv0 = seg.uv0;
   x.uv1 = seg.uv1;
   x.stations = intervals > 0 ? intervals + 1 : 0;
-  if (!textured) x.colour.resize(3 * size_t(x.stations));
+  if (!textured) x.colour.resize(3 * size_t(x.stations) + detail::kMaxLanes);  // padded: the rows load vectors
   return x;
 }
 

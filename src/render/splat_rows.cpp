@@ -240,8 +240,9 @@ struct SegmentKernel {
   Piece first;
   static Piece piece(D d, float pa0, float len, float skew, float across, float invM00, float k, float erfScale,
                      float scale0, float slope) {
+    const PieceScale s = pieceScale(scale0, slope, len);  // flat where the scale barely changes
     return {hn::Set(d, pa0), hn::Set(d, len), hn::Set(d, skew), hn::Set(d, across), hn::Set(d, invM00), hn::Set(d, k),
-            hn::Set(d, erfScale), hn::Set(d, scale0), hn::Set(d, slope), slope == 0};
+            hn::Set(d, erfScale), hn::Set(d, s.scale0), hn::Set(d, s.slope), s.slope == 0};
   }
   static Piece piece(D d, const SegmentPiece& p) {
     return piece(d, p.a0, p.a1 - p.a0, p.skew, p.across, p.invM00, p.k, p.erfScale, p.scale0, p.slope);
@@ -931,6 +932,30 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   VF attr[3], dc[3];
   for (int k = 0; k < 3; ++k) attr[k] = hn::Set(d, A.attr[k]), dc[k] = hn::Set(d, A.dc[k]);
   const hn::RebindToSigned<DF> di;
+  // at most L stations: their colours c_k and steps c_(k+1) - c_k as lane tables, looked up by a
+  // lane permutation (one instruction) instead of gathered from memory (six per vector; the
+  // same values to the bit)
+  const int stations = A.stations;
+  const bool stationTable = stations >= 2 && stations <= L;
+  VF st0[3], stD[3];
+  if (stationTable && A.stationPadded) {  // (lanes from `stations` on: the next channel or padding, never looked up)
+    for (int c = 0; c < 3; ++c) {
+      const float* sc = A.stationColour + c * stations;
+      st0[c] = hn::LoadU(d, sc), stD[c] = hn::Sub(hn::LoadU(d, sc + 1), st0[c]);
+    }
+  } else if (stationTable) {  // the record's own (3) stations: the tables from broadcasts
+    const auto laneI = hn::Iota(di, 0);
+    for (int c = 0; c < 3; ++c) {
+      const float* sc = A.stationColour + c * stations;
+      VF t0 = hn::Set(d, sc[0]), t1 = hn::Set(d, sc[1]);
+      for (int k = 1; k < stations; ++k) {
+        const auto at = hn::RebindMask(d, hn::Eq(laneI, hn::Set(di, k)));
+        t0 = hn::IfThenElse(at, hn::Set(d, sc[k]), t0);
+        if (k + 1 < stations) t1 = hn::IfThenElse(at, hn::Set(d, sc[k + 1]), t1);
+      }
+      st0[c] = t0, stD[c] = hn::Sub(t1, t0);
+    }
+  }
   // the chunk's pixels (centres) and pass 1's results, kMaxLanes of padding for whole vectors
   constexpr int kPad = kSegChunk + kMaxLanes;
   HWY_ALIGN float px[kPad], py[kPad], bw[kPad], bz[kPad], bt[kPad], bc[3][kPad], bn[3][kPad];
@@ -992,14 +1017,20 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       u = hn::IfThenElseZero(keep, u);  // the other lanes' u may be anything (the station gather's index)
       hn::Store(z, d, bz + i);
       hn::Store(hn::MulAdd(u, thrD, thr0), d, bt + i);
-      if (A.stations >= 2) {  // piecewise linear between the lighting stations
-        const VF fs = hn::Mul(u, hn::Set(d, float(A.stations - 1)));
-        const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), hn::Set(di, A.stations - 2));
+      if (stations >= 2) {  // piecewise linear between the lighting stations
+        const VF fs = hn::Mul(u, hn::Set(d, float(stations - 1)));
+        const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), hn::Set(di, stations - 2));
         const VF v = hn::Sub(fs, hn::ConvertTo(d, k));
-        for (int c = 0; c < 3; ++c) {
-          const float* sc = A.stationColour + c * A.stations;
-          const VF c0 = hn::GatherIndex(d, sc, k), c1 = hn::GatherIndex(d, sc + 1, k);
-          hn::Store(hn::MulAdd(v, hn::Sub(c1, c0), c0), d, bc[c] + i);
+        if (stationTable) {
+          const auto idx = hn::IndicesFromVec(d, k);
+          for (int c = 0; c < 3; ++c)
+            hn::Store(hn::MulAdd(v, hn::TableLookupLanes(stD[c], idx), hn::TableLookupLanes(st0[c], idx)), d, bc[c] + i);
+        } else {
+          for (int c = 0; c < 3; ++c) {
+            const float* sc = A.stationColour + c * stations;
+            const VF c0 = hn::GatherIndex(d, sc, k), c1 = hn::GatherIndex(d, sc + 1, k);
+            hn::Store(hn::MulAdd(v, hn::Sub(c1, c0), c0), d, bc[c] + i);
+          }
         }
       } else {
         for (int c = 0; c < 3; ++c) hn::Store(hn::MulAdd(u, dc[c], attr[c]), d, bc[c] + i);

@@ -122,7 +122,7 @@ std::string agree(const PreparedSegment& f, const PreparedSegment& x, const Vec2
     // in the record (stationCount >= 0: none, or kInlineStations) or in extra, the same in both
     auto stations = [](const PreparedSegment& s, int& count, const float*& colour) {
       if (s.stationCount >= 0) return count = s.stationCount, colour = s.stationColour, true;
-      if (!s.extra || s.extra->textured || s.extra->colour.size() != 3 * size_t(s.extra->stations)) return false;
+      if (!s.extra || s.extra->textured || s.extra->colour.size() != 3 * size_t(s.extra->stations) + detail::kMaxLanes) return false;  // padded
       return count = s.extra->stations, colour = s.extra->colour.data(), true;
     };
     int nf = -2, nx = -2;

@@ -536,8 +536,9 @@ TEST(SegmentSplat, SimdKernelMatchesTheClosedFormInDouble) {
           const double t0 = std::max(0.0, tauStar - delta), t1 = std::min(double(p.a1 - p.a0), tauStar + delta);
           if (!(t1 > t0)) continue;
           const double u0 = p.k * (t0 - tauStar), u1 = p.k * (t1 - tauStar);
-          w += (p.scale0 + double(p.slope) * tauStar) * p.erfScale * (std::erf(u1) - std::erf(u0)) * std::exp(-qmin / 2);
-          w += double(p.slope) * p.invM00 * (std::exp(-qmin / 2 - u0 * u0) - std::exp(-qmin / 2 - u1 * u1));
+          const detail::PieceScale sc = detail::pieceScale(p.scale0, p.slope, p.a1 - p.a0);  // flat if it barely changes
+          w += (sc.scale0 + double(sc.slope) * tauStar) * p.erfScale * (std::erf(u1) - std::erf(u0)) * std::exp(-qmin / 2);
+          w += double(sc.slope) * p.invM00 * (std::exp(-qmin / 2 - u0 * u0) - std::exp(-qmin / 2 - u1 * u1));
         }
         return w;
       };

@@ -2,6 +2,7 @@
 // SIMD evaluation of splat weights over a block of pixels (Google Highway, runtime dispatch: the
 // best target the CPU runs among those compiled, AVX-512 / AVX2 / SSE4 / SSSE3 / portable
 // scalar; the library itself is built for generic x86-64). splat_rows.cpp.
+#include <cmath>
 #include <cstdint>
 
 #include "splat_math.h"
@@ -81,6 +82,21 @@ struct SegmentPiece {
   float slope = 0;                   ///< (scale1 - scale0) / (a1 - a0), 0 when negligible
 };
 
+/// A sub-segment's weight scale is linear along it, scale0 + slope tau for tau in [0, len] (§5.2:
+/// 1 / (h sqrt(det M)) at its ends). Where it changes by at most kFlatScale of scale0 over the
+/// sub-segment, the kernels take it constant at its mean (beyond the thesis, issue 13): the slope
+/// term's two extra exps per pixel go (all but ~1% of a contour model's segments), the weights
+/// move by at most kFlatScale / 2 and the blended colours (normalised weighted averages) by far
+/// less. The SIMD kernel, the scalar closed form and their tests all evaluate this.
+inline constexpr float kFlatScale = 1e-2f;
+struct PieceScale {
+  float scale0 = 0, slope = 0;
+};
+inline PieceScale pieceScale(float scale0, float slope, float len) {
+  if (std::abs(slope * len) <= kFlatScale * scale0) return {scale0 + 0.5f * (slope * len), 0.0f};
+  return {scale0, slope};
+}
+
 /// Per-pixel constants of one ScreenSpace segment splat (§5, the closed form of
 /// segment_methods.cpp): the ray through (px, py) meets the strip's plane at depth depthNum / N
 /// with plane coordinates a = A / N - a0 (along), b = B / N - b0 (across). The first sub-segment
@@ -140,6 +156,9 @@ struct SegmentShadeRows {
   /// stationColour[c * stations + k] (channel c of station k), instead of attr + u dc
   int stations = 0;
   const float* stationColour = nullptr;
+  /// stationColour is readable kMaxLanes floats past its 3 * stations (SegmentExtra::colour's
+  /// padding; not the record's own stations): the rows load its channels as whole vectors
+  bool stationPadded = false;
 };
 
 /// Rasterises one segment over `count` row spans (inside tile.rect()) straight into the Z^3 tile,
