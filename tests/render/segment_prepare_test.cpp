@@ -287,6 +287,30 @@ TEST(SegmentPrepare, UnusualInputGoesToTheExactPath) {
   EXPECT_EQ(st[6], PrimitiveStatus::Drawn);
 }
 
+TEST(SegmentPrepare, BatchesAgreeWithTheExactPathOnEveryTarget) {
+  // how the batches load their input depends on the target (512-bit vectors: Segment blocks
+  // transposed; else lane-by-lane copies), and their arithmetic on its vector length: on every
+  // target the machine runs, every record agrees with the exact path's
+  const Vec3f eye = Vec3f(0.3f, 0.2f, 1).normalized() * 3.0f;
+  const Camera cam = Camera::lookAt(eye, Vec3f::Zero(), Vec3f(0, 1, 0), 40, 320, 240, 0.05f, 1000);
+  RenderOptions o;
+  o.material.specular = 0.5f;
+  int targets = 0;
+  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    for (bool turning : {false, true}) {
+      Tally tally;
+      check(randomSegments(2000, eye, true, uint32_t(21 + turning), turning), cam, o, true, tally);
+      EXPECT_GT(tally.compared, 300) << "target " << target;
+      EXPECT_GT(tally.compared, tally.visible * 99 / 100) << "target " << target;
+      if (turning) EXPECT_GT(tally.stations, tally.visible / 2) << "target " << target;
+    }
+    ++targets;
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GT(targets, 0);
+}
+
 TEST(SegmentPrepare, BatchInputIsTheSegmentsFields) {
   // segmentLoad (512-bit vectors: 4 x 4 Segment blocks transposed) gives the batch the fields the
   // lane-by-lane copy gives it, bit for bit, the colours as FrameContext::primitiveColor, for a
