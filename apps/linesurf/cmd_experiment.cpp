@@ -27,6 +27,8 @@ struct ExperimentArgs {
   float contourMergeAngle = ContourOptions{}.mergeAngle;
   bool noImages = false;
   float segmentLod = RenderOptions{}.segmentLod;
+  float coverageGain = RenderOptions{}.coverageGain;
+  int coverageReach = RenderOptions{}.coverageReach;
 };
 
 std::vector<std::string> splitCommas(const std::vector<std::string>& in) {
@@ -63,6 +65,8 @@ void run(const ExperimentArgs& a) {
   o.contour.mergeNormalDeviation = a.contourMergeNormalDeviation;
   o.contour.mergeAngle = a.contourMergeAngle;
   o.render.segmentLod = a.segmentLod;
+  o.render.coverageGain = a.coverageGain;
+  o.render.coverageReach = a.coverageReach;
 
   ExperimentResults res = runExperiment(o, progressBar());
   endProgress();
@@ -140,6 +144,13 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--segment-lod", a->segmentLod,
                   "Draw segments at most this many kernel sigmas long as one point splat, [0, 4] (render --segment-lod)")
+      ->capture_default_str();
+  sub->add_option("--coverage-gain", a->coverageGain,
+                  "Coverage alpha gain, [0, 100] (0 = the thesis's normalised alpha; render --coverage-gain)")
+      ->capture_default_str();
+  sub->add_option("--coverage-reach", a->coverageReach,
+                  "Coverage alpha within this many pixels of a silhouette, [0, 16] (0 = everywhere; render "
+                  "--coverage-reach)")
       ->capture_default_str();
   sub->callback([a] { run(*a); });
 });

@@ -211,6 +211,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bind(f, "coverageGain", o.coverageGain,
        "Coverage alpha at silhouettes (beyond the thesis): alpha = gain x the kernel sum over the model's kernel "
        "density, [0, 100] (0 = the thesis's normalised alpha; 1.5 for contour models)");
+  bind(f, "coverageReach", o.coverageReach,
+       "Coverage alpha only at silhouettes: pixels within this many pixels of the background or of a farther "
+       "layer, [0, 16] (0 = everywhere)");
   auto* vis = sub->add_option_group("visibility", "Modified Z^3 buffer (§6.2.3)");
   bind(vis, "layers", o.layers, "Fragment layers per pixel [1, 8]");
   bindEnum(vis, "zThresholdMode", o.zThresholdMode,

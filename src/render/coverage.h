@@ -12,8 +12,10 @@
 /// the kernels' tails, as a box-filtered mesh's coverage does. The density counts the primitives of the
 /// same sheet only (normals within 90 degrees, centre within the kernel's cut-off of the plane), so
 /// that the two sides of a thin part do not halve each other's coverage.
+#include <cstdint>
 #include <vector>
 
+#include "linesurf/core/image.h"
 #include "linesurf/core/model.h"
 
 namespace linesurf::detail {
@@ -23,5 +25,21 @@ namespace linesurf::detail {
 /// standard deviations, without the screen prefilter (it keeps a kernel's mass). Deterministic for
 /// any thread count.
 std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff);
+
+/// Coverage at silhouettes only (RenderOptions::coverageReach > 0; beyond the thesis, issue 14).
+/// The resolve writes every pixel with its front layer opaque (the normalised alpha of an opaque
+/// model) and the depth of its front layer to a frame-wide buffer (+inf where empty); a pixel
+/// whose front layer is partly covered is also kept as a candidate with its coverage result.
+struct SilhouettePixel {
+  uint32_t x, y;
+  float zThreshold;  ///< of the front layer
+  float rgba[4];     ///< the coverage result composited over the background, as the image stores it
+  float alpha;       ///< its coverage alpha before the background (the alpha buffer)
+};
+
+/// Whether the candidate at (x, y) lies at a silhouette: a pixel within `reach` (Chebyshev, inside
+/// the w x h frame) whose front depth exceeds this one's by more than its z threshold and 2 % of
+/// its depth (the background is +inf). Reads frontZ only.
+bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, int reach);
 
 }  // namespace linesurf::detail

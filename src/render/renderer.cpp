@@ -90,6 +90,10 @@ struct Renderer::Buffers {
   std::vector<uint32_t> counts;       ///< per chunk and tile: bins
   std::vector<size_t> tileStart, offset;
   std::vector<uint32_t> refs;         ///< tile lists: point slot, or pointSlots + segment index
+  /// Coverage at silhouettes only (RenderOptions::coverageReach): the front depths of the frame,
+  /// and per tile its partly covered pixels (coverage.h)
+  std::vector<float> frontZ;
+  std::vector<std::vector<detail::SilhouettePixel>> silhouette;
 };
 
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
@@ -351,6 +355,11 @@ RenderResult Renderer::render(const Camera& cam) const {
   if (opt.depthBuffer) res.depth = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
   if (opt.alphaBuffer) res.alpha = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
   if (opt.normalBuffer) res.normal = Image(cam.width(), cam.height(), Color(0, 0, 0, 0));
+  // coverage at silhouettes only: every pixel resolved with its front layer opaque, the partly
+  // covered ones kept with their coverage result until every tile's front depths are known
+  const bool silhouettes = coverage && opt.coverageReach > 0;
+  float* const frontZ = silhouettes ? (buf.frontZ.resize(res.color.pixels.size()), buf.frontZ.data()) : nullptr;
+  if (silhouettes) buf.silhouette.resize(std::max(buf.silhouette.size(), tiles));
   std::vector<Z3Counters> tileCounters(tiles);
   std::vector<std::pair<double, double>> tileSeconds(tiles);  // rasterise, resolve
   const Color bg = opt.background;
@@ -403,10 +412,24 @@ RenderResult Renderer::render(const Camera& cam) const {
     const bool simdResolve = !opt.perPixelLighting && !res.depth && !res.alpha && !res.normal;
     const float bgRGBA[4] = {bg.x(), bg.y(), bg.z(), bg.w()};
     const int32_t* layerCounts = z3.counts();
+    std::vector<detail::SilhouettePixel>* cands = silhouettes ? &buf.silhouette[tile] : nullptr;
+    if (cands) cands->clear();
+    // a resolved pixel composited over the background, as the image stores it
+    auto overBackground = [&](const Color& px) {
+      const float a = px.w();
+      Color c = px;
+      c.head<3>() += (1 - a) * bg.w() * bg.head<3>();
+      c.w() = a + (1 - a) * bg.w();
+      if (bg.w() > 0 && c.w() > 0 && c.w() < 1) c.head<3>() /= c.w();  // straight colour for PNG
+      if (bg.w() == 0 && a > 0) c.head<3>() /= a;
+      return c;
+    };
     for (int y = rect.y0; y < rect.y1; ++y) {
       bool others = true;  // pixels with several layers before `done`
+      float* rowZ = frontZ ? frontZ + size_t(y) * size_t(cam.width()) : nullptr;
       const int done = simdResolve ? detail::resolveSingleLayerRow(z3, y, rect.x0, rect.width(), bgRGBA,
-                                                                   res.color.at(rect.x0, y).data(), others)
+                                                                   res.color.at(rect.x0, y).data(), others,
+                                                                   rowZ ? rowZ + rect.x0 : nullptr, cands)
                                    : 0;
       const int32_t* rowCounts = layerCounts + z3.index(rect.x0, y);
       for (int x = others ? rect.x0 : rect.x0 + done; x < rect.x1; ++x) {
@@ -414,24 +437,28 @@ RenderResult Renderer::render(const Camera& cam) const {
         if (x - rect.x0 < done && layers <= 1) continue;  // written by the SIMD row
         if (layers == 0) {
           res.color.at(x, y) = bg;
+          if (rowZ) rowZ[x] = INFINITY;
           continue;
         }
         // per-pixel lighting is deferred: each layer lit once, with its blended normal, at this
         // pixel's ray and the layer's depth; otherwise the fragments carry Gouraud colours
         const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);
-        const ResolvedPixel px =
-            opt.perPixelLighting ? z3.resolve(x, y, [&](const Vec3f& albedo, const Vec3f& n, float depth) {
-              const float nn = n.norm();
-              return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
-            })
-                                 : z3.resolve(x, y);
+        auto shade = [&](const Vec3f& albedo, const Vec3f& n, float depth) {
+          const float nn = n.norm();
+          return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
+        };
+        auto keep = [](const Vec3f& c, const Vec3f&, float) { return c; };
+        // at silhouettes only: the front layer opaque here, its coverage kept as a candidate
+        const bool opaqueFront = rowZ && z3.frontAlpha(x, y) < 1.0f;
+        const ResolvedPixel px = opt.perPixelLighting ? z3.resolve(x, y, shade, opaqueFront) : z3.resolve(x, y, keep, opaqueFront);
+        if (rowZ) rowZ[x] = px.depth;
+        if (opaqueFront) {
+          const ResolvedPixel pc = opt.perPixelLighting ? z3.resolve(x, y, shade) : z3.resolve(x, y);
+          const Color c = overBackground(pc.color);
+          cands->push_back({uint32_t(x), uint32_t(y), z3.frontThreshold(x, y), {c.x(), c.y(), c.z(), c.w()}, pc.color.w()});
+        }
         const float a = px.color.w();
-        Color c = px.color;
-        c.head<3>() += (1 - a) * bg.w() * bg.head<3>();
-        c.w() = a + (1 - a) * bg.w();
-        if (bg.w() > 0 && c.w() > 0 && c.w() < 1) c.head<3>() /= c.w();  // straight colour for PNG
-        if (bg.w() == 0 && a > 0) c.head<3>() /= a;
-        res.color.at(x, y) = c;
+        res.color.at(x, y) = overBackground(px.color);
         if (res.depth) res.depth->at(x, y) = Color(px.depth, px.depth, px.depth, 1);
         if (res.alpha) res.alpha->at(x, y) = Color(a, a, a, a);
         if (res.normal)
@@ -445,6 +472,17 @@ RenderResult Renderer::render(const Camera& cam) const {
   for (size_t b0 = 0; b0 < tiles; b0 += batch) {
     parallelFor(b0, std::min(tiles, b0 + batch), doTile, 1);
     reportProgress(opt.progress, "render", 0.1 + 0.9 * double(std::min(tiles, b0 + batch)) / double(tiles));
+  }
+  if (silhouettes) {  // the partly covered pixels at silhouettes take their coverage result
+    parallelFor(0, tiles, [&](size_t tile) {
+      const double t0 = threadCpuSeconds();
+      for (const detail::SilhouettePixel& c : buf.silhouette[tile]) {
+        if (!detail::atSilhouette(c, frontZ, cam.width(), cam.height(), opt.coverageReach)) continue;
+        res.color.at(int(c.x), int(c.y)) = Color(c.rgba[0], c.rgba[1], c.rgba[2], c.rgba[3]);
+        if (res.alpha) res.alpha->at(int(c.x), int(c.y)) = Color(c.alpha, c.alpha, c.alpha, c.alpha);
+      }
+      tileSeconds[tile].second += threadCpuSeconds() - t0;
+    }, 1);
   }
   for (const auto& [raster, resolve] : tileSeconds) {
     st.fragmentThreadSeconds += raster;

@@ -43,6 +43,8 @@ PARAMS = [
      "--alpha-override", "alpha_override"),
     (lambda m: linesurf.render(m, coverage_gain=-1), ["render", "{model}", "--coverage-gain", "-1"],
      "--coverage-gain", "coverage_gain"),
+    (lambda m: linesurf.render(m, coverage_reach=17), ["render", "{model}", "--coverage-reach", "17"],
+     "--coverage-reach", "coverage_reach"),
     (lambda m: linesurf.render(m, zoom=float("nan")), ["render", "{model}", "--zoom", "nan"], "--zoom", "zoom"),
     (lambda m: linesurf.render(m, size=(0, 10)), ["render", "{model}", "--size", "0x10"], "--size", "size"),
     (lambda m: linesurf.render(m, up_axis="w"), ["render", "{model}", "--up-axis", "w"], "--up-axis", "up_axis"),

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "render/coverage.h"
 #include "linesurf/core/error.h"
@@ -19,6 +20,14 @@ float maxAbsDiff(const Image& a, const Image& b) {
   float m = 0;
   for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, (a.pixels[i] - b.pixels[i]).cwiseAbs().maxCoeff());
   return m;
+}
+
+// Grid samples jittered by this fraction of the spacing (Gaussian): troughs between them.
+constexpr float kJitter = 0.4f;
+shapes::SampleOptions jittered() {
+  shapes::SampleOptions o;
+  o.noise = kJitter;
+  return o;
 }
 
 // A square 2 x 2 as points on a grid, or as strips along x at the same spacing.
@@ -174,16 +183,64 @@ TEST(Coverage, PartlyCoveredLayerKeepsWhatIsBehind) {
   EXPECT_NEAR(t.resolve(0, 0).color.z(), 0.0f, 1e-6f);
 }
 
+// Coverage at silhouettes only (RenderOptions::coverageReach): a square of jittered grid samples,
+// whose coverage has troughs inside, is translucent inside only next to a real hole (a pixel no
+// splat reaches: a silhouette too), and its edge is as soft as with coverage everywhere.
+TEST(Coverage, SilhouettesOnlyKeepInteriorGapsOpaque) {
+  HybridModel m = shapes::plane(2, 2, 41, 41, jittered());
+  for (Point& p : m.points) p.position.z() = 0;  // jittered in the plane only: no depth steps
+  const int size = 128, reach = 2;
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, size, size);
+  const float half = cam.focalPixels() / 4;  // the square's half side in pixels (44)
+  struct Stats {
+    int interior = 0, translucent = 0, awayFromHoles = 0;  // >= 3 px inside; alpha < 1; no empty pixel within reach
+    float outside = 0;                                      // alpha summed outside the square
+  };
+  auto stats = [&](int coverageReach) {
+    RenderOptions o;
+    o.alphaBuffer = true;
+    o.coverageGain = 1.5f;
+    o.coverageReach = coverageReach;
+    const Image a = *renderImage(m, cam, o).alpha;
+    auto emptyNear = [&](int x, int y) {
+      for (int v = std::max(0, y - reach); v <= std::min(size - 1, y + reach); ++v)
+        for (int u = std::max(0, x - reach); u <= std::min(size - 1, x + reach); ++u)
+          if (a.at(u, v).w() == 0) return true;
+      return false;
+    };
+    Stats s;
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        const float dx = std::abs(float(x) + 0.5f - 0.5f * size), dy = std::abs(float(y) + 0.5f - 0.5f * size);
+        const float inside = half - std::max(dx, dy);  // pixels inside the edge
+        if (inside >= 3 && ++s.interior && a.at(x, y).w() < 0.999f) ++s.translucent, s.awayFromHoles += !emptyNear(x, y);
+        if (inside < 0) s.outside += a.at(x, y).w();
+      }
+    return s;
+  };
+  const Stats everywhere = stats(0), edges = stats(reach);
+  std::printf("interior %d: translucent with coverage everywhere %d (%d away from holes), at silhouettes %d (%d); "
+              "alpha outside %.1f, %.1f\n", edges.interior, everywhere.translucent, everywhere.awayFromHoles,
+              edges.translucent, edges.awayFromHoles, everywhere.outside, edges.outside);
+  EXPECT_GT(edges.interior, 5000);
+  EXPECT_GT(everywhere.awayFromHoles, 50);  // the troughs show with coverage everywhere (measured 87)
+  EXPECT_EQ(edges.awayFromHoles, 0);
+  EXPECT_GT(everywhere.outside, 100.0f);
+  EXPECT_NEAR(edges.outside, everywhere.outside, 0.01f * everywhere.outside);  // the soft edge is kept
+}
+
 TEST(Coverage, SimdRowsMatchThePixelResolveAndThreads) {
   // a sphere of points in front of a strip plane: several layers, partly covered edges
-  HybridModel m = shapes::sphere(0.6f, 20000);
+  HybridModel m = shapes::sphere(0.6f, 20000, jittered());
   const HybridModel strips = squareStrips();
   m.segments = strips.segments;
   for (Point& p : m.points) p.position.z() += 0.8f;
   const Camera cam = Camera::lookAt(Vec3f(0.3f, 0.2f, 5), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 120, 90);
-  for (int tile : {16, 64}) {
+  Image byReach[2];  // tile 16's image: tile 64 draws the same
+  for (int tile : {16, 64}) for (int reach : {0, 2}) {
     RenderOptions o;
     o.coverageGain = 2;
+    o.coverageReach = reach;
     o.tileSize = tile;
     const RenderResult simd = renderImage(m, cam, o);
     o.alphaBuffer = true;  // every pixel through Z3Tile::resolve
@@ -198,7 +255,11 @@ TEST(Coverage, SimdRowsMatchThePixelResolveAndThreads) {
       one = renderImage(m, cam, o);
     }
     EXPECT_EQ(maxAbsDiff(one.color, pixel.color), 0.0f) << tile;
+    Image& first = byReach[reach > 0];
+    if (first.pixels.empty()) first = pixel.color;
+    else EXPECT_EQ(maxAbsDiff(first, pixel.color), 0.0f) << reach;
   }
+  EXPECT_GT(maxAbsDiff(byReach[0], byReach[1]), 0.01f);  // the reach matters here (measured 0.03)
 }
 
 TEST(Coverage, TranslucentModelsKeepTheThesisAlpha) {

@@ -76,9 +76,19 @@ struct RenderOptions {
   /// cut-off: the soft silhouette of a box-filtered mesh instead of a 1-3 pixel fringe. A partly
   /// covered layer keeps the layers behind it (Z^3 step b waits for full coverage). Only when every
   /// primitive is opaque (no alphaOverride < 1, no colour alpha < 1, no texture); otherwise the
-  /// thesis's alpha. 0 = off, the default: irregular point clouds keep translucent pixels inside
-  /// (docs/decisions.md, "Issue 14 (i14edge)"); 1.5 measured best for contour models. [0, 100].
+  /// thesis's alpha. Where it applies: coverageReach. 0 = off, the default: Table 5 (line vs point
+  /// model) gets worse, the contour point models' gaps show at their silhouettes, and frames cost
+  /// 10-120% more (docs/decisions.md, "Issue 14 (i14edge)", "Issue 14 (i14sil)"); 1.5 measured best
+  /// for contour models. [0, 100].
   float coverageGain = 0.0f;
+  /// Where coverage alpha applies (beyond the thesis; issue 14, docs/decisions.md "Issue 14
+  /// (i14sil)"). > 0: only at silhouettes, i.e. at a pixel whose front layer is partly covered
+  /// and that has, within this many pixels (a square of side 2 reach + 1), a pixel showing the
+  /// background or a front layer farther than this one's by its z threshold and 2 % of its
+  /// depth; every other pixel keeps the normalised (opaque) alpha, so the gaps of an irregular or
+  /// sparse sampling inside a surface stay closed. 0: everywhere (the gaps show). [0, 16]; only
+  /// with coverageGain > 0.
+  int coverageReach = 2;
 
   // --- visibility and blending (§6.2.3, modified Z^3) -----------------------------------------
   ZThresholdMode zThresholdMode = ZThresholdMode::PerPrimitive;

@@ -139,9 +139,10 @@ class Z3Tile {
     return resolve(x, y, [](const Vec3f& c, const Vec3f&, float) { return c; });
   }
   /// The same with deferred shading: each layer's colour is shade(albedo, normal sum (not
-  /// normalised), layer depth).
+  /// normalised), layer depth). frontOpaque: the front layer's alpha is 1 (coverage at
+  /// silhouettes only, RenderOptions::coverageReach: an interior pixel keeps the opaque alpha).
   template <class Shade>
-  ResolvedPixel resolve(int x, int y, Shade&& shade) const {
+  ResolvedPixel resolve(int x, int y, Shade&& shade, bool frontOpaque = false) const {
     ResolvedPixel out;
     const size_t p = index(x, y);
     const int n = count_[p];
@@ -153,7 +154,7 @@ class Z3Tile {
     for (int i = 0; i < n && a < 1.0f; ++i) {
       const float* ly = px + i * layerStride_;
       const float iw = 1.0f / ly[kW * fs];
-      const float al = layerAlpha(ly[kA * fs], iw);
+      const float al = frontOpaque && i == 0 ? 1.0f : layerAlpha(ly[kA * fs], iw);
       const float t = (1 - a) * al;
       c += t * shade(Vec3f(ly[kR * fs] * iw, ly[kG * fs] * iw, ly[kB * fs] * iw),
                      Vec3f(ly[kNx * fs], ly[kNy * fs], ly[kNz * fs]), ly[kZ * fs]);
@@ -166,6 +167,14 @@ class Z3Tile {
     out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
     return out;
   }
+  /// The alpha of the front layer at (x, y), which must hold a layer (layerAlpha), and its depth
+  /// and z threshold.
+  float frontAlpha(int x, int y) const {
+    const float* px = data_.data() + index(x, y);
+    return layerAlpha(px[kA * capacity_], 1.0f / px[kW * capacity_]);
+  }
+  float frontDepth(int x, int y) const { return data_[index(x, y) + kZ * capacity_]; }
+  float frontThreshold(int x, int y) const { return data_[index(x, y) + kThr * capacity_]; }
   /// Number of layers in use at (x, y).
   int layerCount(int x, int y) const { return count_[index(x, y)]; }
 

@@ -4,11 +4,14 @@
 // scalar; the library itself is built for generic x86-64). splat_rows.cpp.
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "splat_math.h"
 #include "linesurf/render/z3_buffer.h"
 
 namespace linesurf::detail {
+
+struct SilhouettePixel;  // coverage.h
 
 /// Per-pixel constants of one object-space EWA point splat (§4.2.2). Along the ray through the
 /// pixel centre (px, py) the splat's tangent plane is hit at depth depthNum / N with plane
@@ -63,8 +66,12 @@ uint64_t pointRowsZ3(const PointRaster& p, const PointShade& shade, const PixelR
 /// the way the renderer does, written to out (straight RGBA, 4 floats per pixel from x0); the
 /// other pixels before `returned` (empty, or several layers) get bg itself, the pixels from
 /// `returned` on are left to the caller. out is only written (it may be uninitialised). `others`:
-/// whether any of the pixels before `returned` holds several layers.
-int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out, bool& others);
+/// whether any of the pixels before `returned` holds several layers. frontZ (coverage at
+/// silhouettes only, src/render/coverage.h): the front depths of the pixels before `returned`
+/// (+inf where empty) go to frontZ[0 ..], the one-layer pixels are written with an opaque front
+/// layer, and those partly covered are appended to cands with their coverage result.
+int resolveSingleLayerRow(Z3Tile& tile, int y, int x0, int n, const float* bg, float* out, bool& others,
+                          float* frontZ = nullptr, std::vector<SilhouettePixel>* cands = nullptr);
 
 /// One sub-segment of the ScreenSpace method: plane coordinates (a along the segment from p0,
 /// b across) with the resampling covariance held constant.
