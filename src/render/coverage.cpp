@@ -178,10 +178,11 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
 // A neighbour is farther (a silhouette) when its front depth exceeds this pixel's by more than the
 // front layer's z threshold and by more than this fraction of its depth. Measured with reach 2
 // and gain 1.5 (docs/decisions.md, "Issue 14 (i14sil)"): with the z threshold alone the
-// shape-approximation hybrids of random spheres keep 200-650 pixels per view at alpha < 0.5 three
-// pixels inside the silhouette (neighbouring front layers of one surface more than a threshold
-// apart), 1 % of the depth 37-97, 2 % 1-8; the contour lines' SSIM against the mesh loses 0.000-
-// 0.007 to 1 %, 0.001-0.015 to 3 %.
+// shape-approximation hybrid of the random 100k sphere keeps 217-489 pixels per render at alpha
+// <= 1/2 three pixels inside the silhouette (neighbouring front layers of one surface more than a
+// threshold apart), with 1 % of the depth 37-97, with 2 % 1-8; against the z threshold alone, the
+// contour lines' SSIM against the mesh loses 0.000-0.007 at 1 %, 0.001-0.012 at 2 %, 0.002-0.015
+// at 3 %.
 constexpr float kSilhouetteDepthStep = 0.02f;
 
 bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, int reach) {
