@@ -25,6 +25,7 @@ struct ExperimentArgs {
   bool contourVertexNormals = false;
   float contourMergeNormalDeviation = ContourOptions{}.mergeNormalDeviation;
   float contourMergeAngle = ContourOptions{}.mergeAngle;
+  float contourMergeStripAngle = ContourOptions{}.mergeStripAngle;
   bool noImages = false;
   float segmentLod = RenderOptions{}.segmentLod;
   float coverageGain = RenderOptions{}.coverageGain;
@@ -64,6 +65,7 @@ void run(const ExperimentArgs& a) {
   o.contour.vertexNormals = a.contourVertexNormals;
   o.contour.mergeNormalDeviation = a.contourMergeNormalDeviation;
   o.contour.mergeAngle = a.contourMergeAngle;
+  o.contour.mergeStripAngle = a.contourMergeStripAngle;
   o.render.segmentLod = a.segmentLod;
   o.render.coverageGain = a.coverageGain;
   o.render.coverageReach = a.coverageReach;
@@ -141,6 +143,9 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--contour-merge-angle", a->contourMergeAngle,
                   "contour: polyline merging, largest normal angle in degrees (extract contour --merge-angle)")
+      ->capture_default_str();
+  sub->add_option("--contour-merge-strip-angle", a->contourMergeStripAngle,
+                  "contour: polyline merging, largest strip-plane tilt in degrees (extract contour --merge-strip-angle)")
       ->capture_default_str();
   sub->add_option("--segment-lod", a->segmentLod,
                   "Draw segments at most this many kernel sigmas long as one point splat, [0, 4] (render --segment-lod)")

@@ -120,6 +120,8 @@ RegisterCommand reg(33, [](CLI::App& app) {
   bind(sub, "mergeTangentDeviation", o.mergeTangentDeviation,
        "Merging: largest deviation across the merged segment within the surface, x d");
   bind(sub, "mergeAngle", o.mergeAngle, "Merging: largest angle between merged and original normals, degrees [0, 90)");
+  bind(sub, "mergeStripAngle", o.mergeStripAngle,
+       "Merging, smooth models: largest tilt of the merged strip's plane from the original ones, degrees [0, 90)");
   bind(sub, "mergeMaxPieces", o.mergeMaxPieces, "Merging: most original segments in one merged segment (1: no merging)");
   sub->add_flag("--flat", a->flat,
                 "One normal per segment (the thesis) instead of interpolated vertex normals at both endpoints");

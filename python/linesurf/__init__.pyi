@@ -91,7 +91,8 @@ def extract_contour(mesh: Mesh, *, spacing: float = 0.0, spacing_scale: float = 
                     vertex_normals: bool = False, family_switch_sine: float = 1.0,
                     endpoint_normals: bool = True, merge_normal_deviation: float = 0.01,
                     merge_tangent_deviation: float = 0.05, merge_angle: float = 2.0,
-                    merge_max_pieces: int = 32, diagonal_divisions: float = 200.0) -> SimpleNamespace: ...
+                    merge_max_pieces: int = 32, diagonal_divisions: float = 200.0,
+                    merge_strip_angle: float = 4.0) -> SimpleNamespace: ...
 def verify(cloud: PointsLike, hybrid: Model, *, epsilon: Optional[float] = None, delta: Optional[float] = None,
            k: Optional[int] = None) -> Dict[str, Any]: ...
 

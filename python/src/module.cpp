@@ -942,7 +942,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
       [](const TriangleMesh& mesh, float spacing, float spacing_scale, uint64_t seed, float radius_scale,
          float points_below, bool all_points, bool vertex_normals, float family_switch_sine, bool endpoint_normals,
          float merge_normal_deviation, float merge_tangent_deviation, float merge_angle, int merge_max_pieces,
-         float diagonal_divisions) {
+         float diagonal_divisions, float merge_strip_angle) {
         ContourOptions o;
         o.spacing = spacing, o.spacingScale = spacing_scale, o.seed = seed, o.radiusScale = radius_scale;
         o.pointsBelow = points_below, o.allPoints = all_points, o.vertexNormals = vertex_normals;
@@ -951,6 +951,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         o.mergeNormalDeviation = merge_normal_deviation, o.mergeTangentDeviation = merge_tangent_deviation;
         o.mergeAngle = merge_angle, o.mergeMaxPieces = merge_max_pieces;
         o.diagonalDivisions = diagonal_divisions;
+        o.mergeStripAngle = merge_strip_angle;
         validate(o);
         if (mesh.faces.empty()) throwBadOption("mesh", "holds no faces: contour extraction needs a triangle mesh");
         ContourStats st;
@@ -977,6 +978,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
       py::arg("merge_tangent_deviation") = ContourOptions{}.mergeTangentDeviation,
       py::arg("merge_angle") = ContourOptions{}.mergeAngle, py::arg("merge_max_pieces") = ContourOptions{}.mergeMaxPieces,
       py::arg("diagonal_divisions") = ContourOptions{}.diagonalDivisions,
+      py::arg("merge_strip_angle") = ContourOptions{}.mergeStripAngle,
       R"doc(Contour-plane extraction from a triangle Mesh, thesis §3.3 (= `linesurf extract contour`).
 
 spacing: largest distance d between neighbouring segments (0: spacing_scale x min(mean edge length,

@@ -201,6 +201,8 @@ void checkContourOptions(const ContourOptions& o) {
     throwBadOption("mergeTangentDeviation", fmt::format("must be a finite multiple of d >= 0, got {}", o.mergeTangentDeviation));
   if (!(std::isfinite(o.mergeAngle) && o.mergeAngle >= 0 && o.mergeAngle < 90))
     throwBadOption("mergeAngle", fmt::format("must be in [0, 90) degrees, got {}", o.mergeAngle));
+  if (!(std::isfinite(o.mergeStripAngle) && o.mergeStripAngle >= 0 && o.mergeStripAngle < 90))
+    throwBadOption("mergeStripAngle", fmt::format("must be in [0, 90) degrees, got {}", o.mergeStripAngle));
   if (o.mergeMaxPieces < 1 || o.mergeMaxPieces > 1024)
     throwBadOption("mergeMaxPieces", fmt::format("must be in [1, 1024], got {}", o.mergeMaxPieces));
   if (o.planes) {
@@ -543,6 +545,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
     lim.normalDeviation = double(options.mergeNormalDeviation) * d;
     lim.tangentDeviation = double(options.mergeTangentDeviation) * d;
     lim.cosAngle = std::cos(double(options.mergeAngle) * std::numbers::pi / 180.0);
+    lim.cosStripAngle = std::cos(double(options.mergeStripAngle) * std::numbers::pi / 180.0);
     lim.maxPieces = options.mergeMaxPieces;
     if (interp.textured && mesh.texture->width > 0 && mesh.texture->height > 0)
       lim.uvTolerance = 0.5 / double(std::max(mesh.texture->width, mesh.texture->height));

@@ -1,11 +1,13 @@
 // Tests of contour polyline merging (beyond the thesis, issue 13; src/extract/detail/contour_merge.cpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include <fmt/format.h>
 
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/shapes.h"
 #include "linesurf/extract/contour.h"
@@ -126,7 +128,7 @@ TEST(ContourMerge, DeviationStaysWithinTheToleranceAndCountsFallAsItGrows) {
     ContourOptions o = horizontalCuts();
     o.mergeNormalDeviation = tol;
     o.mergeTangentDeviation = tol;
-    o.mergeAngle = 89;  // the deviation binds here
+    o.mergeAngle = o.mergeStripAngle = 89;  // the deviation binds here
     ContourStats st;
     const HybridModel merged = extractContour(mesh, o, &st);
     EXPECT_LT(merged.segments.size(), last);
@@ -147,7 +149,7 @@ TEST(ContourMerge, DeviationStaysWithinTheToleranceAndCountsFallAsItGrows) {
   // At most mergeMaxPieces originals per segment.
   ContourOptions o = horizontalCuts();
   o.mergeNormalDeviation = o.mergeTangentDeviation = 1;
-  o.mergeAngle = 89;
+  o.mergeAngle = o.mergeStripAngle = 89;
   o.mergeMaxPieces = 4;
   const HybridModel four = extractContour(mesh, o);
   EXPECT_EQ(four.segments.size(), kCircles * 2 * kSides / 4);
@@ -202,6 +204,43 @@ TEST(ContourMerge, SmoothSphereKeepsNormalsAndNeverCrossesPlanes) {
     }
   }
   EXPECT_GT(checked, original.segments.size() / 4);
+}
+
+TEST(ContourMerge, StripTiltHasItsOwnLimitOnSmoothModelsOnly) {
+  // Smooth sphere: a looser strip limit merges more, each merged strip plane stays within it of
+  // the sphere's normal (up to the faceting of the pieces' planes), and the shading normals keep
+  // mergeAngle (checked in SmoothSphereKeepsNormalsAndNeverCrossesPlanes). Flat models ignore it.
+  const TriangleMesh mesh = shapes::sphereMesh(1.0f, 4);
+  auto cut = [&](float strip, bool smooth) {
+    ContourOptions o;
+    o.mergeAngle = 2;
+    o.mergeStripAngle = strip;
+    o.mergeNormalDeviation = 0.05f;
+    o.endpointNormals = smooth;
+    return extractContour(mesh, o);
+  };
+  const HybridModel tight = cut(2, true), loose = cut(6, true);
+  EXPECT_LT(loose.segments.size(), tight.segments.size());
+  auto worstTilt = [](const HybridModel& m) {
+    double worst = 0;
+    for (const Segment& s : m.segments) {
+      const Vec3d e = (s.p1 - s.p0).cast<double>().normalized();
+      Vec3d radial = (0.5 * (s.p0 + s.p1)).cast<double>().normalized();
+      radial = (radial - radial.dot(e) * e).normalized();
+      worst = std::max(worst, std::acos(std::clamp(s.normal.cast<double>().dot(radial), -1.0, 1.0)) * 180 / std::numbers::pi);
+    }
+    return worst;
+  };
+  const double faceting = 3;  // the pieces' planes lean from the radial direction by up to ~3 degrees here
+  EXPECT_LE(worstTilt(tight), 2 + faceting);
+  EXPECT_LE(worstTilt(loose), 6 + faceting);
+  EXPECT_GT(worstTilt(loose), worstTilt(tight));
+  const HybridModel flatTight = cut(2, false), flatLoose = cut(6, false);
+  ASSERT_EQ(flatTight.segments.size(), flatLoose.segments.size());
+  for (size_t i = 0; i < flatTight.segments.size(); ++i) EXPECT_EQ(flatTight.segments[i].p1, flatLoose.segments[i].p1);
+  ContourOptions bad;
+  bad.mergeStripAngle = 90;
+  EXPECT_THROW(validate(bad), OptionError);
 }
 
 TEST(ContourMerge, NeverAcrossAPolylineBreak) {

@@ -97,6 +97,15 @@ struct ContourOptions {
   float mergeNormalDeviation = 0.01f;
   float mergeTangentDeviation = 0.05f;
   float mergeAngle = 2.0f;
+  /// Smooth models (endpointNormals): largest angle between a merged segment's strip plane and
+  /// the planes of the pieces it replaces, degrees [0, 90) (beyond the thesis, issue 13). The
+  /// strip plane only places the strip (its edges move by half-width × sin of the tilt: 0.019 d
+  /// at 2 degrees) and culls it; the shading comes from the endpoint normals, which mergeAngle
+  /// still bounds at every interior vertex. 4 (stop 23; was mergeAngle): 4-18% fewer segments on
+  /// bunny, horse, gargoyle, dragon, line frames 8-13 points faster against their point models,
+  /// the line-vs-mesh SSIM within 0.0001, Table 5 +0.003 to +0.022 (docs/decisions.md, "Issue 13
+  /// (lead, stop 23)"). Flat models use mergeAngle for the strip (it is their shading normal).
+  float mergeStripAngle = 4.0f;
   int mergeMaxPieces = 32;
   /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.
   float pointsBelow = 0;
