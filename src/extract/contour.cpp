@@ -545,7 +545,8 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
     lim.normalDeviation = double(options.mergeNormalDeviation) * d;
     lim.tangentDeviation = double(options.mergeTangentDeviation) * d;
     lim.cosAngle = std::cos(double(options.mergeAngle) * std::numbers::pi / 180.0);
-    lim.cosStripAngle = std::cos(double(options.mergeStripAngle) * std::numbers::pi / 180.0);
+    // flat models: the strip normal is the shading normal, so mergeAngle bounds it
+    lim.cosStripAngle = smooth ? std::cos(double(options.mergeStripAngle) * std::numbers::pi / 180.0) : lim.cosAngle;
     lim.maxPieces = options.mergeMaxPieces;
     if (interp.textured && mesh.texture->width > 0 && mesh.texture->height > 0)
       lim.uvTolerance = 0.5 / double(std::max(mesh.texture->width, mesh.texture->height));

@@ -83,7 +83,7 @@ class ChainMerger {
     m.normalize();
     for (size_t k = i; k < j; ++k) {
       const Segment& s = segs_[pc[k].index];
-      if (s.normal.cast<double>().dot(m) < (lim_.smooth ? lim_.cosStripAngle : lim_.cosAngle)) return false;
+      if (s.normal.cast<double>().dot(m) < lim_.cosStripAngle) return false;
       if ((s.color.cast<double>() - color).cwiseAbs().maxCoeff() > double(lim_.colorTolerance)) return false;
     }
     // Shading normals at the merged ends (smooth models).

@@ -30,7 +30,7 @@ struct ContourMergeLimits {
                                 ///< segment along the surface normal there, object units
   double tangentDeviation = 0;  ///< the same across the segment within the surface, object units
   double cosAngle = 1;          ///< cos of the largest normal angle (see contour.h)
-  double cosStripAngle = 1;     ///< smooth: cos of the largest strip-plane tilt (mergeStripAngle)
+  double cosStripAngle = 1;     ///< cos of the largest strip-plane tilt (smooth: mergeStripAngle, flat: cosAngle)
   int maxPieces = 1;            ///< most original segments in one merged segment
   double uvTolerance = 0;       ///< textured models: largest uv deviation from linear (0: no texture)
   float colorTolerance = 0;     ///< largest colour channel deviation from the merged colour
