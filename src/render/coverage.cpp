@@ -205,4 +205,29 @@ bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, i
   return false;
 }
 
+int64_t silhouetteBehind(const SilhouettePixel& c, const float* frontZ, const uint8_t* partial, int w, int h, int reach) {
+  const int x = int(c.x), y = int(c.y);
+  const float z = frontZ[size_t(y) * size_t(w) + size_t(x)];
+  const float beyond = z + std::max(c.zThreshold, kSilhouetteDepthStep * z);
+  int64_t best = -1, farthest = -1;
+  int bestDist = reach + 1;
+  float bestZ = 0, farZ = 0;
+  for (int yy = std::max(0, y - reach); yy <= std::min(h - 1, y + reach); ++yy) {
+    const size_t row = size_t(yy) * size_t(w);
+    for (int xx = std::max(0, x - reach); xx <= std::min(w - 1, x + reach); ++xx) {
+      const float zz = frontZ[row + size_t(xx)];
+      if (!(zz > beyond)) continue;  // (the background: +inf)
+      if (farthest < 0 || zz > farZ) farthest = int64_t(row) + xx, farZ = zz;
+      if (partial[row + size_t(xx)]) continue;
+      const int dist = std::max(std::abs(xx - x), std::abs(yy - y));
+      if (best < 0 || dist < bestDist || (dist == bestDist && zz > bestZ)) {
+        best = int64_t(row) + xx;
+        bestDist = dist;
+        bestZ = zz;
+      }
+    }
+  }
+  return best >= 0 ? best : farthest;
+}
+
 }  // namespace linesurf::detail

@@ -35,11 +35,23 @@ struct SilhouettePixel {
   float zThreshold;  ///< of the front layer
   float rgba[4];     ///< the coverage result composited over the background, as the image stores it
   float alpha;       ///< its coverage alpha before the background (the alpha buffer)
+  /// what lay behind its front layer (Z3Tile::resolveBehind: premultiplied, coverage alpha)
+  float behind[4] = {0, 0, 0, 0};
 };
 
 /// Whether the candidate at (x, y) lies at a silhouette: a pixel within `reach` (Chebyshev, inside
 /// the w x h frame) whose front depth exceeds this one's by more than its z threshold and 2 % of
 /// its depth (the background is +inf). Reads frontZ only.
 bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, int reach);
+
+/// What a silhouette candidate's partial coverage is composited over (the frame's layers are those
+/// of an opaque frame, Z3Tile::setCoverageOccludes(false): nothing behind the front layer is kept):
+/// of the pixels within `reach` (Chebyshev) whose front depth lies beyond the candidate's as in
+/// atSilhouette, the nearest that is fully covered or shows the background (partial[i] == 0: not
+/// a candidate itself, whose opaque-frame colour would hide the coverage), ties to the farthest
+/// depth (the background first), then row-major order; where every one is partial, the farthest.
+/// Its index y * w + x, or -1 where there is none (not at a silhouette). Its front depth is +inf
+/// where it shows the background.
+int64_t silhouetteBehind(const SilhouettePixel& c, const float* frontZ, const uint8_t* partial, int w, int h, int reach);
 
 }  // namespace linesurf::detail

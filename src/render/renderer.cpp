@@ -94,6 +94,7 @@ struct Renderer::Buffers {
   /// and per tile its partly covered pixels (coverage.h)
   std::vector<float> frontZ;
   std::vector<std::vector<detail::SilhouettePixel>> silhouette;
+  std::vector<uint8_t> partial;  ///< 1 where a pixel's front layer is partly covered
 };
 
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
@@ -373,6 +374,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     Z3Tile& z3 = *buffer;
     z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
     z3.setCoverageScale(coverageScale);
+    z3.setCoverageOccludes(!silhouettes);  // at silhouettes only: an opaque frame's layers
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     const size_t kEnd = tileStart[tile + 1];
@@ -465,6 +467,29 @@ RenderResult Renderer::render(const Camera& cam) const {
           res.normal->at(x, y) = Color(0.5f * (px.normal.x() + 1), 0.5f * (px.normal.y() + 1), 0.5f * (px.normal.z() + 1), 1);
       }
     }
+    if (cands) {
+      // Candidates whose neighbourhood lies in this tile are decided now (their front depths are
+      // all known: the same test as after the frame), the others after every tile; the kept ones
+      // take what lay behind their front layer (Z3Tile::resolveBehind) while the tile holds it.
+      const int reach = opt.coverageReach;
+      size_t kept = 0;
+      for (detail::SilhouettePixel& c : *cands) {
+        const int x = int(c.x), y = int(c.y);
+        const bool inTile = std::max(0, x - reach) >= rect.x0 && std::min(cam.width() - 1, x + reach) < rect.x1 &&
+                            std::max(0, y - reach) >= rect.y0 && std::min(cam.height() - 1, y + reach) < rect.y1;
+        if (inTile && !detail::atSilhouette(c, frontZ, cam.width(), cam.height(), reach)) continue;
+        const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);
+        auto shade = [&](const Vec3f& albedo, const Vec3f& n, float depth) {
+          const float nn = n.norm();
+          return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
+        };
+        auto keep = [](const Vec3f& col, const Vec3f&, float) { return col; };
+        const Color b = opt.perPixelLighting ? z3.resolveBehind(x, y, shade) : z3.resolveBehind(x, y, keep);
+        for (int k = 0; k < 4; ++k) c.behind[k] = b[k];
+        (*cands)[kept++] = c;
+      }
+      cands->resize(kept);
+    }
     tileCounters[tile] = z3.counters();
     tileSeconds[tile].second = threadCpuSeconds() - t1;
   };
@@ -473,16 +498,51 @@ RenderResult Renderer::render(const Camera& cam) const {
     parallelFor(b0, std::min(tiles, b0 + batch), doTile, 1);
     reportProgress(opt.progress, "render", 0.1 + 0.9 * double(std::min(tiles, b0 + batch)) / double(tiles));
   }
-  if (silhouettes) {  // the partly covered pixels at silhouettes take their coverage result
+  if (silhouettes) {
+    // The partly covered pixels at silhouettes take their coverage result, composited over what
+    // lies beyond them: the frame kept no layer behind a front one (Z3Tile::setCoverageOccludes),
+    // so over the nearest neighbour that shows the background or a farther surface (coverage.h,
+    // silhouetteBehind). Two passes, the second writing what the first computed from the opaque
+    // images alone, so the result does not depend on the order of the tiles or the threads.
+    const int w = cam.width(), h = cam.height();
+    std::vector<uint8_t>& partial = buf.partial;
+    partial.assign(res.color.pixels.size(), 0);
+    for (size_t tile = 0; tile < tiles; ++tile)
+      for (const detail::SilhouettePixel& c : buf.silhouette[tile]) partial[size_t(c.y) * size_t(w) + c.x] = 1;
+    std::vector<std::vector<std::pair<size_t, Color>>> out(tiles), outAlpha(tiles);
     parallelFor(0, tiles, [&](size_t tile) {
       const double t0 = threadCpuSeconds();
       for (const detail::SilhouettePixel& c : buf.silhouette[tile]) {
-        if (!detail::atSilhouette(c, frontZ, cam.width(), cam.height(), opt.coverageReach)) continue;
-        res.color.at(int(c.x), int(c.y)) = Color(c.rgba[0], c.rgba[1], c.rgba[2], c.rgba[3]);
-        if (res.alpha) res.alpha->at(int(c.x), int(c.y)) = Color(c.alpha, c.alpha, c.alpha, c.alpha);
+        const int64_t behind = detail::silhouetteBehind(c, frontZ, partial.data(), w, h, opt.coverageReach);
+        if (behind < 0) continue;
+        const size_t i = size_t(c.y) * size_t(w) + c.x;
+        // premultiplied: the front = the stored result (straight, times its alpha) less the
+        // background's share; then over the neighbour's (opaque-frame) pixel
+        const float a = c.alpha, cw = c.rgba[3];
+        const Vec3f front = Vec3f(c.rgba[0], c.rgba[1], c.rgba[2]) * cw - (1 - a) * bg.w() * bg.head<3>();
+        // over what lay behind it in this pixel, then over the neighbour
+        const float ab = c.behind[3];
+        const Vec3f under = Vec3f(c.behind[0], c.behind[1], c.behind[2]);
+        const bool toBackground = std::isinf(frontZ[behind]);
+        const Color& nb = toBackground ? bg : res.color.pixels[size_t(behind)];
+        const float na = toBackground ? bg.w() : nb.w();
+        Color r;
+        r.head<3>() = front + (1 - a) * (under + (1 - ab) * na * nb.head<3>());
+        r.w() = a + (1 - a) * (ab + (1 - ab) * na);
+        if (r.w() > 0 && r.w() < 1) r.head<3>() /= r.w();
+        out[tile].push_back({i, r});
+        if (res.alpha) {
+          const float nAlpha = toBackground ? 0.0f : res.alpha->pixels[size_t(behind)].w();
+          const float ar = a + (1 - a) * (ab + (1 - ab) * nAlpha);
+          outAlpha[tile].push_back({i, Color(ar, ar, ar, ar)});
+        }
       }
       tileSeconds[tile].second += threadCpuSeconds() - t0;
     }, 1);
+    for (size_t tile = 0; tile < tiles; ++tile) {
+      for (const auto& [i, c] : out[tile]) res.color.pixels[i] = c;
+      for (const auto& [i, c] : outAlpha[tile]) res.alpha->pixels[i] = c;
+    }
   }
   for (const auto& [raster, resolve] : tileSeconds) {
     st.fragmentThreadSeconds += raster;

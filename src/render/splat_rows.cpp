@@ -550,6 +550,8 @@ struct Z3Rows {
   bool opaque;
   int nAttr;
   float coverage;  // Z3Tile::coverageScale(): a layer is opaque once its coverage reaches 1
+  float* behindBase;  // Z3Tile::behindPlane(0) (its planes `stride` apart), or null
+  int32_t* behindCnt;
   // per-lane counts of the lanes opened and of those dropped behind (a vector subtract of the
   // mask per row, not a popcount); opened() / occluded() sum them
   hn::Vec<hn::RebindToSigned<D>> openedV = hn::Zero(di), occludedV = hn::Zero(di);
@@ -557,8 +559,9 @@ struct Z3Rows {
   uint64_t occluded() const { return uint64_t(hn::GetLane(hn::SumOfLanes(di, occludedV))); }
   Z3Rows(Z3Tile& z3, bool opaqueFragments)
       : base(z3.plane(0, 0)), stride(size_t(z3.plane(0, 1) - z3.plane(0, 0))), cnt(z3.counts()),
-        opaque(opaqueFragments), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1),
-        coverage(z3.coverageScale()) {}
+        opaque(opaqueFragments || !z3.coverageOccludes()), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1),
+        coverage(z3.coverageOccludes() ? z3.coverageScale() : 0.0f), behindBase(z3.behindPlane(0)),
+        behindCnt(z3.behindCounts()) {}
   HWY_INLINE float* field(int f, size_t p) const { return base + size_t(f) * stride + p; }
   template <class AttrAt>
   HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
@@ -593,6 +596,16 @@ struct Z3Rows {
       openedV = hn::Sub(openedV, hn::VecFromMask(di, hn::RebindMask(di, open)));
     }
     occludedV = hn::Sub(occludedV, hn::VecFromMask(di, hn::RebindMask(di, behind)));
+    if (behindBase && !hn::AllFalse(d, behind)) {  // kept as the pixel's behind sums (Z3Tile::addBehind)
+      const auto has = hn::RebindMask(d, hn::Ne(hn::LoadU(di, behindCnt + p), hn::Zero(di)));
+      auto add = [&](int k, V v) {
+        float* q = behindBase + size_t(k) * stride + p;
+        hn::BlendedStore(hn::IfThenElse(has, hn::Add(hn::LoadU(d, q), v), v), behind, d, q);
+      };
+      for (int k = 0; k < Z3Tile::kAttrs; ++k) add(k, k < nAttr ? hn::Mul(w, attrAt(k)) : zero);
+      add(Z3Tile::kBehindZ, hn::Mul(w, z));
+      hn::BlendedStore(hn::Set(di, 1), hn::RebindMask(di, behind), di, behindCnt + p);
+    }
     return hn::AndNot(hn::Or(fast, behind), inside);
   }
 };
@@ -784,7 +797,7 @@ struct PointRun {
     VZ attr[Z3Tile::kAttrs];
     for (int k = 0; k < Z3Tile::kAttrs; ++k) attr[k] = hn::Set(dz, fa[k]);
     const VZ thr = hn::Set(dz, P.zThreshold), zeroZ = hn::Zero(dz);
-    zr.opaque = P.color[3] >= 1.0f;
+    zr.opaque = P.color[3] >= 1.0f || !z3.coverageOccludes();  // coverage at silhouettes: an opaque frame
     for (int row = 0; row < H; ++row) {
       const size_t rowBase = z3.index(r.x0, r.y0 + row);
       for (int c = 0; c < W; c += LZ) {

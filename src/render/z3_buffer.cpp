@@ -24,6 +24,25 @@ void Z3Tile::reset(const PixelRect& rect) {
   }
   counters_ = {};
   fragments_ = direct_ = 0;
+  if (!coverageOccludes_) setCoverageOccludes(false);  // the behind sums sized and cleared
+}
+
+void Z3Tile::addBehind(size_t p, float w, const float* attr, float depth) {
+  float* b = behind_.data() + p;
+  const size_t fs = capacity_;
+  const bool has = behindCount_[p] != 0;
+  for (int k = 0; k < kAttrs; ++k) b[k * fs] = (has ? b[k * fs] : 0.0f) + w * attr[k];
+  b[kBehindZ * fs] = (has ? b[kBehindZ * fs] : 0.0f) + w * depth;
+  behindCount_[p] = 1;
+}
+
+void Z3Tile::layerBehind(size_t p, const float* layer) {
+  float* b = behind_.data() + p;
+  const size_t fs = capacity_;
+  const bool has = behindCount_[p] != 0;
+  for (int k = 0; k < kAttrs; ++k) b[k * fs] = (has ? b[k * fs] : 0.0f) + layer[k * fs];
+  b[kBehindZ * fs] = (has ? b[kBehindZ * fs] : 0.0f) + layer[kZ * fs] * layer[kW * fs];
+  behindCount_[p] = 1;
 }
 
 namespace {
@@ -63,10 +82,14 @@ void Z3Tile::compress(float* px, int& n) {
   f(kZ) = 0.5f * (f(kZ) + b(kZ));
   f(kThr) = std::max(f(kThr), b(kThr));
   f(kW) = W;
-  f(kOpaque) = am >= 1.0f ? 1.0f : 0.0f;
+  f(kOpaque) = am >= 1.0f || !coverageOccludes() ? 1.0f : 0.0f;
   for (int i = best + 1; i + 1 < n; ++i) moveLayer(px, layerStride_, fs, i, i + 1);
   --n;
-  if (f(kOpaque) != 0) n = best + 1;  // an opaque merged layer hides everything behind it
+  if (f(kOpaque) != 0) {  // an opaque merged layer hides everything behind it
+    if (!coverageOccludes())
+      for (int i = best + 1; i < n; ++i) layerBehind(size_t(px - data_.data()), px + i * layerStride_);
+    n = best + 1;
+  }
   ++counters_.compressed;
 }
 
@@ -80,6 +103,7 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
   const float alpha = cov ? std::min(w * attr[kA] * coverage_, 1.0f) : attr[kA];  // the fragment's own
   // behind an opaque layer (always the last one): occluded
   if (n > 0 && at(n - 1, kOpaque) != 0 && depth > at(n - 1, kZ)) {
+    if (!coverageOccludes()) addBehind(p, w, attr, depth);
     ++counters_.occluded;
     return;
   }
@@ -103,7 +127,7 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
       at(0, kZ) = 0.5f * (at(0, kZ) + depth);
       at(0, kThr) = std::max(at(0, kThr), zThreshold);
       at(0, kW) = W;
-      at(0, kOpaque) = am >= 1.0f ? 1.0f : 0.0f;
+      at(0, kOpaque) = am >= 1.0f || !coverageOccludes() ? 1.0f : 0.0f;
       ++counters_.compressed;
       ++direct_;
       return;
@@ -112,6 +136,7 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
     // the compression may have produced an opaque layer in front of the fragment
     if (at(n - 1, kOpaque) != 0 && depth > at(n - 1, kZ) + std::max(zThreshold, at(n - 1, kThr))) {
       count_[p] = n;
+      if (!coverageOccludes()) addBehind(p, w, attr, depth);
       ++counters_.occluded;
       return;
     }
@@ -119,8 +144,13 @@ void Z3Tile::insertNew(size_t p, float depth, float zThreshold, float w, const f
   // b. allocation, keeping the layers sorted front to back
   int pos = n;
   while (pos > 0 && at(pos - 1, kZ) > depth) --pos;
-  const bool opaque = alpha >= 1.0f;  // coverage alpha: the fragment alone covers the pixel
-  if (opaque) n = pos;  // everything behind an opaque fragment is occluded: free it
+  // coverage alpha: the fragment alone covers the pixel, or coverage does not decide occlusion
+  const bool opaque = alpha >= 1.0f || !coverageOccludes();
+  if (opaque) {  // everything behind an opaque fragment is occluded: free it
+    if (!coverageOccludes())
+      for (int i = pos; i < n; ++i) layerBehind(p, px + i * layerStride_);
+    n = pos;
+  }
   for (int i = n; i > pos; --i) moveLayer(px, layerStride_, fs, i, i - 1);
   for (int k = 0; k < kAttrs; ++k) at(pos, k) = w * attr[k];
   at(pos, kZ) = depth;

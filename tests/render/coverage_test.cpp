@@ -229,6 +229,47 @@ TEST(Coverage, SilhouettesOnlyKeepInteriorGapsOpaque) {
   EXPECT_NEAR(edges.outside, everywhere.outside, 0.01f * everywhere.outside);  // the soft edge is kept
 }
 
+// Coverage at silhouettes keeps no layer behind a front one (an opaque frame's layers: the frame
+// costs what an opaque one does) but sums what it drops per pixel (Z3Tile::resolveBehind), so a
+// partly covered edge is composited over the surface behind it, not over the background: a red
+// sphere in front of a blue square on a green background shows no green along its outline inside
+// the square, and the outline is still soft (red and blue mixed).
+TEST(Coverage, InnerSilhouettesCompositeOverWhatLiesBehind) {
+  HybridModel m = shapes::sphere(0.5f, 20000, jittered());
+  for (Point& p : m.points) p.color = Color(1, 0, 0, 1), p.position.z() += 1.0f;
+  HybridModel square = shapes::plane(3, 3, 81, 81);
+  for (Point& p : square.points) p.color = Color(0, 0, 1, 1), m.points.push_back(p);
+  const int size = 160;
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 6), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, size, size);
+  RenderOptions o;
+  o.coverageGain = 1.5f;
+  o.coverageReach = 2;
+  o.background = Color(0, 1, 0, 1);
+  o.material.specular = 0;
+  o.alphaBuffer = true;
+  const RenderResult r = renderImage(m, cam, o);
+  // the sphere's outline lies ~ 0.5 / 5 of the focal length from the centre; the square reaches
+  // 1.5 / 6: pixels within 0.6 of the sphere's radius on either side of its outline
+  const float f = cam.focalPixels(), rs = 0.5f / 5.0f * f;
+  int ring = 0, mixed = 0;
+  float green = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const float dx = float(x) + 0.5f - 0.5f * size, dy = float(y) + 0.5f - 0.5f * size;
+      const float d = std::sqrt(dx * dx + dy * dy);
+      if (std::abs(d - rs) > 3) continue;
+      const Color& c = r.color.at(x, y);
+      ++ring;
+      green = std::max(green, c.y());
+      mixed += c.x() > 0.1f && c.z() > 0.1f;
+      EXPECT_NEAR(r.alpha->at(x, y).w(), 1.0f, 1e-5f) << x << "," << y;  // the square behind covers it
+    }
+  std::printf("ring %d pixels (radius %.1f px): %d red and blue mixed, most green %.4f\n", ring, rs, mixed, green);
+  EXPECT_GT(ring, 200);
+  EXPECT_GT(mixed, 40);         // soft: the sphere's edge is partly covered
+  EXPECT_LT(green, 0.02f);      // and composited over the blue square, never over the background
+}
+
 TEST(Coverage, SimdRowsMatchThePixelResolveAndThreads) {
   // a sphere of points in front of a strip plane: several layers, partly covered edges
   HybridModel m = shapes::sphere(0.6f, 20000, jittered());

@@ -73,12 +73,14 @@ struct RenderOptions {
   /// min(1, g sum_k c_k w_k) (w_k the fragments' resampling weights, c_k the inverse of the model's
   /// least kernel density around primitive k, src/render/coverage.h; g this gain), composited over
   /// what lies behind, instead of the normalised alpha that paints a splat's colour out to its
-  /// cut-off: the soft silhouette of a box-filtered mesh instead of a 1-3 pixel fringe. A partly
-  /// covered layer keeps the layers behind it (Z^3 step b waits for full coverage). Only when every
-  /// primitive is opaque (no alphaOverride < 1, no colour alpha < 1, no texture); otherwise the
-  /// thesis's alpha. Where it applies: coverageReach. 0 = off, the default: Table 5 (line vs point
-  /// model) gets worse, the contour point models' gaps show at their silhouettes, and frames cost
-  /// 10-120% more (docs/decisions.md, "Issue 14 (i14edge)", "Issue 14 (i14sil)"); 1.5 measured best
+  /// cut-off: the soft silhouette of a box-filtered mesh instead of a 1-3 pixel fringe. With
+  /// coverage everywhere (coverageReach 0) a partly covered layer keeps the layers behind it (Z^3
+  /// step b waits for full coverage); at silhouettes only, the frame keeps an opaque frame's layers
+  /// and sums what they drop per pixel, and a silhouette pixel's front is composited over that and
+  /// its farther neighbour. Only when every primitive is opaque (no alphaOverride < 1, no colour
+  /// alpha < 1, no texture); otherwise the thesis's alpha. 0 = off, the default: Table 5 (line vs
+  /// point model) gets worse and frames cost 6-27% more at silhouettes only (10-120% everywhere;
+  /// docs/decisions.md, "Issue 14 (i14edge)", "(i14sil)", "(lead, stop 24)"); 1.5 measured best
   /// for contour models. [0, 100].
   float coverageGain = 0.0f;
   /// Where coverage alpha applies (beyond the thesis; issue 14, docs/decisions.md "Issue 14

@@ -16,7 +16,9 @@
 /// Coverage alpha (beyond the thesis; issue 14, setCoverageScale): A then sums each fragment's
 /// coverage, weight times a per-primitive constant, and a layer's alpha is min(1, s A) (s the
 /// tile's coverage scale) instead of the weighted mean A/W; a layer is opaque (step b) only once
-/// that reaches 1, so a partly covered layer keeps what lies behind it.
+/// that reaches 1, so a partly covered layer keeps what lies behind it; or, without coverage
+/// occlusion (setCoverageOccludes(false), coverage at silhouettes only), at once as without
+/// coverage, with what it hides summed per pixel (resolveBehind).
 /// Storage: a fixed number of layers per pixel in structure-of-arrays planes, one plane of
 /// floats per (layer, field), row-major over the tile, so that the SIMD point rows
 /// (detail/splat_rows.h, pointRowsZ3) test and merge a whole row of pixels per instruction (the
@@ -114,7 +116,7 @@ class Z3Tile {
     float* ly = px + hit * layerStride_;
     for (int k = 0; k < kAttrs; ++k) ly[k * fs] += weight * attr[k];
     if (coverage_ > 0) {  // opaque once covered: what lies behind is freed (step b)
-      if (ly[kA * fs] * coverage_ >= 1.0f) {
+      if (coverageOccludes_ && ly[kA * fs] * coverage_ >= 1.0f) {
         ly[kOpaque * fs] = 1;
         count_[p] = hit + 1;
       }
@@ -213,17 +215,56 @@ class Z3Tile {
   /// primitive is opaque, and the primitives' alpha attribute to their coverage constants.
   float coverageScale() const { return coverage_; }
   void setCoverageScale(float s) { coverage_ = s > 0 ? s : 0; }
+  /// With coverage: whether a layer occludes only once covered (true, the default: a partly
+  /// covered layer keeps the layers behind it) or at once, as an opaque layer does without
+  /// coverage (false: coverage at silhouettes only, RenderOptions::coverageReach > 0, where the
+  /// resolve composites a partly covered front over the farther neighbour instead; the layers
+  /// are those of an opaque frame, so the frame costs what an opaque one does).
+  bool coverageOccludes() const { return coverage_ <= 0 || coverageOccludes_; }
+  void setCoverageOccludes(bool on) {
+    coverageOccludes_ = on;
+    if (on) return;
+    if (behind_.size() < capacity_ * kBehindFields) behind_.resize(capacity_ * kBehindFields);
+    behindCount_.assign(capacity_, 0);
+  }
+  /// Without coverage occlusion (setCoverageOccludes(false)) what the layers do not keep is summed
+  /// per pixel instead of dropped: the fragments behind the front layer and the layers a nearer one
+  /// frees, as one accumulation of the layer sums (kR..kNz) and of w z (kBehindZ), so that a
+  /// silhouette pixel's partial front can be composited over what lay behind it (resolveBehind).
+  /// The SIMD rows add to it through behindPlane / behindCounts (a pixel's sums are valid where its
+  /// count is not 0). Null / empty otherwise.
+  enum { kBehindZ = kAttrs, kBehindFields };
+  float* behindPlane(int field) { return coverageOccludes() ? nullptr : behind_.data() + size_t(field) * capacity_; }
+  int32_t* behindCounts() { return coverageOccludes() ? nullptr : behindCount_.data(); }
+  /// What lay behind pixel (x, y)'s layers (premultiplied colour, shade(albedo, normal sum, depth)
+  /// as resolve() lights a layer, and its coverage alpha); zero where nothing did or coverage
+  /// occludes.
+  template <class Shade>
+  Color resolveBehind(int x, int y, Shade&& shade) const {
+    if (coverageOccludes()) return Color(0, 0, 0, 0);
+    const size_t p = index(x, y);
+    if (behindCount_[p] == 0) return Color(0, 0, 0, 0);
+    auto B = [&](int f) { return behind_[size_t(f) * capacity_ + p]; };
+    const float W = B(kW);
+    if (!(W > 0)) return Color(0, 0, 0, 0);
+    const float iw = 1.0f / W, a = layerAlpha(B(kA), iw);
+    const Vec3f c = shade(Vec3f(B(kR) * iw, B(kG) * iw, B(kB) * iw), Vec3f(B(kNx), B(kNy), B(kNz)), B(kBehindZ) * iw);
+    return Color(a * c.x(), a * c.y(), a * c.z(), a);
+  }
   /// A layer's alpha from its sum A and 1/W (either mode).
   float layerAlpha(float A, float invW) const {
     return coverage_ > 0 ? std::min(A * coverage_, 1.0f) : std::clamp(A * invW, 0.0f, 1.0f);
   }
   /// Whether a lone fragment of this weight and alpha attribute is opaque (frees what is behind).
   bool fragmentOpaque(float weight, float alpha) const {
+    if (coverage_ > 0 && !coverageOccludes_) return true;  // the renderer's coverage: opaque primitives only
     return coverage_ > 0 ? weight * alpha * coverage_ >= 1.0f : alpha >= 1.0f;
   }
 
  private:
   void compress(float* px, int& n);
+  void addBehind(size_t p, float w, const float* attr, float depth);  // a fragment (see behindPlane)
+  void layerBehind(size_t p, const float* layer);                     // a freed layer's sums
   void insertNew(size_t pixel, float depth, float zThreshold, float weight, const float* attr);  // steps b and c
   PixelRect rect_;
   int layers_;
@@ -235,6 +276,9 @@ class Z3Tile {
   uint64_t fragments_ = 0, direct_ = 0;
   bool blendNormals_ = true;
   float coverage_ = 0;
+  bool coverageOccludes_ = true;
+  std::vector<float> behind_;          ///< kBehindFields planes of capacity_ (setCoverageOccludes(false))
+  std::vector<int32_t> behindCount_;   ///< per pixel: 0 = nothing behind yet
 };
 
 }  // namespace linesurf
