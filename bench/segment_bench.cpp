@@ -267,33 +267,52 @@ void BM_ContourPrepare(benchmark::State& state) {
 }
 BENCHMARK(BM_ContourPrepare)->Args({0, 0})->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
-// The contour line model of mesh range(0) (kMeshes), its segments prepared as the renderer does
-// (SIMD batches, the exact path for the lanes they leave), 8 views, one thread: ns per segment
-// and the share of the segments the batches handed to the exact path (issue 13, i13turn).
-void BM_ContourSegmentPrepare(benchmark::State& state) {
-  std::string error;
-  const HybridModel* m = contourModel(int(state.range(0)), 1, error);
-  if (!m) return state.SkipWithError(error.c_str());
-  RenderOptions o;
-  o.alphaBuffer = true;
-  const Renderer r(*m, o);
+// The segments of model m prepared as the renderer does (SIMD batches, the exact path for the
+// lanes they leave), 8 views, one thread: ns per segment and the share of the segments the
+// batches handed to the exact path.
+void segmentPrepare(benchmark::State& state, const HybridModel& m, const RenderOptions& o) {
+  const Renderer r(m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
-  std::vector<PreparedSegment> segs(m->segments.size());
+  std::vector<PreparedSegment> segs(m.segments.size());
   std::vector<PrimitiveStatus> status(segs.size());
   size_t v = 0, exact = 0, all = 0;
   for (auto _ : state) {
-    FrameContext frame = FrameContext::make(views[v++ % views.size()], o, r.sphere(), m->attributes.colors);
-    frame.endpointNormals = m->attributes.endpointNormals;
-    exact += prepareSegments(m->segments.data(), 0, segs.size(), frame, segmentSetupFrame(frame), segs.data(), status.data());
+    FrameContext frame = FrameContext::make(views[v++ % views.size()], o, r.sphere(), m.attributes.colors);
+    frame.endpointNormals = m.attributes.endpointNormals;
+    exact += prepareSegments(m.segments.data(), 0, segs.size(), frame, segmentSetupFrame(frame), segs.data(), status.data());
     all += segs.size();
     benchmark::DoNotOptimize(status.data());
   }
   state.counters["ns/segment"] = benchmark::Counter(double(segs.size()), benchmark::Counter::kIsIterationInvariantRate |
                                                                            benchmark::Counter::kInvert);
   state.counters["exact_share"] = double(exact) / double(std::max<size_t>(1, all));
+  state.counters["segments"] = double(segs.size());
+}
+
+// segmentPrepare of the contour line model of mesh range(0) (kMeshes) (issue 13, i13turn).
+void BM_ContourSegmentPrepare(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = contourModel(int(state.range(0)), 1, error);
+  if (!m) return state.SkipWithError(error.c_str());
+  RenderOptions o;
+  o.alphaBuffer = true;
+  segmentPrepare(state, *m, o);
   state.SetLabel(std::string(kMeshes[state.range(0)]) + " contour lines simd=" + renderSimdTarget());
 }
 BENCHMARK(BM_ContourSegmentPrepare)->DenseRange(0, 6)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// segmentPrepare of hybrid model range(0) (kModels) of kind range(1) (1 eps-delta, 2 greedy, 3
+// hierarchical) (issue 13, i13prep3: their long segments with several sub-segments).
+void BM_HybridSegmentPrepare(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = model(int(state.range(0)), int(state.range(1)), error);
+  if (!m) return state.SkipWithError(error.c_str());
+  segmentPrepare(state, *m, RenderOptions{});
+  state.SetLabel(std::string(kModels[state.range(0)]) +
+                 (state.range(1) == 1 ? " eps-delta" : state.range(1) == 2 ? " greedy" : " hierarchical") +
+                 " simd=" + renderSimdTarget());
+}
+BENCHMARK(BM_HybridSegmentPrepare)->ArgsProduct({{3, 4}, {1, 2, 3}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // The bunny contour segments of one view prepared one at a time (prepareSegment), the first
 // `limit` drawn ones (their records in the cache: the arithmetic alone for the benchmarks below).

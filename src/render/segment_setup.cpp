@@ -46,7 +46,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 // The margins below send a lane to the exact path wherever float rounding could decide a test
 // otherwise than the double arithmetic of prepareSegment: relative 1e-4 on the culling and depth
-// tests, 4% on the subdivision test (its float error is below 1e-4), a facing of 0.02 at the
+// tests, 2% of an integer on the sub-segment count (its float error is below 1e-3), a facing of 0.02 at the
 // ends (below it the float covariance loses more than 1e-4 relative), covariances with an
 // eigenvalue within 0.1% of the stretch clamp (beyond it the clamp is applied here).
 constexpr float kPieceTolerance2 = float(segment::kPieceTolerance * segment::kPieceTolerance);
@@ -470,6 +470,7 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     const Cov M0 = cov(cx, cy, cz, exact);
     const Cov M1 = cov(qx1, qy1, qz1, exact);
     Cov Mm{hn::Mul(half, hn::Add(M0.a, M1.a)), hn::Mul(half, hn::Add(M0.b, M1.b)), hn::Mul(half, hn::Add(M0.c, M1.c)), zero};
+    Mm.det = hn::MulSub(Mm.a, Mm.c, hn::Mul(Mm.b, Mm.b));  // the mean's (Mat2d::determinant)
     auto norm2 = [&](VF a, VF b, VF c) { return hn::MulAdd(a, a, hn::MulAdd(hn::Add(b, b), b, hn::Mul(c, c))); };
     VF change2 = norm2(hn::Sub(M1.a, M0.a), hn::Sub(M1.b, M0.b), hn::Sub(M1.c, M0.c));
     // the middle's own covariance, unless the segment is short against its depth
@@ -484,22 +485,76 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       const VF c2 = hn::Mul(S(16.0f), norm2(hn::Sub(Mc.a, Mm.a), hn::Sub(Mc.b, Mm.b), hn::Sub(Mc.c, Mm.c)));
       change2 = hn::IfThenElse(isShort, change2, hn::Max(change2, c2));
       Mm.a = hn::IfThenElse(isShort, Mm.a, Mc.a), Mm.b = hn::IfThenElse(isShort, Mm.b, Mc.b);
-      Mm.c = hn::IfThenElse(isShort, Mm.c, Mc.c);
+      Mm.c = hn::IfThenElse(isShort, Mm.c, Mc.c), Mm.det = hn::IfThenElse(isShort, Mm.det, Mc.det);
     }
     const VF limit = hn::Mul(S(kPieceTolerance2), hn::Min(norm2(M0.a, M0.b, M0.c), norm2(M1.a, M1.b, M1.c)));
-    exact = hn::Or(exact, hn::Not(hn::Lt(change2, hn::Mul(S(0.96f), limit))));  // K > 1 or near it
-    // the only piece (segment::makePiece)
+    // the sub-segment count K = ceil(change / (kPieceTolerance scale)) (prepareSegment's stage 2);
+    // within 2% of an integer ceil() (rounding could decide it), or beyond kBatchPieces, the exact
+    // path decides
+    const VF ratio = hn::Sqrt(hn::Div(change2, limit));
+    const VF near = hn::Round(ratio);
+    exact = hn::Or(exact, hn::And(hn::Ge(near, one), hn::Lt(hn::Abs(hn::Sub(ratio, near)), S(0.02f))));
+    exact = hn::Or(exact, hn::Not(hn::Lt(ratio, S(float(kBatchPieces)))));
+    const VF K = hn::Max(hn::Ceil(hn::Min(ratio, S(float(kBatchPieces)))), one);
+    const MF multi = hn::Gt(K, one);
+    // the first piece (segment::makePiece) over [0, L] (K = 1) with the middle's covariance
     const VF detm = hn::MulSub(Mm.a, Mm.c, hn::Mul(Mm.b, Mm.b));
     const VF ic = hn::Div(one, Mm.c);
-    const VF invM00 = hn::Mul(detm, ic);
-    const VF pieceReach = hn::Mul(R, hn::Sqrt(Mm.a));
-    const VF scale0 = hn::Div(one, hn::Mul(rad, hn::Sqrt(M0.det))), scale1 = hn::Div(one, hn::Mul(rad, hn::Sqrt(M1.det)));
+    VF invM00 = hn::Mul(detm, ic);
+    VF pieceReach = hn::Mul(R, hn::Sqrt(Mm.a));
+    VF scale0 = hn::Div(one, hn::Mul(rad, hn::Sqrt(M0.det)));
+    const VF scale1 = hn::Div(one, hn::Mul(rad, hn::Sqrt(M1.det)));
     VF slope = hn::Mul(hn::Sub(scale1, scale0), iL);
     slope = hn::IfThenElseZero(hn::Gt(hn::Mul(hn::Abs(slope), len), hn::Mul(S(1e-4f), scale0)), slope);
-    St(hn::Neg(hn::Mul(Mm.b, ic)), B.skew), St(ic, B.across), St(invM00, B.invM00);
+    VF skew = hn::Neg(hn::Mul(Mm.b, ic)), across = ic;
+    VF aMin = hn::Neg(pieceReach), aMax = hn::Add(len, pieceReach), bMax = hn::Mul(R, hn::Sqrt(Mm.c));
+    if (!hn::AllFalse(d, hn::AndNot(exact, hn::And(multi, active)))) {
+      // K > 1 (issue 13, i13prep3: hybrid models' long segments): piece p over [L p / K, L (p + 1)
+      // / K] with the covariance at its middle, its weight scales from the covariances at its ends
+      // (M0, M1, the middle's where 2 (p + 1) = K, else the covariance there), as the exact path's
+      // stage 2; the footprint box around all pieces
+      VF maxReach = zero, loDet = M0.det;
+      aMin = hn::IfThenElse(multi, zero, aMin), aMax = hn::IfThenElse(multi, len, aMax);
+      bMax = hn::IfThenElseZero(hn::Not(multi), bMax);
+      const VF invK = hn::Div(one, K);
+      const int maxK = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(hn::AndNot(exact, active), K))));
+      for (int p = 0; p < maxK; ++p) {
+        const MF live = hn::And(multi, hn::Lt(S(float(p)), K));
+        const VF a0 = hn::Mul(hn::Mul(len, S(float(p))), invK), a1 = hn::Mul(hn::Mul(len, S(float(p + 1))), invK);
+        const VF am = hn::Mul(half, hn::Add(a0, a1));
+        MF bad = hn::Lt(one, zero);
+        const Cov Mp = cov(hn::MulAdd(am, ex, cx), hn::MulAdd(am, ey, cy), hn::MulAdd(am, ez, cz), bad);
+        const Cov Mh = cov(hn::MulAdd(a1, ex, cx), hn::MulAdd(a1, ey, cy), hn::MulAdd(a1, ez, cz), bad);
+        const MF last = hn::Eq(S(float(p + 1)), K), middle = hn::Eq(S(float(2 * (p + 1))), K);
+        const VF hiDet = hn::IfThenElse(last, M1.det, hn::IfThenElse(middle, Mm.det, Mh.det));
+        exact = hn::Or(exact, hn::And(live, hn::Or(bad, hn::AndNot(hn::Or(last, middle), hn::Not(hn::Gt(hiDet, zero))))));
+        const VF det = hn::MulSub(Mp.a, Mp.c, hn::Mul(Mp.b, Mp.b)), idet = hn::Div(one, det);
+        const VF pic = hn::Div(one, Mp.c), pInv = hn::Mul(det, pic), reach = hn::Mul(R, hn::Sqrt(Mp.a));
+        const VF s0 = hn::Div(one, hn::Mul(rad, hn::Sqrt(loDet))), s1 = hn::Div(one, hn::Mul(rad, hn::Sqrt(hiDet)));
+        VF sl = hn::Div(hn::Sub(s1, s0), hn::Sub(a1, a0));
+        sl = hn::IfThenElseZero(hn::Gt(hn::Mul(hn::Abs(sl), hn::Sub(a1, a0)), hn::Mul(S(1e-4f), s0)), sl);
+        const VF pk = hn::Sqrt(hn::Div(half, pInv)), pErf = hn::Sqrt(hn::Mul(S(0.5f * float(kPi)), pInv));
+        const VF pSkew = hn::Neg(hn::Mul(Mp.b, pic));
+        const VF fields[kPieceFields] = {a0, a1, hn::Mul(Mp.c, idet), hn::Neg(hn::Mul(Mp.b, idet)), hn::Mul(Mp.a, idet),
+                                         s0, s1, reach, pSkew, pic, pInv, pk, pErf, sl};
+        for (int q = 0; q < kPieceFields; ++q) St(fields[q], B.piece[q][p]);
+        if (p == 0) {
+          skew = hn::IfThenElse(multi, pSkew, skew), across = hn::IfThenElse(multi, pic, across);
+          invM00 = hn::IfThenElse(multi, pInv, invM00), scale0 = hn::IfThenElse(multi, s0, scale0);
+          slope = hn::IfThenElse(multi, sl, slope);
+        }
+        aMin = hn::IfThenElse(live, hn::Min(aMin, hn::Sub(a0, reach)), aMin);
+        aMax = hn::IfThenElse(live, hn::Max(aMax, hn::Add(a1, reach)), aMax);
+        bMax = hn::IfThenElse(live, hn::Max(bMax, hn::Mul(R, hn::Sqrt(Mp.c))), bMax);
+        maxReach = hn::IfThenElse(live, hn::Max(maxReach, reach), maxReach);
+        loDet = hiDet;
+      }
+      St(maxReach, B.pieceMaxReach), St(hn::Mul(K, iL), B.pieceInvLength);
+    }
+    St(K, B.pieceCount);
+    St(skew, B.skew), St(across, B.across), St(invM00, B.invM00);
     St(hn::Sqrt(hn::Div(half, invM00)), B.k), St(hn::Sqrt(hn::Mul(S(0.5f * float(kPi)), invM00)), B.erfScale);
     St(scale0, B.scale0), St(slope, B.slope);
-    const VF aMin = hn::Neg(pieceReach), aMax = hn::Add(len, pieceReach), bMax = hn::Mul(R, hn::Sqrt(Mm.c));
     St(aMin, B.aMin), St(aMax, B.aMax), St(bMax, B.bMax), St(len, B.length);
     // stage 4: the footprint box between the near and far planes, projected
     VF x0 = inf, x1 = hn::Neg(inf), y0 = inf, y1 = hn::Neg(inf);
@@ -578,6 +633,13 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       n0x = hn::IfThenElse(sm, ax, nx), n0y = hn::IfThenElse(sm, ay, ny), n0z = hn::IfThenElse(sm, az, nz);
       n1x = hn::IfThenElse(sm, bx, nx), n1y = hn::IfThenElse(sm, by, ny), n1z = hn::IfThenElse(sm, bz, nz);
     }
+    // shade Stations: turning, or K > 1 sub-segments with Gouraud colours (at least K intervals:
+    // prepareSegment's stage 6)
+    MF shaded = turning;
+    if (!F.perPixelLighting) {
+      shaded = hn::Or(turning, multi);
+      stations = hn::IfThenElse(multi, hn::Max(stations, K), stations);
+    }
     St(n0x, B.n0x), St(n0y, B.n0y), St(n0z, B.n0z), St(n1x, B.n1x), St(n1y, B.n1y), St(n1z, B.n1z);
     St(hn::Sub(n1x, n0x), B.dnx), St(hn::Sub(n1y, n0y), B.dny), St(hn::Sub(n1z, n0z), B.dnz);
     St(stations, B.stations);
@@ -594,17 +656,17 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       St(dif0, B.diffuse0), St(spec0, B.specular0), St(dif1, B.diffuse1), St(spec1, B.specular1);
       const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
       const VF r0 = Lit(cr, dif0, spec0, lr), g0 = Lit(cg, dif0, spec0, lg), b0 = Lit(cb, dif0, spec0, lb);
-      ar = hn::IfThenElse(turning, cr, r0), ag = hn::IfThenElse(turning, cg, g0), ab = hn::IfThenElse(turning, cb, b0);
-      dcx = hn::IfThenElseZero(hn::Not(turning), hn::Sub(Lit(cr, dif1, spec1, lr), r0));
-      dcy = hn::IfThenElseZero(hn::Not(turning), hn::Sub(Lit(cg, dif1, spec1, lg), g0));
-      dcz = hn::IfThenElseZero(hn::Not(turning), hn::Sub(Lit(cb, dif1, spec1, lb), b0));
+      ar = hn::IfThenElse(shaded, cr, r0), ag = hn::IfThenElse(shaded, cg, g0), ab = hn::IfThenElse(shaded, cb, b0);
+      dcx = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cr, dif1, spec1, lr), r0));
+      dcy = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cg, dif1, spec1, lg), g0));
+      dcz = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cb, dif1, spec1, lb), b0));
     }
     St(ar, B.ar), St(ag, B.ag), St(ab, B.ab), St(dcx, B.dcx), St(dcy, B.dcy), St(dcz, B.dcz);
     {  // the index, and the word holding smooth and shade
       const hn::RebindToUnsigned<DF> du;
       using VU = hn::Vec<decltype(du)>;
       hn::StoreU(hn::Add(hn::Set(du, B.first), hn::BitCast(du, hn::LoadU(di, B.lane + i))), du, B.index + i);
-      const VU shade = hn::IfThenElse(hn::RebindMask(du, turning), hn::Set(du, uint32_t(SegmentShade::Stations)),
+      const VU shade = hn::IfThenElse(hn::RebindMask(du, shaded), hn::Set(du, uint32_t(SegmentShade::Stations)),
                                       hn::IfThenElse(hn::RebindMask(du, sm), hn::Set(du, uint32_t(SegmentShade::Smooth)),
                                                      hn::Set(du, uint32_t(F.perPixelLighting ? SegmentShade::Constant
                                                                                              : SegmentShade::Linear))));
@@ -614,7 +676,7 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       hn::StoreU(flags, du, B.flags + i);
       // stationCount (untexturedStations): 0 where lighting is deferred, kInlineStations for two
       // intervals, else -1 (in SegmentExtra)
-      const auto inl = hn::And(turning, hn::Or(hn::Eq(stations, zero), hn::Eq(stations, S(float(kInlineStations - 1)))));
+      const auto inl = hn::And(shaded, hn::Or(hn::Eq(stations, zero), hn::Eq(stations, S(float(kInlineStations - 1)))));
       const VF count = hn::IfThenElse(inl, hn::IfThenElseZero(hn::Gt(stations, zero), S(float(kInlineStations))), S(-1.0f));
       hn::StoreU(hn::And(hn::BitCast(du, hn::ConvertTo(di, count)), hn::Set(du, 0xFFu)), du, B.stationCount + i);
     }
@@ -867,9 +929,11 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       // the SegmentExtra of each turning lane's slot (its station colours below), where the slot
       // has one from an earlier frame: fetched while the records' images are made
       if (!(b.status[k] == 0.0f || b.status[k] == 3.0f) || !(b.stations[k] >= 0)) continue;  // drawn lanes only
-      if (stationsInline(int(b.stations[k]))) continue;  // their stations in the record
+      const bool pieces = b.pieceCount[k] > 1.0f;  // their pieces in SegmentExtra
+      if (stationsInline(int(b.stations[k])) && !pieces) continue;  // their stations in the record
       if (const SegmentExtra* x = out[base + size_t(b.lane[k])].extra.get()) {
         const char* c = reinterpret_cast<const char*>(&x->colour);
+        if (pieces) __builtin_prefetch(x, 1);
         __builtin_prefetch(c, 1);
         __builtin_prefetch(c + sizeof(x->colour) + 2 * sizeof(Vec2f) + 2 * sizeof(int), 1);
       }
@@ -893,6 +957,23 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       char* dst = reinterpret_cast<char*>(&rec);
       std::memcpy(dst + 8, b.rec[0] + 4 * k + 2, 8);
       for (int c = 1; c < detail::kRecordChunks; ++c) std::memcpy(dst + 16 * c, b.rec[c] + 4 * k, 16);
+      if (const int K = int(b.pieceCount[k]); K > 1) {  // its sub-segments in the slot's SegmentExtra
+        SegmentExtra& x = extraOf(rec);
+        x.pieces.resize(size_t(K));
+        for (int p = 0; p < K; ++p) {
+          auto f = [&](int field) { return b.piece[field][p][k]; };
+          SegmentPiece& q = x.pieces[size_t(p)];
+          q.a0 = f(detail::kPieceA0), q.a1 = f(detail::kPieceA1);
+          q.m00 = f(detail::kPieceM00), q.m01 = f(detail::kPieceM01), q.m11 = f(detail::kPieceM11);
+          q.scale0 = f(detail::kPieceScale0), q.scale1 = f(detail::kPieceScale1), q.reach = f(detail::kPieceReach);
+          q.skew = f(detail::kPieceSkew), q.across = f(detail::kPieceAcross), q.invM00 = f(detail::kPieceInvM00);
+          q.k = f(detail::kPieceK), q.erfScale = f(detail::kPieceErfScale), q.slope = f(detail::kPieceSlope);
+        }
+        x.pieceInvLength = b.pieceInvLength[k], x.pieceMaxReach = b.pieceMaxReach[k];
+        detail::SegmentRaster& r = rec.raster;
+        r.pieceCount = K, r.pieces = x.pieces.data();
+        r.pieceInvLength = x.pieceInvLength, r.pieceMaxReach = x.pieceMaxReach;
+      }
       const int stations = int(b.stations[k]);
       if (stations >= 0) {  // turning: shade Stations (in the record or SegmentExtra), lit at the stations
         if (jobs.count + stations > detail::kStationJobs) flushStations(F, b, jobs);

@@ -1,10 +1,10 @@
 #pragma once
 /// The prepare stage of segment splats in batches (beyond the thesis, issue 13): the common case
-/// of prepareSegment (segment_splat.h: ScreenSpace, untextured, one sub-segment, not
-/// depth-clipped, colour linear along the segment) in SIMD over a batch of segments, in float
+/// of prepareSegment (segment_splat.h: ScreenSpace, untextured, up to kBatchPieces sub-segments,
+/// not depth-clipped) in SIMD over a batch of segments, in float
 /// (segment_setup.cpp, Highway runtime dispatch). Every lane the SIMD code cannot decide safely
 /// (unusual input, near a threshold of a culling or subdivision test, clamped covariance, near
-/// grazing, depth-clipped, more than one sub-segment) is prepared by
+/// grazing, depth-clipped, more than kBatchPieces sub-segments) is prepared by
 /// prepareSegment itself, the exact path; the others agree with it up to float rounding
 /// (tests/render/segment_prepare_test.cpp).
 #include <cstddef>
@@ -34,6 +34,12 @@ struct SegmentRecordTemplate {
 };
 
 inline constexpr int kSegmentBatch = 64;
+/// The most ScreenSpace sub-segments a lane of the batches takes (issue 13, i13prep3: hybrid
+/// models' long segments); more go to the exact path.
+inline constexpr int kBatchPieces = 8;
+/// The fields of a sub-segment (SegmentPiece) as the batches write them, one array each.
+enum PieceField { kPieceA0, kPieceA1, kPieceM00, kPieceM01, kPieceM11, kPieceScale0, kPieceScale1, kPieceReach,
+                  kPieceSkew, kPieceAcross, kPieceInvM00, kPieceK, kPieceErfScale, kPieceSlope, kPieceFields };
 
 /// Per-frame constants of the segment set-up.
 struct SegmentSetupFrame {
@@ -88,6 +94,11 @@ struct SegmentSetupBatch {
   alignas(64) float skew[kSegmentBatch], across[kSegmentBatch], invM00[kSegmentBatch], k[kSegmentBatch],
       erfScale[kSegmentBatch], scale0[kSegmentBatch], slope[kSegmentBatch];
   alignas(64) float qx[4][kSegmentBatch], qy[4][kSegmentBatch];      ///< projected footprint box
+  /// ScreenSpace sub-segments (prepareSegment's stage 2, issue 13, i13prep3): K per lane (1: the
+  /// piece above only), K / length, the largest reach, and for K > 1 piece p's field f at
+  /// piece[f][p][lane] (piece 0 is also the one above)
+  alignas(64) float pieceCount[kSegmentBatch], pieceInvLength[kSegmentBatch], pieceMaxReach[kSegmentBatch];
+  alignas(64) float piece[kPieceFields][kBatchPieces][kSegmentBatch];
   alignas(64) int32_t x0[kSegmentBatch], y0[kSegmentBatch], x1[kSegmentBatch], y1[kSegmentBatch];
   /// shading normals at p0 and p1 (unit; the plane normal unless smooth)
   alignas(64) float n0x[kSegmentBatch], n0y[kSegmentBatch], n0z[kSegmentBatch];

@@ -9,6 +9,7 @@
 // test checks that they are a minority, and not none (the awkward cases above are among them).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -90,13 +91,38 @@ std::string agree(const PreparedSegment& f, const PreparedSegment& x, const Vec2
   rel("aMin", a.aMin, b.aMin, ext, 1e-3f);
   rel("aMax", a.aMax, b.aMax, ext, 1e-3f);
   rel("bMax", a.bMax, b.bMax, b.bMax, 1e-3f);
-  rel("skew", a.skew, b.skew, std::max(1.0f, std::abs(b.skew)), 1e-3f);
-  rel("across", a.across, b.across, b.across, 1e-3f);
-  rel("invM00", a.invM00, b.invM00, b.invM00, 1e-3f);
-  rel("k", a.k, b.k, b.k, 1e-3f);
-  rel("erfScale", a.erfScale, b.erfScale, b.erfScale, 1e-3f);
-  rel("scale0", a.scale0, b.scale0, b.scale0, 1e-3f);
+  // the kernel constants a piece and the record's first piece share
+  auto kernel = [&](const auto& p, const auto& q) {
+    rel("skew", p.skew, q.skew, std::max(1.0f, std::abs(q.skew)), 1e-3f);
+    rel("across", p.across, q.across, q.across, 1e-3f);
+    rel("invM00", p.invM00, q.invM00, q.invM00, 1e-3f);
+    rel("k", p.k, q.k, q.k, 1e-3f);
+    rel("erfScale", p.erfScale, q.erfScale, q.erfScale, 1e-3f);
+    rel("scale0", p.scale0, q.scale0, q.scale0, 1e-3f);
+  };
+  kernel(a, b);
   rel("slope*L", a.slope * a.length, b.slope * b.length, b.scale0, 2e-3f);
+  if (f.pieceCount() > 1 && x.pieceCount() == f.pieceCount()) {  // the sub-segments (in extra)
+    rel("pieceInvLength", a.pieceInvLength, b.pieceInvLength, b.pieceInvLength, 1e-4f);
+    rel("pieceMaxReach", a.pieceMaxReach, b.pieceMaxReach, ext, 1e-3f);
+    if (a.pieces != f.extra->pieces.data() || b.pieces != x.extra->pieces.data() ||
+        f.extra->pieces.size() != size_t(f.pieceCount()) || x.extra->pieces.size() != size_t(x.pieceCount()))
+      err += "pieces; ";
+    else
+      for (int k = 0; k < f.pieceCount(); ++k) {
+        const SegmentPiece &p = a.pieces[k], &q = b.pieces[k];
+        rel("piece a0", p.a0, q.a0, ext, 1e-4f);
+        rel("piece a1", p.a1, q.a1, ext, 1e-4f);
+        rel("piece reach", p.reach, q.reach, ext, 1e-3f);
+        const float m = std::max({std::abs(q.m00), std::abs(q.m11), std::abs(q.m01)});
+        rel("piece m00", p.m00, q.m00, m, 1e-3f);
+        rel("piece m01", p.m01, q.m01, m, 1e-3f);
+        rel("piece m11", p.m11, q.m11, m, 1e-3f);
+        kernel(p, q);
+        rel("piece scale1", p.scale1, q.scale1, q.scale1, 1e-3f);
+        rel("piece slope*len", p.slope * (p.a1 - p.a0), q.slope * (q.a1 - q.a0), q.scale0, 2e-3f);
+      }
+  }
   rel("zThreshold0", a.zThreshold0, b.zThreshold0, b.zThreshold0, 1e-3f);
   rel("zThreshold1", a.zThreshold1, b.zThreshold1, b.zThreshold1, 1e-3f);
   // the ray through `centre` (the segment's middle) meets the plane at the same depth and (a, b),
@@ -140,6 +166,7 @@ struct Tally {
   size_t segments = 0, scalar = 0;  ///< all, and those the SIMD code left to prepareSegment
   int compared = 0, edge = 0, visible = 0;
   int stations = 0;  ///< visible segments the exact path shades with several stations (shade Stations)
+  int pieces = 0;    ///< compared segments with several sub-segments
 };
 
 // One frame: every segment's status and constants from the batches against the exact path's.
@@ -172,6 +199,7 @@ void check(const std::vector<Segment>& segs, const Camera& cam, const RenderOpti
       const std::string err = agree(batched[i], exact[i], cam.project(mid).head<2>());
       EXPECT_TRUE(err.empty()) << "segment " << i << ": " << err;
       ++tally.compared;
+      tally.pieces += exact[i].pieceCount() > 1;
     }
     tally.visible += visible(sx[i]);
     tally.stations += visible(sx[i]) && exact[i].shade == SegmentShade::Stations;
@@ -200,8 +228,9 @@ TEST(SegmentPrepare, BatchesAgreeWithTheExactPath) {
   EXPECT_LT(tally.edge, tally.compared / 200);
   EXPECT_LT(tally.scalar, tally.segments / 2);
   EXPECT_GT(tally.scalar, tally.segments / 100);
-  std::printf("%zu segments, %zu to the exact path, %d visible, %d compared, %d at the edge\n", tally.segments,
-              tally.scalar, tally.visible, tally.compared, tally.edge);
+  EXPECT_GT(tally.pieces, 100);  // segments with several sub-segments compared
+  std::printf("%zu segments, %zu to the exact path, %d visible, %d compared (%d with sub-segments), %d at the edge\n",
+              tally.segments, tally.scalar, tally.visible, tally.compared, tally.pieces, tally.edge);
 }
 
 // Smooth segments whose shading normals turn by 0.1 .. 1.3 rad along them (contour line models:
