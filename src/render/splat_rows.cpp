@@ -199,7 +199,7 @@ HWY_INLINE int expandSpans(DF d, const RowSpan* spans, int count, float* px, flo
 struct SegmentFrameV {
   DF d;
   VF one = hn::Set(d, 1.0f), zero = hn::Zero(d), mhalf = hn::Set(d, -0.5f);
-  VF R2, nearD, farD;
+  VF R2, halfR2, nearD, farD;
   VF gcut;  ///< exp(-R^2 / 2) (as expHalfNeg gives it): the slope term's ends where the cutoff bounds
   float r2 = std::numeric_limits<float>::quiet_NaN(), nd = 0, fd = 0;
   bool poly = false;  ///< R2 <= kPolyExpMaxQ: exp by the polynomial
@@ -208,7 +208,7 @@ struct SegmentFrameV {
   HWY_INLINE void set(const SegmentRaster& S) {
     if (S.R2 == r2 && S.nearD == nd && S.farD == fd) return;
     r2 = S.R2, nd = S.nearD, fd = S.farD;
-    R2 = hn::Set(d, r2), nearD = hn::Set(d, nd), farD = hn::Set(d, fd);
+    R2 = hn::Set(d, r2), halfR2 = hn::Set(d, 0.5f * r2), nearD = hn::Set(d, nd), farD = hn::Set(d, fd);
     poly = r2 <= kPolyExpMaxQ;
     gcut = poly ? expHalfNeg<true>(d, R2) : expHalfNeg<false>(d, R2);
   }
@@ -235,15 +235,17 @@ struct SegmentKernel {
   V Bdx = hn::Set(d, S.B.dx), Bdy = hn::Set(d, S.B.dy), B0 = hn::Set(d, S.B.c);
   // one sub-segment's constants
   struct Piece {
-    V a0, len, skew, across, invM00, k, erfScale, scale0, slope;
+    V a0, len, skew, across, halfAcross, invM00, k, erfScale0, erfSlope, slope;
     bool flat;  ///< slope == 0
   };
   Piece first;
   static Piece piece(D d, float pa0, float len, float skew, float across, float invM00, float k, float erfScale,
                      float scale0, float slope) {
     const PieceScale s = pieceScale(scale0, slope, len);  // flat where the scale barely changes
-    return {hn::Set(d, pa0), hn::Set(d, len), hn::Set(d, skew), hn::Set(d, across), hn::Set(d, invM00), hn::Set(d, k),
-            hn::Set(d, erfScale), hn::Set(d, s.scale0), hn::Set(d, s.slope), s.slope == 0};
+    return {hn::Set(d, pa0),           hn::Set(d, len),          hn::Set(d, skew),
+            hn::Set(d, across),        hn::Set(d, 0.5f * across), hn::Set(d, invM00),
+            hn::Set(d, k),             hn::Set(d, erfScale * s.scale0), hn::Set(d, erfScale * s.slope),
+            hn::Set(d, s.slope),       s.slope == 0};
   }
   static Piece piece(D d, const SegmentPiece& p) {
     return piece(d, p.a0, p.a1 - p.a0, p.skew, p.across, p.invM00, p.k, p.erfScale, p.scale0, p.slope);
@@ -254,33 +256,38 @@ struct SegmentKernel {
   // The integral along one sub-segment at plane coordinates (a, b), zero outside `inside`.
   HWY_INLINE V pieceWeight(const Piece& p, V a, V b, hn::Mask<D> inside) const {
     const V zero = F.zero, R2 = F.R2;
-    // with x = a - a0 - tau: q(tau) = m00 (tau - tau*)^2 + qmin, kernels count where q <= R^2
+    // with x = a - a0 - tau: q(tau) = m00 (tau - tau*)^2 + qmin, kernels count where q <= R^2,
+    // i.e. u = k (tau - tau*) in [-kd, kd] with k = sqrt(m00 / 2), kd = sqrt((R^2 - qmin) / 2);
+    // the sub-segment [0, len] is u in [-k tau*, k (len - tau*)]. In u directly (beyond the
+    // thesis, issue 13: no tau-space interval, a shorter dependency chain than clamping tau and
+    // scaling back): the same integral, rounded differently
     const V tauStar = hn::MulAdd(p.skew, b, hn::Sub(a, p.a0));
-    const V qmin = hn::Mul(hn::Mul(b, b), p.across);
-    const V delta = hn::Sqrt(hn::Mul(hn::Max(hn::Sub(R2, qmin), zero), p.invM00));
-    const V lo = hn::Sub(tauStar, delta), hi = hn::Add(tauStar, delta);
-    const V t0 = hn::Max(zero, lo), t1 = hn::Min(p.len, hi);
-    inside = hn::And(inside, hn::And(hn::Lt(qmin, R2), hn::Gt(t1, t0)));
+    const V bb = hn::Mul(b, b);
+    const V qmin = hn::Mul(bb, p.across);
+    const V kd = hn::Sqrt(hn::Max(hn::NegMulAdd(bb, p.halfAcross, F.halfR2), zero));  // (R^2 - qmin) / 2
+    const V uS = hn::Mul(p.k, tauStar);                 // -u of the sub-segment's start
+    const V uE = hn::MulSub(p.k, p.len, uS);            // u of its end
+    const V nkd = hn::Neg(kd);
+    // the ends of the sub-segment that cut the kernels' interval [-kd, kd]
+    const auto cut0 = hn::Lt(uS, kd), cut1 = hn::Lt(uE, kd);
+    const V u0 = hn::Max(hn::Neg(uS), nkd), u1 = hn::Min(uE, kd);
+    inside = hn::And(inside, hn::And(hn::Lt(qmin, R2), hn::Gt(u1, u0)));
     if (hn::AllFalse(d, inside)) return zero;
-    // the ends of the sub-segment that cut the kernels' interval [tau* - delta, tau* + delta]
-    const auto cut0 = hn::And(inside, hn::Gt(t0, lo)), cut1 = hn::And(inside, hn::Lt(t1, hi));
     const V qc = hn::Min(qmin, R2);
     const V g = expHalfNeg<kPoly>(d, qc);  // exp(-qmin / 2)
-    // integral of exp(-m00 (tau - tau*)^2 / 2) over [t0, t1] = erf(u1) - erf(u0), u_i = k (t_i -
-    // tau*): erf without exp. At an uncut end u_i = -+k delta (not the rounded difference), so a
-    // vector without cut lanes (the middle of a long segment) takes 2 erf(k delta), the same value
-    // to the bit (erfKernel is odd exactly): a pixel's weight does not depend on its lane's vector
-    V i0;
-    const V kd = hn::Mul(p.k, delta);
-    const V u0 = hn::IfThenElse(cut0, hn::Mul(p.k, hn::Sub(t0, tauStar)), hn::Neg(kd));
-    const V u1 = hn::IfThenElse(cut1, hn::Mul(p.k, hn::Sub(t1, tauStar)), kd);
-    if (hn::AllFalse(d, hn::Or(cut0, cut1))) {
+    // integral of exp(-m00 (tau - tau*)^2 / 2) over the sub-segment = (erf(u1) - erf(u0)) / k
+    // (erfScale = sqrt(pi) / 2 / k): erf without exp. At an uncut end u is -+kd exactly, so a
+    // vector without cut lanes (the middle of a long segment) takes 2 erf(kd), the same value to
+    // the bit (erfKernel is odd exactly): a pixel's weight does not depend on its lane's vector
+    // w = (erf(u1) - erf(u0)) erfScale (scale0 + slope tau*) g, the factors beside the erfs first
+    const V sg = hn::Mul(hn::MulAdd(p.erfSlope, tauStar, p.erfScale0), g);
+    V w;
+    if (hn::AllFalse(d, hn::And(inside, hn::Or(cut0, cut1)))) {
       const V e = erfKernel<kPoly>(d, kd);
-      i0 = hn::Mul(p.erfScale, hn::Add(e, e));
+      w = hn::Mul(hn::Add(e, e), sg);
     } else {
-      i0 = hn::Mul(p.erfScale, hn::Sub(erfKernel<kPoly>(d, u1), erfKernel<kPoly>(d, u0)));
+      w = hn::Mul(hn::Sub(erfKernel<kPoly>(d, u1), erfKernel<kPoly>(d, u0)), sg);
     }
-    V w = hn::Mul(hn::Mul(hn::MulAdd(p.slope, tauStar, p.scale0), i0), g);
     if (!p.flat) {
       // the scale's slope adds slope / m00 (g e0 - g e1), g e_i = exp(-qmin/2 - u_i^2): at an end
       // the cutoff bounds (not the sub-segment's end) that is exp(-R^2/2) at both, so only the
