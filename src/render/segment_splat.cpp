@@ -757,7 +757,7 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
   const int stride = ctx.rect.height();
   const detail::SegmentRaster* batch[kRasterBatch];
   PixelRect rects[kRasterBatch];
-  int slot[kRasterBatch], counts[kRasterBatch];
+  int slot[kRasterBatch], counts[kRasterBatch], widest[kRasterBatch], pixels[kRasterBatch];
   int m = 0;
   for (int i = 0; i < n; ++i) {
     const PreparedSegment& sp = *segs[i];
@@ -781,7 +781,7 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
   thread_local std::vector<detail::RowSpan> spans;
   if (m > 0) {
     if (spans.size() < size_t(kRasterBatch * stride)) spans.resize(size_t(kRasterBatch * stride));
-    detail::segmentSpansBatch(batch, rects, m, kSpanSlack, spans.data(), stride, counts);
+    detail::segmentSpansBatch(batch, rects, m, kSpanSlack, spans.data(), stride, counts, widest, pixels);
   }
   // runs of consecutive ones shaded in the rows in one call (detail::segmentRowsRunZ3)
   detail::SegmentRowsItem items[kRasterBatch];
@@ -800,6 +800,7 @@ void rasterizeSegments(const PreparedSegment* const* segs, int n, const SplatCon
         shadeRows(sp, item.shade);
         item.spans = spans.data() + size_t(k) * size_t(stride);
         item.count = counts[k];
+        item.widest = widest[k], item.pixels = pixels[k];
         if (item.shade.stationPadded) {  // read by the rows
           __builtin_prefetch(item.shade.stationColour);
           __builtin_prefetch(item.shade.stationColour + 3 * item.shade.stations - 1);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "render/splat_rows.cpp"
@@ -436,7 +437,7 @@ int SegmentSpans(const SegmentRaster& S, const PixelRect& r, float slack, RowSpa
 // the same eight constraints, set up once per vector of segments, then one row of every
 // segment per step.
 void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects, int n, float slack, RowSpan* out,
-                       int stride, int* counts) {
+                       int stride, int* counts, int* widest, int* pixels) {
   const DF d;
   const hn::RebindToSigned<DF> di;
   const int L = int(hn::Lanes(d));
@@ -504,6 +505,9 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
     constexpr int kRows = 32;
     HWY_ALIGN int32_t xb[kRows][kMaxLanes], xe[kRows][kMaxLanes], firstRow[kMaxLanes], lastRow[kMaxLanes];
     auto first = hn::Set(di, kRows), last = hn::Set(di, -1);
+    // the widest span and the pixels of each lane's rows within its rect (SegmentRowsItem)
+    const auto RH = hn::Load(di, rh);
+    auto wideV = hn::Zero(di), pixV = hn::Zero(di);
     for (int t0 = 0; t0 < maxRows; t0 += kRows) {
       const int rows = std::min(kRows, maxRows - t0);
       for (int t = 0; t < rows; ++t, py = hn::Add(py, one)) {
@@ -518,6 +522,8 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
         hn::Store(b, di, xb[t]);
         hn::Store(e, di, xe[t]);
         const auto some = hn::Gt(e, b);
+        const auto w = hn::IfThenElseZero(hn::And(some, hn::Lt(hn::Set(di, t0 + t), RH)), hn::Sub(e, b));
+        wideV = hn::Max(wideV, w), pixV = hn::Add(pixV, w);
         first = hn::IfThenElse(hn::And(some, hn::Eq(first, hn::Set(di, kRows))), hn::Set(di, t), first);
         last = hn::IfThenElse(some, hn::Set(di, t), last);
       }
@@ -535,6 +541,11 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
         }
         counts[g0 + j] = c;
       }
+    }
+    if (widest) {
+      HWY_ALIGN int32_t wa[kMaxLanes], pa[kMaxLanes];
+      hn::Store(wideV, di, wa), hn::Store(pixV, di, pa);
+      for (int j = 0; j < m; ++j) widest[g0 + j] = wa[j], pixels[g0 + j] = pa[j];
     }
   }
 }
@@ -962,9 +973,28 @@ int ResolveSingleLayerRow(Z3Tile& z3, int y, int x0, int n, const float* bg, flo
 // and the chunk's bookkeeping cost more instructions per span than its Z^3 pass: issue 13).
 inline constexpr int kSegChunk = 512;
 
+// The Z^3 pass's state of a run of segments for 4, 8 and 16 lanes (Z3Rows: the tile's planes and
+// the fast path's counters), set up once per run; the counters go to the tile at its end.
+struct SegmentZ3Sets {
+  Z3Tile& z3;
+  Z3Rows<hn::CappedTag<float, 4>> z4{z3, true};
+  Z3Rows<hn::CappedTag<float, 8>> z8{z3, true};
+  Z3Rows<hn::CappedTag<float, 16>> z16{z3, true};
+  explicit SegmentZ3Sets(Z3Tile& tile) : z3(tile) {}
+  ~SegmentZ3Sets() {
+    z3.addFastCounts(z4.opened() + z8.opened() + z16.opened(), z4.occluded() + z8.occluded() + z16.occluded());
+  }
+  template <class DZ>  // (on narrower targets the tags are one type: its first set)
+  Z3Rows<DZ>& rows() {
+    if constexpr (std::is_same_v<DZ, hn::CappedTag<float, 4>>) return z4;
+    else if constexpr (std::is_same_v<DZ, hn::CappedTag<float, 8>>) return z8;
+    else return z16;
+  }
+};
+
 template <bool kPoly, class DZ, bool kOneChunk>
 HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentFrameV& F, const SegmentShadeRows& A,
-                                   const RowSpan* spans, int count, Z3Tile& z3) {
+                                   const RowSpan* spans, int count, Z3Tile& z3, Z3Rows<DZ>& zset) {
   const DF d;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
   const SegmentKernel<kPoly> kernel(S, F);
@@ -1012,7 +1042,9 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   const VZ zeroZ = hn::Zero(dz);
   VZ constAttr[Z3Tile::kAttrs];
   for (int k = 0; k < Z3Tile::kAttrs; ++k) constAttr[k] = hn::Set(dz, A.attr[k]);
-  Z3Rows<DZ> z3rows(z3, A.attr[Z3Tile::kA] >= 1.0f);
+  // (a local copy: the tile's stores would make the compiler reload the run's one)
+  Z3Rows<DZ> z3rows = zset;
+  z3rows.opaque = A.attr[Z3Tile::kA] >= 1.0f;
   uint64_t inserted = 0;
   int r = 0, rx = count > 0 ? spans[0].x0 : 0;  // the next span and where in it the next chunk starts
   while (r < count) {
@@ -1132,27 +1164,31 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       for (int c = 0; c < width; c += LZ) blend(run, rowBase, width, c);
     }
   }
-  z3.addFastCounts(z3rows.opened(), z3rows.occluded());
+  zset.openedV = z3rows.openedV, zset.occludedV = z3rows.occludedV;
   return inserted;
 }
 
-// One segment's rows (SegmentRowsZ3, SegmentRowsRunZ3) with the frame's constants F (set here).
-HWY_INLINE uint64_t SegmentRowsF(SegmentFrameV& F, const SegmentRaster& S, const SegmentShadeRows& A,
-                                 const RowSpan* spans, int count, Z3Tile& z3) {
-  int widest = 0, pixels = 0;  // the Z^3 pass runs on vectors of at most the widest span's lanes
-  for (int r = 0; r < count; ++r) {
-    const int w = spans[r].x1 - spans[r].x0;
-    widest = std::max(widest, w), pixels += w;
+// One segment's rows (SegmentRowsZ3, SegmentRowsRunZ3) with the frame's constants F (set here);
+// widest, pixels: of the spans, or pixels < 0 to count them here.
+HWY_INLINE uint64_t SegmentRowsF(SegmentFrameV& F, SegmentZ3Sets& Z, const SegmentRaster& S, const SegmentShadeRows& A,
+                                 const RowSpan* spans, int count, Z3Tile& z3, int widest = 0, int pixels = -1) {
+  if (pixels < 0) {  // the Z^3 pass runs on vectors of at most the widest span's lanes
+    pixels = 0;
+    for (int r = 0; r < count; ++r) {
+      const int w = spans[r].x1 - spans[r].x0;
+      widest = std::max(widest, w), pixels += w;
+    }
   }
   if (pixels <= 0) return 0;
   F.set(S);
   auto rows = [&](auto dz) {
     using DZ = decltype(dz);
+    Z3Rows<DZ>& zr = Z.template rows<DZ>();
     if (pixels <= kSegChunk)
-      return F.poly ? SegmentRowsT<true, DZ, true>(dz, S, F, A, spans, count, z3)
-                    : SegmentRowsT<false, DZ, true>(dz, S, F, A, spans, count, z3);
-    return F.poly ? SegmentRowsT<true, DZ, false>(dz, S, F, A, spans, count, z3)
-                  : SegmentRowsT<false, DZ, false>(dz, S, F, A, spans, count, z3);
+      return F.poly ? SegmentRowsT<true, DZ, true>(dz, S, F, A, spans, count, z3, zr)
+                    : SegmentRowsT<false, DZ, true>(dz, S, F, A, spans, count, z3, zr);
+    return F.poly ? SegmentRowsT<true, DZ, false>(dz, S, F, A, spans, count, z3, zr)
+                  : SegmentRowsT<false, DZ, false>(dz, S, F, A, spans, count, z3, zr);
   };
   if (widest <= 4) return rows(hn::CappedTag<float, 4>());
   if (widest <= 8) return rows(hn::CappedTag<float, 8>());
@@ -1161,15 +1197,20 @@ HWY_INLINE uint64_t SegmentRowsF(SegmentFrameV& F, const SegmentRaster& S, const
 
 uint64_t SegmentRowsZ3(const SegmentRaster& S, const SegmentShadeRows& A, const RowSpan* spans, int count, Z3Tile& z3) {
   SegmentFrameV F;
-  return SegmentRowsF(F, S, A, spans, count, z3);
+  SegmentZ3Sets Z(z3);
+  return SegmentRowsF(F, Z, S, A, spans, count, z3);
 }
 
 // SegmentRowsZ3 for a run of segments (detail/splat_rows.h): one dispatch, the frame's constants
-// set again only when they change.
+// set again only when they change, the Z^3 pass's state once.
 uint64_t SegmentRowsRunZ3(const SegmentRowsItem* items, int n, Z3Tile& z3) {
   SegmentFrameV F;
+  SegmentZ3Sets Z(z3);
   uint64_t inserted = 0;
-  for (int i = 0; i < n; ++i) inserted += SegmentRowsF(F, *items[i].raster, items[i].shade, items[i].spans, items[i].count, z3);
+  for (int i = 0; i < n; ++i) {
+    const SegmentRowsItem& it = items[i];
+    inserted += SegmentRowsF(F, Z, *it.raster, it.shade, it.spans, it.count, z3, it.widest, it.pixels);
+  }
   return inserted;
 }
 
@@ -1220,8 +1261,8 @@ int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpa
   return HWY_DYNAMIC_DISPATCH(SegmentSpans)(s, r, slack, out);
 }
 void segmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects, int n, float slack, RowSpan* out,
-                       int stride, int* counts) {
-  HWY_DYNAMIC_DISPATCH(SegmentSpansBatch)(segs, rects, n, slack, out, stride, counts);
+                       int stride, int* counts, int* widest, int* pixels) {
+  HWY_DYNAMIC_DISPATCH(SegmentSpansBatch)(segs, rects, n, slack, out, stride, counts, widest, pixels);
 }
 const char* simdTargetName() { return hwy::TargetName(HWY_DYNAMIC_DISPATCH(Target)()); }
 }  // namespace linesurf::detail

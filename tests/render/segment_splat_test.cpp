@@ -484,6 +484,60 @@ TEST(SegmentSplat, TightRowSpansKeepEveryFragmentOfTheBoxWalk) {
               fragments, checked, walkedTight, walkedBox, multiPiece, clipped, simdChecked);
 }
 
+// The span batch (detail::segmentSpansBatch, as rasterizeSegments calls it) reports each
+// segment's widest span and its spans' pixels, which the rows take instead of counting them (the
+// Z^3 pass's lane count is chosen by the widest span): on random one-piece segments in tiles at
+// random offsets, both equal what its own spans hold, rows beyond a segment's rect left out.
+TEST(SegmentSplat, SpanBatchReportsTheWidestSpanAndThePixels) {
+  std::mt19937 rng(5);
+  std::vector<PreparedSegment> segs(300);
+  for (size_t i = 0; i < segs.size();) {
+    Segment s;
+    Camera cam;
+    if (!randomSegmentView(rng, 0.1f, s, cam)) continue;
+    PreparedSegment& ps = segs[i];
+    const PrimitiveStatus st = prepareWith(s, cam, SegmentMethod::ScreenSpace, ps, false);
+    if ((st != PrimitiveStatus::Drawn && st != PrimitiveStatus::Clipped) || ps.pieceCount() != 1) continue;
+    ++i;
+  }
+  size_t checked = 0, wide = 0, shorter = 0;
+  const int stride = 24;
+  for (size_t g = 0; g < segs.size(); g += 16) {
+    const int n = int(std::min<size_t>(16, segs.size() - g));
+    const detail::SegmentRaster* batch[16];
+    PixelRect rects[16];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      const PreparedSegment& ps = segs[g + size_t(i)];
+      const int ox = int(rng() % 24), oy = int(rng() % 24);  // a tile of 24 rows at most, cut at a random offset
+      const PixelRect tile{ps.bounds.x0 + ox - 12, ps.bounds.y0 + oy - 12, ps.bounds.x0 + ox + 12,
+                           ps.bounds.y0 + oy + 12};
+      const PixelRect r = ps.bounds.intersect(tile);
+      if (r.empty()) continue;
+      batch[m] = &ps.raster, rects[m++] = r;
+    }
+    std::vector<detail::RowSpan> spans(size_t(16 * stride));
+    int counts[16], widest[16], pixels[16];
+    detail::segmentSpansBatch(batch, rects, m, 0.01f, spans.data(), stride, counts, widest, pixels);
+    for (int i = 0; i < m; ++i) {
+      if (counts[i] < 0) continue;
+      int w = 0, p = 0;
+      for (int k = 0; k < counts[i]; ++k) {
+        const detail::RowSpan& sp = spans[size_t(i * stride + k)];
+        ASSERT_GE(sp.y, rects[i].y0);
+        ASSERT_LT(sp.y, rects[i].y1);
+        w = std::max(w, sp.x1 - sp.x0), p += sp.x1 - sp.x0;
+      }
+      EXPECT_EQ(widest[i], w) << "segment " << g + size_t(i);
+      EXPECT_EQ(pixels[i], p) << "segment " << g + size_t(i);
+      ++checked, wide += w > 4, shorter += rects[i].height() < 24;
+    }
+  }
+  EXPECT_GT(checked, 200u);
+  EXPECT_GT(wide, 20u);
+  EXPECT_GT(shorter, 50u);
+}
+
 // The SIMD segment kernel (detail::segmentFragments: reciprocalNewton, the polynomial exp and erf
 // at cutoff 2, hn::Exp and the rational erf at 3) against the ScreenSpace closed form in double
 // (every sub-segment, std::erf, std::exp) on random segments: every fragment within 2e-4 of the

@@ -140,9 +140,10 @@ int segmentSpans(const SegmentRaster& s, const PixelRect& r, float slack, RowSpa
 
 /// segmentSpans for n one-piece segments at once (pieceCount == 1; SIMD lanes = segments):
 /// segment i's spans over rects[i] (at most stride rows) go to out + i * stride, counts[i] their
-/// number, or -1 for degenerate constants.
+/// number, or -1 for degenerate constants; with widest (and pixels), widest[i] the widest of
+/// segment i's spans and pixels[i] their pixels (SegmentRowsItem).
 void segmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects, int n, float slack, RowSpan* out,
-                       int stride, int* counts);
+                       int stride, int* counts, int* widest = nullptr, int* pixels = nullptr);
 
 /// As pointFragments for one segment, over `count` row spans holding at most kBlock pixels in
 /// all; p = the along-axis parameter u = clamp(a / length, 0, 1), q = the z threshold.
@@ -180,6 +181,8 @@ struct SegmentRowsItem {
   SegmentShadeRows shade;
   const RowSpan* spans = nullptr;
   int count = 0;
+  /// the widest span and the spans' pixels (segmentSpansBatch's), or pixels < 0: counted by the rows
+  int widest = 0, pixels = -1;
 };
 
 /// segmentRowsZ3 for items[0 .. n) in turn, with one dispatch and the frame's kernel constants set
