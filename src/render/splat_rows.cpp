@@ -314,11 +314,14 @@ struct SegmentKernel {
     if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, F.nearD), hn::Le(z, F.farD)));
     const V a = hn::MulSub(hn::MulAdd(Adx, px, hn::MulAdd(Ady, py, A0)), iN, a0);
     const V b = hn::MulSub(hn::MulAdd(Bdx, px, hn::MulAdd(Bdy, py, B0)), iN, b0);
-    inside = hn::And(inside, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
-    if (hn::AllFalse(d, inside)) return inside;
     if (S.pieceCount == 1) {
+      // (no footprint box test: the sub-segment's own test, qmin < R^2 and a cut kernel interval,
+      // is the capsule of the cutoff that the box holds)
+      if (hn::AllFalse(d, inside)) return inside;
       w = pieceWeight(first, a, b, inside);
     } else {  // the pieces whose reach can contain the lanes' a (with a piece of margin each side)
+      inside = hn::And(inside, hn::And(hn::Le(hn::Abs(b), bMax), hn::And(hn::Ge(a, aMin), hn::Le(a, aMax))));
+      if (hn::AllFalse(d, inside)) return inside;
       w = zero;
       const float aLo = hn::GetLane(hn::MinOfLanes(d, hn::IfThenElse(inside, a, hn::Set(d, 1e30f))));
       const float aHi = hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElse(inside, a, hn::Set(d, -1e30f))));
