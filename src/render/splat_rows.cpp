@@ -1047,7 +1047,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   for (int k = 0; k < Z3Tile::kAttrs; ++k) constAttr[k] = hn::Set(dz, A.attr[k]);
   // (a local copy: the tile's stores would make the compiler reload the run's one)
   Z3Rows<DZ> z3rows = zset;
-  z3rows.opaque = A.attr[Z3Tile::kA] >= 1.0f;
+  z3rows.opaque = A.attr[Z3Tile::kA] >= 1.0f || !z3.coverageOccludes();  // (as Z3Rows sets it)
   uint64_t inserted = 0;
   int r = 0, rx = count > 0 ? spans[0].x0 : 0;  // the next span and where in it the next chunk starts
   while (r < count) {
