@@ -50,7 +50,7 @@ float weightAt(const Kernel& k, const Vec3f& x, const Vec3f& nx, float cut) {
 
 }  // namespace
 
-std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff) {
+std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least) {
   const size_t np = model.points.size(), ns = model.segments.size(), n = np + ns;
   std::vector<Kernel> ks(n);
   std::vector<Vec3f> centre(n), normal(n);
@@ -160,16 +160,20 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
       for (uint32_t j : near) sum += weightAt(ks[j], p, normal[i], cutoff);
       return sum;
     };
-    // the least of the density at the centre and on a ring of kRing points at kRingRadius r in
-    // the primitive's plane (across and along a segment's middle): the troughs between samples
-    float sum = density(x);
+    // the least (or the mean) of the density at the centre and on a ring of kRing points at
+    // kRingRadius r in the primitive's plane (across and along a segment's middle): the troughs
+    // between samples
+    float sum = density(x), total = sum;
     Vec3f u = k.length > 0 ? k.e : (std::abs(k.n.x()) < 0.9f ? Vec3f(Vec3f::UnitX().cross(k.n)) : Vec3f(Vec3f::UnitY().cross(k.n)));
     u.normalize();
     const Vec3f v = k.n.cross(u);
     for (int a = 0; a < kRing; ++a) {
       const float t = 2 * float(kPi) * float(a) / float(kRing);
-      sum = std::min(sum, density(x + ringR * (std::cos(t) * u + std::sin(t) * v)));
+      const float at = density(x + ringR * (std::cos(t) * u + std::sin(t) * v));
+      sum = std::min(sum, at);
+      total += at;
     }
+    if (!least) sum = total / float(kRing + 1);
     c[i] = sum > 0 ? 1.0f / sum : 0.0f;
   }, 1024);
   return c;

@@ -23,8 +23,14 @@ namespace linesurf::detail {
 /// c_k for the points, then the segments, of `model` (0 for a primitive without a positive finite
 /// radius), with the reconstruction kernels sigma = reconstructionScale * radius cut off at `cutoff`
 /// standard deviations, without the screen prefilter (it keeps a kernel's mass). Deterministic for
-/// any thread count.
-std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff);
+/// any thread count. The density around k is sampled at its centre and on a ring at 0.6 r in its
+/// plane; `least`: c_k inverts the least of them (coverage everywhere, RenderOptions::coverageReach
+/// 0: the troughs between samples reach 1 and the interior stays opaque), otherwise their mean
+/// (coverage at silhouettes only, where the interior is opaque anyway: the edge of a sampling then
+/// ends within half a cell of its samples' cells, as a box-filtered surface's does; the least
+/// density moved a grid of points' edge out by 1.8 half cells; docs/decisions.md "Issue 14 (lead,
+/// stop 24)").
+std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least = true);
 
 /// Coverage at silhouettes only (RenderOptions::coverageReach > 0; beyond the thesis, issue 14).
 /// The resolve writes every pixel with its front layer opaque (the normalised alpha of an opaque

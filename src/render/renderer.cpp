@@ -107,7 +107,9 @@ Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
     }
     if (model_.attributes.texcoords && model_.texture) opaqueModel_ = false;
     if (opaqueModel_) {
-      coverage_ = detail::coverageConstants(model_, options_.reconstructionScale, options_.cutoffRadius);
+      // at silhouettes only: the mean density around each primitive, else the least (coverage.h)
+      coverage_ = detail::coverageConstants(model_, options_.reconstructionScale, options_.cutoffRadius,
+                                            options_.coverageReach == 0);
       for (float c : coverage_) coverageMax_ = std::max(coverageMax_, c);
     }
   }
