@@ -479,7 +479,7 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
     const VF na[kC] = {one, neg1, zero, zero, ua, ua, nua, nua}, nb[kC] = {zero, zero, one, neg1, ub, nub, ub, nub};
     const VF h[kC] = {hn::Add(len, ea), ea, eb, eb, hn::MulAdd(ua, len, ep), hn::MulAdd(ua, len, em), em, ep};
     // the constraints (as SegmentSpans): a lower bound x >= loY py + lo0 or an upper one
-    VF loY[kC], lo0[kC], hiY[kC], hi0[kC];
+    VF loY[kC], lo0[kC], hiY[kC], hi0[kC], lowMask[kC], upMask[kC];
     const VF sl = hn::Set(d, slack), rel = hn::Set(d, 1e-5f), big = hn::Set(d, 1e8f);
     auto finite = ok;
     for (int c = 0; c < kC; ++c) {
@@ -492,6 +492,7 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
       const auto lower = hn::Gt(gx, zero), upper = hn::Lt(gx, zero);
       const VF inv = hn::Neg(hn::Div(one, hn::IfThenElse(hn::Or(lower, upper), gx, one)));
       const VF by = hn::Mul(gy, inv), b0 = hn::Mul(g, inv);
+      lowMask[c] = hn::IfThenElseZero(lower, one), upMask[c] = hn::IfThenElseZero(upper, one);
       loY[c] = hn::IfThenElseZero(lower, by), lo0[c] = hn::IfThenElse(lower, b0, hn::Neg(big));
       hiY[c] = hn::IfThenElseZero(upper, by), hi0[c] = hn::IfThenElse(upper, b0, big);
       finite = hn::And(finite, hn::Lt(hn::Abs(hn::Add(by, b0)), hn::Set(d, INFINITY)));
@@ -511,39 +512,62 @@ void SegmentSpansBatch(const SegmentRaster* const* segs, const PixelRect* rects,
     // the widest span and the pixels of each lane's rows within its rect (SegmentRowsItem)
     const auto RH = hn::Load(di, rh);
     auto wideV = hn::Zero(di), pixV = hn::Zero(di);
-    for (int t0 = 0; t0 < maxRows; t0 += kRows) {
-      const int rows = std::min(kRows, maxRows - t0);
-      for (int t = 0; t < rows; ++t, py = hn::Add(py, one)) {
-        VF lo = hn::Neg(big), hi = big;
-        for (int c = 0; c < kC; ++c) {
-          lo = hn::Max(lo, hn::MulAdd(loY[c], py, lo0[c]));
-          hi = hn::Min(hi, hn::MulAdd(hiY[c], py, hi0[c]));
+    // each opposite pair of directions (0, 1), (2, 3), (4, 7), (5, 6) bounds x from both sides where
+    // one of its constraints is a lower and the other an upper bound (always in an affine frame):
+    // then the rows take the pair's lower and upper one, four constraints a side instead of eight
+    // (the same maxima and minima of the same values: the same spans), and fit in registers
+    constexpr int kPair[4][2] = {{0, 1}, {2, 3}, {4, 7}, {5, 6}};
+    VF pLoY[4], pLo0[4], pHiY[4], pHi0[4];
+    auto paired = finite;
+    for (int p = 0; p < 4; ++p) {
+      const int c = kPair[p][0], c1 = kPair[p][1];
+      const auto lowC = hn::Gt(lowMask[c], zero), upC = hn::Gt(upMask[c], zero);
+      const auto lowC1 = hn::Gt(lowMask[c1], zero), upC1 = hn::Gt(upMask[c1], zero);
+      paired = hn::And(paired, hn::Or(hn::And(lowC, upC1), hn::And(upC, lowC1)));
+      pLoY[p] = hn::IfThenElse(lowC, loY[c], loY[c1]), pLo0[p] = hn::IfThenElse(lowC, lo0[c], lo0[c1]);
+      pHiY[p] = hn::IfThenElse(lowC, hiY[c1], hiY[c]), pHi0[p] = hn::IfThenElse(lowC, hi0[c1], hi0[c]);
+    }
+    auto rowsOf = [&](const VF* LY, const VF* L0, const VF* HY, const VF* H0, auto ncTag) {
+      constexpr int nc = decltype(ncTag)::value;
+      for (int t0 = 0; t0 < maxRows; t0 += kRows) {
+        const int rows = std::min(kRows, maxRows - t0);
+        for (int t = 0; t < rows; ++t, py = hn::Add(py, one)) {
+          VF lo = hn::Neg(big), hi = big;
+          for (int c = 0; c < nc; ++c) {
+            lo = hn::Max(lo, hn::MulAdd(LY[c], py, L0[c]));
+            hi = hn::Min(hi, hn::MulAdd(HY[c], py, H0[c]));
+          }
+          lo = hn::Min(lo, big), hi = hn::Max(hi, hn::Neg(big));
+          const auto b = hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0);
+          const auto e = hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1);
+          hn::Store(b, di, xb[t]);
+          hn::Store(e, di, xe[t]);
+          const auto some = hn::Gt(e, b);
+          const auto w = hn::IfThenElseZero(hn::And(some, hn::Lt(hn::Set(di, t0 + t), RH)), hn::Sub(e, b));
+          wideV = hn::Max(wideV, w), pixV = hn::Add(pixV, w);
+          first = hn::IfThenElse(hn::And(some, hn::Eq(first, hn::Set(di, kRows))), hn::Set(di, t), first);
+          last = hn::IfThenElse(some, hn::Set(di, t), last);
         }
-        lo = hn::Min(lo, big), hi = hn::Max(hi, hn::Neg(big));
-        const auto b = hn::Max(hn::ConvertTo(di, hn::Ceil(hn::Sub(lo, half))), X0);
-        const auto e = hn::Min(hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hi, half))), hn::Set(di, 1)), X1);
-        hn::Store(b, di, xb[t]);
-        hn::Store(e, di, xe[t]);
-        const auto some = hn::Gt(e, b);
-        const auto w = hn::IfThenElseZero(hn::And(some, hn::Lt(hn::Set(di, t0 + t), RH)), hn::Sub(e, b));
-        wideV = hn::Max(wideV, w), pixV = hn::Add(pixV, w);
-        first = hn::IfThenElse(hn::And(some, hn::Eq(first, hn::Set(di, kRows))), hn::Set(di, t), first);
-        last = hn::IfThenElse(some, hn::Set(di, t), last);
-      }
-      hn::Store(first, di, firstRow);
-      hn::Store(last, di, lastRow);
-      first = hn::IfThenElse(hn::Eq(first, hn::Set(di, kRows)), first, hn::Zero(di));  // the next chunk from its row 0
-      last = hn::Set(di, -1);
-      for (int j = 0; j < m; ++j) {
-        int c = counts[g0 + j];
-        if (c < 0) continue;
-        RowSpan* o = out + size_t(g0 + j) * size_t(stride);
-        for (int t = firstRow[j], te = std::min(lastRow[j] + 1, rh[j] - t0); t < te; ++t) {
-          o[c] = {ry0[j] + t0 + t, xb[t][j], xe[t][j]};
-          c += xe[t][j] > xb[t][j];
+        hn::Store(first, di, firstRow);
+        hn::Store(last, di, lastRow);
+        first = hn::IfThenElse(hn::Eq(first, hn::Set(di, kRows)), first, hn::Zero(di));  // the next chunk from its row 0
+        last = hn::Set(di, -1);
+        for (int j = 0; j < m; ++j) {
+          int c = counts[g0 + j];
+          if (c < 0) continue;
+          RowSpan* o = out + size_t(g0 + j) * size_t(stride);
+          for (int t = firstRow[j], te = std::min(lastRow[j] + 1, rh[j] - t0); t < te; ++t) {
+            o[c] = {ry0[j] + t0 + t, xb[t][j], xe[t][j]};
+            c += xe[t][j] > xb[t][j];
+          }
+          counts[g0 + j] = c;
         }
-        counts[g0 + j] = c;
       }
+    };
+    if (hn::AllTrue(d, hn::Or(paired, hn::Not(finite)))) {
+      rowsOf(pLoY, pLo0, pHiY, pHi0, std::integral_constant<int, 4>());
+    } else {
+      rowsOf(loY, lo0, hiY, hi0, std::integral_constant<int, kC>());
     }
     if (widest) {
       HWY_ALIGN int32_t wa[kMaxLanes], pa[kMaxLanes];

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -484,13 +485,9 @@ TEST(SegmentSplat, TightRowSpansKeepEveryFragmentOfTheBoxWalk) {
               fragments, checked, walkedTight, walkedBox, multiPiece, clipped, simdChecked);
 }
 
-// The span batch (detail::segmentSpansBatch, as rasterizeSegments calls it) reports each
-// segment's widest span and its spans' pixels, which the rows take instead of counting them (the
-// Z^3 pass's lane count is chosen by the widest span): on random one-piece segments in tiles at
-// random offsets, both equal what its own spans hold, rows beyond a segment's rect left out.
-TEST(SegmentSplat, SpanBatchReportsTheWidestSpanAndThePixels) {
-  std::mt19937 rng(5);
-  std::vector<PreparedSegment> segs(300);
+// n random one-piece segments, prepared by the exact path for their random views
+std::vector<PreparedSegment> randomOnePieceSegments(std::mt19937& rng, size_t n) {
+  std::vector<PreparedSegment> segs(n);
   for (size_t i = 0; i < segs.size();) {
     Segment s;
     Camera cam;
@@ -500,6 +497,16 @@ TEST(SegmentSplat, SpanBatchReportsTheWidestSpanAndThePixels) {
     if ((st != PrimitiveStatus::Drawn && st != PrimitiveStatus::Clipped) || ps.pieceCount() != 1) continue;
     ++i;
   }
+  return segs;
+}
+
+// The span batch (detail::segmentSpansBatch, as rasterizeSegments calls it) reports each
+// segment's widest span and its spans' pixels, which the rows take instead of counting them (the
+// Z^3 pass's lane count is chosen by the widest span): on random one-piece segments in tiles at
+// random offsets, both equal what its own spans hold, rows beyond a segment's rect left out.
+TEST(SegmentSplat, SpanBatchReportsTheWidestSpanAndThePixels) {
+  std::mt19937 rng(5);
+  const std::vector<PreparedSegment> segs = randomOnePieceSegments(rng, 300);
   size_t checked = 0, wide = 0, shorter = 0;
   const int stride = 24;
   for (size_t g = 0; g < segs.size(); g += 16) {
@@ -536,6 +543,48 @@ TEST(SegmentSplat, SpanBatchReportsTheWidestSpanAndThePixels) {
   EXPECT_GT(checked, 200u);
   EXPECT_GT(wide, 20u);
   EXPECT_GT(shorter, 50u);
+}
+
+// The span batch's rows take four constraints a side where every lane's opposite directions
+// bound x from both sides, eight otherwise (the batch decides per vector): a segment's spans are
+// the same alone as in any batch, so the same whichever of the two its batch took, on random
+// one-piece segments (close and grazing views among them) in batches of 16 in random order.
+TEST(SegmentSplat, SpanBatchGivesEachSegmentTheSameSpansInAnyBatch) {
+  std::mt19937 rng(23);
+  std::vector<PreparedSegment> segs = randomOnePieceSegments(rng, 480);
+  const int stride = 24;
+  size_t checked = 0, spansSeen = 0;
+  for (int round = 0; round < 2; ++round) {
+    std::shuffle(segs.begin(), segs.end(), rng);
+    for (size_t g = 0; g < segs.size(); g += 16) {
+      const detail::SegmentRaster* batch[16];
+      PixelRect rects[16];
+      int m = 0;
+      for (size_t i = g; i < g + 16; ++i) {
+        const PixelRect& b = segs[i].bounds;
+        const PixelRect r = b.intersect(PixelRect{b.x0, b.y0, b.x0 + 24, b.y0 + stride});
+        if (!r.empty()) batch[m] = &segs[i].raster, rects[m++] = r;
+      }
+      std::vector<detail::RowSpan> spans(size_t(16 * stride)), alone(static_cast<size_t>(stride));
+      int counts[16], widest[16], pixels[16];
+      detail::segmentSpansBatch(batch, rects, m, 0.01f, spans.data(), stride, counts, widest, pixels);
+      for (int i = 0; i < m; ++i) {
+        int count = 0, w = 0, p = 0;
+        detail::segmentSpansBatch(&batch[i], &rects[i], 1, 0.01f, alone.data(), stride, &count, &w, &p);
+        ASSERT_EQ(counts[i], count) << "segment " << g + size_t(i);
+        if (count < 0) continue;
+        EXPECT_EQ(widest[i], w);
+        EXPECT_EQ(pixels[i], p);
+        for (int k = 0; k < count; ++k) {
+          const detail::RowSpan &a = spans[size_t(i * stride + k)], &b = alone[size_t(k)];
+          ASSERT_TRUE(a.y == b.y && a.x0 == b.x0 && a.x1 == b.x1) << "segment " << g + size_t(i) << " span " << k;
+        }
+        ++checked, spansSeen += size_t(count);
+      }
+    }
+  }
+  EXPECT_GT(checked, 800u);
+  EXPECT_GT(spansSeen, 2000u);
 }
 
 // The SIMD segment kernel (detail::segmentFragments: reciprocalNewton, the polynomial exp and erf
