@@ -79,7 +79,7 @@ struct RenderOptions {
   /// and sums what they drop per pixel, and a silhouette pixel's front is composited over that and
   /// its farther neighbour. Only when every primitive is opaque (no alphaOverride < 1, no colour
   /// alpha < 1, no texture); otherwise the thesis's alpha. 0 = off, the default: Table 5 (line vs
-  /// point model) gets worse and frames cost 6-27% more at silhouettes only (10-120% everywhere;
+  /// point model) gets worse and frames cost 4-28% more at silhouettes only (10-120% everywhere;
   /// docs/decisions.md, "Issue 14 (i14edge)", "(i14sil)", "(lead, stop 24)"); 1.25 measured best
   /// for contour models at silhouettes only (1.5 everywhere). [0, 100].
   float coverageGain = 0.0f;
