@@ -189,10 +189,17 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
 // at 3 %.
 constexpr float kSilhouetteDepthStep = 0.02f;
 
+namespace {
+// The front depth beyond which a neighbour of candidate c lies farther (atSilhouette).
+float beyondDepth(const SilhouettePixel& c, const float* frontZ, int w) {
+  const float z = frontZ[size_t(c.y) * size_t(w) + size_t(c.x)];
+  return z + std::max(c.zThreshold, kSilhouetteDepthStep * z);
+}
+}  // namespace
+
 bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, int reach) {
   const int x = int(c.x), y = int(c.y);
-  const float z = frontZ[size_t(y) * size_t(w) + size_t(x)];
-  const float beyond = z + std::max(c.zThreshold, kSilhouetteDepthStep * z);
+  const float beyond = beyondDepth(c, frontZ, w);
   const int x0 = std::max(0, x - reach), x1 = std::min(w - 1, x + reach);
   const int y0 = std::max(0, y - reach), y1 = std::min(h - 1, y + reach);
   auto rowBeyond = [&](int yy) {
@@ -211,8 +218,7 @@ bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, i
 
 int64_t silhouetteBehind(const SilhouettePixel& c, const float* frontZ, const uint8_t* partial, int w, int h, int reach) {
   const int x = int(c.x), y = int(c.y);
-  const float z = frontZ[size_t(y) * size_t(w) + size_t(x)];
-  const float beyond = z + std::max(c.zThreshold, kSilhouetteDepthStep * z);
+  const float beyond = beyondDepth(c, frontZ, w);
   int64_t best = -1, farthest = -1;
   int bestDist = reach + 1;
   float bestZ = 0, farZ = 0;

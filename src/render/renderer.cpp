@@ -428,6 +428,15 @@ RenderResult Renderer::render(const Camera& cam) const {
       if (bg.w() == 0 && a > 0) c.head<3>() /= a;
       return c;
     };
+    // per-pixel lighting is deferred: each layer lit once, with its blended normal, at the pixel's
+    // ray and the layer's depth; otherwise the fragments carry Gouraud colours (keep)
+    auto shadeAt = [&](int x, int y) {
+      return [&frame, ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f)](const Vec3f& albedo, const Vec3f& n, float depth) {
+        const float nn = n.norm();
+        return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
+      };
+    };
+    auto keep = [](const Vec3f& c, const Vec3f&, float) { return c; };
     for (int y = rect.y0; y < rect.y1; ++y) {
       bool others = true;  // pixels with several layers before `done`
       float* rowZ = frontZ ? frontZ + size_t(y) * size_t(cam.width()) : nullptr;
@@ -444,14 +453,7 @@ RenderResult Renderer::render(const Camera& cam) const {
           if (rowZ) rowZ[x] = INFINITY;
           continue;
         }
-        // per-pixel lighting is deferred: each layer lit once, with its blended normal, at this
-        // pixel's ray and the layer's depth; otherwise the fragments carry Gouraud colours
-        const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);
-        auto shade = [&](const Vec3f& albedo, const Vec3f& n, float depth) {
-          const float nn = n.norm();
-          return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
-        };
-        auto keep = [](const Vec3f& c, const Vec3f&, float) { return c; };
+        const auto shade = shadeAt(x, y);
         // at silhouettes only: the front layer opaque here, its coverage kept as a candidate
         const bool opaqueFront = rowZ && z3.frontAlpha(x, y) < 1.0f;
         const ResolvedPixel px = opt.perPixelLighting ? z3.resolve(x, y, shade, opaqueFront) : z3.resolve(x, y, keep, opaqueFront);
@@ -480,13 +482,7 @@ RenderResult Renderer::render(const Camera& cam) const {
         const bool inTile = std::max(0, x - reach) >= rect.x0 && std::min(cam.width() - 1, x + reach) < rect.x1 &&
                             std::max(0, y - reach) >= rect.y0 && std::min(cam.height() - 1, y + reach) < rect.y1;
         if (inTile && !detail::atSilhouette(c, frontZ, cam.width(), cam.height(), reach)) continue;
-        const Vec3f ray = cam.rayThrough(float(x) + 0.5f, float(y) + 0.5f);
-        auto shade = [&](const Vec3f& albedo, const Vec3f& n, float depth) {
-          const float nn = n.norm();
-          return frame.shade(albedo, nn > 0 ? Vec3f(n / nn) : Vec3f(0, 0, 1), depth * ray);
-        };
-        auto keep = [](const Vec3f& col, const Vec3f&, float) { return col; };
-        const Color b = opt.perPixelLighting ? z3.resolveBehind(x, y, shade) : z3.resolveBehind(x, y, keep);
+        const Color b = opt.perPixelLighting ? z3.resolveBehind(x, y, shadeAt(x, y)) : z3.resolveBehind(x, y, keep);
         for (int k = 0; k < 4; ++k) c.behind[k] = b[k];
         (*cands)[kept++] = c;
       }

@@ -169,13 +169,12 @@ class Z3Tile {
     out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
     return out;
   }
-  /// The alpha of the front layer at (x, y), which must hold a layer (layerAlpha), and its depth
-  /// and z threshold.
+  /// The alpha of the front layer at (x, y), which must hold a layer (layerAlpha), and its z
+  /// threshold.
   float frontAlpha(int x, int y) const {
     const float* px = data_.data() + index(x, y);
     return layerAlpha(px[kA * capacity_], 1.0f / px[kW * capacity_]);
   }
-  float frontDepth(int x, int y) const { return data_[index(x, y) + kZ * capacity_]; }
   float frontThreshold(int x, int y) const { return data_[index(x, y) + kThr * capacity_]; }
   /// Number of layers in use at (x, y).
   int layerCount(int x, int y) const { return count_[index(x, y)]; }
