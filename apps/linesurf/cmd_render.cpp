@@ -210,7 +210,7 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bind(f, "radiusScale", a->prepare.radiusScale, "Multiply every primitive radius, [1e-3, 1e3]");
   bind(f, "coverageGain", o.coverageGain,
        "Coverage alpha at silhouettes (beyond the thesis): alpha = gain x the kernel sum over the model's kernel "
-       "density, [0, 100] (0 = the thesis's normalised alpha; 1.5 for contour models)");
+       "density, [0, 100] (0 = the thesis's normalised alpha; 1.25 for contour models at silhouettes, 1.5 with --coverage-reach 0)");
   bind(f, "coverageReach", o.coverageReach,
        "Coverage alpha only at silhouettes: pixels within this many pixels of the background or of a farther "
        "layer, [0, 16] (0 = everywhere)");
