@@ -137,17 +137,6 @@ void prefetchPrimitive(uint32_t ref, size_t pointSlots, size_t lodBase, const Pr
   for (size_t o = 0; o < bytes; o += 64) __builtin_prefetch(a + o);
 }
 
-void count(PrimitiveStatus s, uint64_t& drawn, uint64_t& clipped, uint64_t& culled, uint64_t& outside,
-           uint64_t& degenerate) {
-  switch (s) {
-    case PrimitiveStatus::Drawn: ++drawn; break;
-    case PrimitiveStatus::Clipped: ++drawn; ++clipped; break;
-    case PrimitiveStatus::Culled: ++culled; break;
-    case PrimitiveStatus::Outside: ++outside; break;
-    case PrimitiveStatus::Degenerate: ++degenerate; break;
-  }
-}
-
 // CPU time of the calling thread (robust against other processes on a shared machine).
 double threadCpuSeconds() {
   timespec ts{};
@@ -269,6 +258,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   parallelForRange(0, ns, [&](size_t r0, size_t r1) {
     const double t0 = threadCpuSeconds();
     uint64_t n[7] = {};
+    uint64_t byStatus[8] = {};  // counted by status without a branch (issue 13, i13prep4)
     // in pieces of kSegmentBatch: the statuses counted, the tiles and fallback flags of the visible
     // ones taken (and short ones turned into point splats) while their records are in the cache:
     // counting and binning below read only segStatus and segTiles (issue 13: a record's miss per
@@ -277,7 +267,7 @@ RenderResult Renderer::render(const Camera& cam) const {
       const size_t i1 = std::min(r1, i0 + detail::kSegmentBatch);
       prepareSegments(model_.segments.data(), uint32_t(i0), i1 - i0, frame, segSetup, segs + i0, segStatus + i0);
       for (size_t i = i0; i < i1; ++i) {
-        count(segStatus[i], n[0], n[1], n[2], n[3], n[4]);
+        ++byStatus[uint8_t(segStatus[i]) & 7u];
         if (!visible(segStatus[i])) continue;
         if (coverage) segs[i].attr[Z3Tile::kA] = covC[np + i] * invC;
         n[5] += segs[i].fallback;
@@ -289,6 +279,9 @@ RenderResult Renderer::render(const Camera& cam) const {
         segTiles[i] = tileSpan(segs[i].bounds);
       }
     }
+    using PS = PrimitiveStatus;
+    n[0] = byStatus[uint8_t(PS::Drawn)] + byStatus[uint8_t(PS::Clipped)], n[1] = byStatus[uint8_t(PS::Clipped)];
+    n[2] = byStatus[uint8_t(PS::Culled)], n[3] = byStatus[uint8_t(PS::Outside)], n[4] = byStatus[uint8_t(PS::Degenerate)];
     for (int k = 0; k < 7; ++k) segCounts[k] += n[k];
     segmentNs += int64_t(1e9 * (threadCpuSeconds() - t0));
   }, 256);

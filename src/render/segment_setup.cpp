@@ -54,33 +54,49 @@ constexpr float kShort = float(segment::kShortSegment);
 constexpr float kCosStationTurn = 0.99500417f;  // cos(segment::kStationTurn)
 
 // Phong factors (FrameContext::shade with the specular table) at unit shading normal m and
-// camera-space point q: colour = (albedo dif + spec) * light colour.
-template <class DF, class VF = hn::Vec<DF>>
-HWY_INLINE void Phong(DF d, const SegmentSetupFrame& F, VF mx, VF my, VF mz, VF qx, VF qy, VF qz, VF& dif, VF& spec) {
+// camera-space point q: colour = (albedo dif + spec) * light colour; for N vectors at once, step
+// by step (their dependency chains interleaved).
+template <int N, class DF, class VF = hn::Vec<DF>>
+HWY_INLINE void PhongN(DF d, const SegmentSetupFrame& F, const VF* mx, const VF* my, const VF* mz, const VF* qx,
+                       const VF* qy, const VF* qz, VF* dif, VF* spec) {
   const PointSetupFrame& V = F.view;
   const hn::RebindToSigned<DF> di;
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
   auto dot3 = [](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
   const VF lx = hn::Set(d, V.lightDir[0]), ly = hn::Set(d, V.lightDir[1]), lz = hn::Set(d, V.lightDir[2]);
-  const VF ndl = hn::Max(zero, dot3(mx, my, mz, lx, ly, lz));
-  dif = hn::MulAdd(hn::Set(d, V.diffuse), ndl, hn::Set(d, V.ambient));
-  spec = zero;
+  VF ndl[N], q2[N], iq[N], hx[N], hy[N], hz[N], h2[N], x[N];
+  for (int k = 0; k < N; ++k) {
+    ndl[k] = hn::Max(zero, dot3(mx[k], my[k], mz[k], lx, ly, lz));
+    dif[k] = hn::MulAdd(hn::Set(d, V.diffuse), ndl[k], hn::Set(d, V.ambient));
+    spec[k] = zero;
+  }
   if (!(V.specular > 0)) return;
-  const VF q2 = dot3(qx, qy, qz, qx, qy, qz);
-  const VF iq = hn::Neg(hn::Div(one, hn::Sqrt(q2)));  // view vector -q / |q|
-  const VF hx = hn::MulAdd(qx, iq, lx), hy = hn::MulAdd(qy, iq, ly), hz = hn::MulAdd(qz, iq, lz);
-  const VF h2 = dot3(hx, hy, hz, hx, hy, hz);
-  const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(mx, my, mz, hx, hy, hz), hn::Sqrt(h2))));
-  // lanes the exact path takes may hold NaN here: the index stays inside the table
+  for (int k = 0; k < N; ++k) q2[k] = dot3(qx[k], qy[k], qz[k], qx[k], qy[k], qz[k]);
+  for (int k = 0; k < N; ++k) iq[k] = hn::Neg(hn::Div(one, hn::Sqrt(q2[k])));  // view vector -q / |q|
+  for (int k = 0; k < N; ++k) {
+    hx[k] = hn::MulAdd(qx[k], iq[k], lx), hy[k] = hn::MulAdd(qy[k], iq[k], ly), hz[k] = hn::MulAdd(qz[k], iq[k], lz);
+    h2[k] = dot3(hx[k], hy[k], hz[k], hx[k], hy[k], hz[k]);
+  }
   const VF table = hn::Set(d, float(FrameContext::kSpecularTable));
-  VF x = hn::Mul(ndh, table);
-  x = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(x, x), x), zero), table);
-  const VF xi = hn::Floor(x);
-  const auto k = hn::ConvertTo(di, xi);
-  const VF t0 = hn::GatherIndex(d, F.specularTable, k), t1 = hn::GatherIndex(d, F.specularTable + 1, k);
-  const VF pw = hn::MulAdd(hn::Sub(x, xi), hn::Sub(t1, t0), t0);
-  const auto lit = hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(h2, zero)), hn::Gt(q2, zero));
-  spec = hn::IfThenElseZero(lit, hn::Mul(hn::Set(d, V.specular), pw));
+  for (int k = 0; k < N; ++k) {
+    const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(mx[k], my[k], mz[k], hx[k], hy[k], hz[k]), hn::Sqrt(h2[k]))));
+    // lanes the exact path takes may hold NaN here: the index stays inside the table
+    x[k] = hn::Mul(ndh, table);
+    x[k] = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(x[k], x[k]), x[k]), zero), table);
+  }
+  for (int k = 0; k < N; ++k) {
+    const VF xi = hn::Floor(x[k]);
+    const auto i = hn::ConvertTo(di, xi);
+    const VF t0 = hn::GatherIndex(d, F.specularTable, i), t1 = hn::GatherIndex(d, F.specularTable + 1, i);
+    const VF pw = hn::MulAdd(hn::Sub(x[k], xi), hn::Sub(t1, t0), t0);
+    const auto lit = hn::And(hn::And(hn::Gt(ndl[k], zero), hn::Gt(h2[k], zero)), hn::Gt(q2[k], zero));
+    spec[k] = hn::IfThenElseZero(lit, hn::Mul(hn::Set(d, V.specular), pw));
+  }
+}
+
+template <class DF, class VF = hn::Vec<DF>>
+HWY_INLINE void Phong(DF d, const SegmentSetupFrame& F, VF mx, VF my, VF mz, VF qx, VF qy, VF qz, VF& dif, VF& spec) {
+  PhongN<1>(d, F, &mx, &my, &mz, &qx, &qy, &qz, &dif, &spec);
 }
 
 // One channel of the lit colour from Phong's factors: (albedo dif + spec) * light colour.
@@ -341,11 +357,10 @@ HWY_INLINE Strip<DF> StripOf(DF d, const SegmentSetupFrame& F, VF cx, VF cy, VF 
   return st;
 }
 
-// World to camera space and stage 1 over lanes [0, n) (issue 13, i13prep2): the lanes it
-// decides (unusual input or undecided: the exact path; outside; culled) get their status in
-// B.decided, the others (-1 there) are compacted to lanes [0, m) of the batch's input arrays,
-// B.lane[k] the original lane of lane k, so that SegmentSetup runs on full vectors of them.
-// Returns m.
+// Stage 1 over lanes [0, n) (issue 13, i13prep2): the lanes it decides (unusual input or
+// undecided: the exact path; outside; culled) get their status in B.decidedStatus and
+// B.exactLanes, the others are compacted to lanes [0, m) of the batch's input arrays, B.lane[k]
+// the original lane of lane k, so that SegmentSetup runs on full vectors of them. Returns m.
 int SegmentCull(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   using DF = hn::ScalableTag<float>;
   const DF d;
@@ -356,13 +371,22 @@ int SegmentCull(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
                            B.cr,  B.cg,  B.cb,  B.ca,  B.m0x, B.m0y, B.m0z, B.m1x, B.m1y, B.m1z};
   const int count = F.smoothFrame ? 21 : 15;
   size_t m = 0;
+  B.exactLanes = 0;
+  const hn::Rebind<uint8_t, DF> d8;
   for (int i = 0; i < n; i += lanes) {
     auto L = [&](const float* a) { return hn::LoadU(d, a + i); };
     const Strip<DF> st = StripOf(d, F, L(B.p0x), L(B.p0y), L(B.p0z), L(B.p1x), L(B.p1y), L(B.p1z), L(B.wx), L(B.wy),
                                  L(B.wz), L(B.radius));
-    hn::StoreU(hn::IfThenElse(hn::Or(st.badInput, hn::AndNot(st.outside, st.early)), S(2.0f),
-                              hn::IfThenElse(st.outside, S(4.0f), hn::IfThenElse(st.culled, S(1.0f), S(-1.0f)))),
-               d, B.decided + i);
+    const auto exact = hn::Or(st.badInput, hn::AndNot(st.outside, st.early));
+    const auto code = hn::IfThenElse(hn::RebindMask(di, st.outside), hn::Set(di, int32_t(PrimitiveStatus::Outside)),
+                                     hn::IfThenElseZero(hn::RebindMask(di, st.culled), hn::Set(di, int32_t(PrimitiveStatus::Culled))));
+    static_assert(int(PrimitiveStatus::Drawn) == 0, "the placeholder of the lanes decided later");
+    hn::StoreU(hn::DemoteTo(d8, code), d8, B.decidedStatus + i);
+    uint8_t bits[8] = {};
+    hn::StoreMaskBits(d, hn::And(exact, hn::FirstN(d, size_t(n - i))), bits);
+    uint64_t word;
+    std::memcpy(&word, bits, sizeof(word));
+    B.exactLanes |= word << i;
     const auto keep = hn::AndNot(hn::Or(hn::Or(st.badInput, st.outside), hn::Or(st.early, st.culled)),
                                  hn::FirstN(d, size_t(n - i)));
     // in place: lanes [m, m + kept) with m <= i, after their loads
@@ -684,6 +708,64 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     const VF two = S(2.0f);
     St(hn::IfThenElse(badInput, two, hn::IfThenElse(outside, S(4.0f), hn::IfThenElse(early, two,
         hn::IfThenElse(culled, one, hn::IfThenElse(exact, two, status))))), B.status);
+    // the interior stations of the drawn lanes with two or more intervals (issue 13, i13prep4):
+    // lane t's jobs (one per station) at [jobFirst[t], jobFirst[t + 1]) of this vector's, lit below
+    const MF drawn = hn::AndNot(hn::Or(hn::Or(hn::Or(badInput, outside), hn::Or(early, culled)), hn::Or(exact, empty)), active);
+    const VF jobLanes = hn::IfThenElse(drawn, stations, S(-1.0f));
+    B.groupJobs[i / lanes] = 0;
+    if (F.light && !hn::AllFalse(d, hn::Ge(jobLanes, two))) {
+      alignas(64) int32_t count[kMaxLanes];
+      hn::Store(hn::ConvertTo(di, hn::Max(hn::Sub(jobLanes, one), zero)), di, count);
+      int32_t* first = B.jobFirst + i;
+      for (int t = 0, at = 0; t < lanes; ++t) first[t] = at, at += count[t];
+      const int jobs = first[lanes - 1] + count[lanes - 1];
+      hn::StoreU(hn::Add(hn::LoadU(di, first), hn::Set(di, B.stationJobs)), di, B.stationJob + i);
+      St(jobLanes, B.jobIntervals);
+      B.groupJobs[i / lanes] = jobs, B.groupBase[i / lanes] = B.stationJobs;
+      B.stationJobs += jobs;
+    }
+  }
+  if (!F.light || B.stationJobs == 0) return;
+  // the jobs lit a vector at a time, each job's inputs taken from the vectors of the lanes it
+  // belongs to by a lane permutation (a batch-wide queue needed ~20 gathers per vector of jobs);
+  // two vectors of jobs interleaved, so that their long dependency chains (three square
+  // roots, three divisions and a gather in a row) overlap
+  int jobAt[kSegmentBatch * kMaxSegmentPieces], jobGroup[kSegmentBatch * kMaxSegmentPieces], jobVectors = 0;
+  for (int i = 0; i < n; i += lanes)
+    for (int q = 0; q < B.groupJobs[i / lanes]; q += lanes) jobAt[jobVectors] = q, jobGroup[jobVectors++] = i;
+  const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
+  constexpr int W = 2;
+  for (int v = 0; v < jobVectors; v += W) {
+    VF u[W], mx[W], my[W], mz[W], px[W], py[W], pz[W], ar[W], ag[W], ab[W], dif[W], spec[W];
+    for (int w = 0; w < W; ++w) {
+      const int jv = std::min(v + w, jobVectors - 1), i = jobGroup[jv], q = jobAt[jv];
+      // job j's lane: the last whose first job is <= j
+      const VI j = hn::Iota(di, q);
+      VI lane = hn::Set(di, lanes - 1);
+      for (int t = 1; t < lanes; ++t) lane = hn::Add(lane, hn::VecFromMask(di, hn::Gt(hn::Set(di, B.jobFirst[i + t]), j)));
+      const auto idx = hn::IndicesFromVec(d, lane);
+      auto T = [&](const float* a) { return hn::TableLookupLanes(hn::LoadU(d, a + i), idx); };
+      // u = s / S, s = j - first + 1 (as float(s) / float(S) rounds)
+      const VI first = hn::TableLookupLanes(hn::LoadU(di, B.jobFirst + i), hn::IndicesFromVec(di, lane));
+      u[w] = hn::Div(hn::ConvertTo(d, hn::Add(hn::Sub(j, first), hn::Set(di, 1))), T(B.jobIntervals));
+      mx[w] = hn::MulAdd(u[w], T(B.dnx), T(B.n0x)), my[w] = hn::MulAdd(u[w], T(B.dny), T(B.n0y));
+      mz[w] = hn::MulAdd(u[w], T(B.dnz), T(B.n0z));
+      const VF cx = T(B.p0x), cy = T(B.p0y), cz = T(B.p0z);
+      px[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cx), cx), cx), py[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cy), cy), cy);
+      pz[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cz), cz), cz);
+      ar[w] = T(B.cr), ag[w] = T(B.cg), ab[w] = T(B.cb);
+    }
+    for (int w = 0; w < W; ++w) {
+      const VF im = hn::Div(one, hn::Sqrt(hn::MulAdd(mx[w], mx[w], hn::MulAdd(my[w], my[w], hn::Mul(mz[w], mz[w])))));
+      mx[w] = hn::Mul(mx[w], im), my[w] = hn::Mul(my[w], im), mz[w] = hn::Mul(mz[w], im);
+    }
+    PhongN<W>(d, F, mx, my, mz, px, py, pz, dif, spec);
+    for (int w = 0; w < W && v + w < jobVectors; ++w) {
+      const int at = B.groupBase[jobGroup[v + w] / lanes] + jobAt[v + w];
+      hn::StoreU(Lit(ar[w], dif[w], spec[w], lr), d, B.stationR + at);
+      hn::StoreU(Lit(ag[w], dif[w], spec[w], lg), d, B.stationG + at);
+      hn::StoreU(Lit(ab[w], dif[w], spec[w], lb), d, B.stationB + at);
+    }
   }
 }
 
@@ -711,32 +793,6 @@ void SegmentRecords(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   }
 }
 
-void SegmentStations(const SegmentSetupFrame& F, const SegmentSetupBatch& B, SegmentStationJobs& J) {
-  using DF = hn::ScalableTag<float>;
-  using VF = hn::Vec<DF>;
-  const DF d;
-  const hn::RebindToSigned<DF> di;
-  const int lanes = int(hn::Lanes(d));
-  for (int i = 0; i < J.count; i += lanes) {
-    const auto lane = hn::LoadU(di, J.lane + i);
-    auto G = [&](const float* a) { return hn::GatherIndex(d, a, lane); };
-    const VF u = hn::LoadU(d, J.u + i);
-    VF mx = hn::MulAdd(u, hn::Sub(G(B.n1x), G(B.n0x)), G(B.n0x));
-    VF my = hn::MulAdd(u, hn::Sub(G(B.n1y), G(B.n0y)), G(B.n0y));
-    VF mz = hn::MulAdd(u, hn::Sub(G(B.n1z), G(B.n0z)), G(B.n0z));
-    const VF im = hn::Div(hn::Set(d, 1.0f), hn::Sqrt(hn::MulAdd(mx, mx, hn::MulAdd(my, my, hn::Mul(mz, mz)))));
-    mx = hn::Mul(mx, im), my = hn::Mul(my, im), mz = hn::Mul(mz, im);
-    const VF qx = hn::MulAdd(u, hn::Sub(G(B.p1cx), G(B.p0x)), G(B.p0x));
-    const VF qy = hn::MulAdd(u, hn::Sub(G(B.p1cy), G(B.p0y)), G(B.p0y));
-    const VF qz = hn::MulAdd(u, hn::Sub(G(B.p1cz), G(B.p0z)), G(B.p0z));
-    VF dif, spec;
-    Phong(d, F, mx, my, mz, qx, qy, qz, dif, spec);
-    hn::StoreU(Lit(G(B.cr), dif, spec, hn::Set(d, F.lightColor[0])), d, J.r + i);
-    hn::StoreU(Lit(G(B.cg), dif, spec, hn::Set(d, F.lightColor[1])), d, J.g + i);
-    hn::StoreU(Lit(G(B.cb), dif, spec, hn::Set(d, F.lightColor[2])), d, J.b + i);
-  }
-}
-
 }  // namespace HWY_NAMESPACE
 }  // namespace linesurf::detail
 HWY_AFTER_NAMESPACE();
@@ -748,7 +804,6 @@ HWY_EXPORT(SegmentToCamera);
 HWY_EXPORT(SegmentCull);
 HWY_EXPORT(SegmentSetup);
 HWY_EXPORT(SegmentRecords);
-HWY_EXPORT(SegmentStations);
 bool segmentLoad(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, const Segment* segments, int n,
                  const PreparedSegment* out) {
   return HWY_DYNAMIC_DISPATCH(SegmentLoad)(frame, batch, segments, n, out);
@@ -764,9 +819,6 @@ void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int 
 }
 void segmentRecords(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
   HWY_DYNAMIC_DISPATCH(SegmentRecords)(frame, batch, n);
-}
-void segmentStations(const SegmentSetupFrame& frame, const SegmentSetupBatch& batch, SegmentStationJobs& jobs) {
-  HWY_DYNAMIC_DISPATCH(SegmentStations)(frame, batch, jobs);
 }
 }  // namespace linesurf::detail
 
@@ -814,10 +866,10 @@ detail::SegmentSetupFrame segmentSetupFrame(const FrameContext& frame) {
 namespace {
 
 // The colours of a turning lane's stations + 1 lighting stations (prepareSegment's stage 6):
-// the ends from the batch's Phong factors, the stations between them queued for
-// segmentStations (F.light); else every station by FrameContext::shade.
+// the ends from the batch's Phong factors, the stations between them as segmentSetup lit them
+// (F.light); else every station by FrameContext::shade.
 void stationColours(const detail::SegmentSetupBatch& b, int j, const FrameContext& frame,
-                    const detail::SegmentSetupFrame& F, int stations, float* colour, detail::SegmentStationJobs& jobs) {
+                    const detail::SegmentSetupFrame& F, int stations, float* colour) {
   const int n = stations + 1;
   if (F.light) {
     for (int c = 0; c < 3; ++c) {
@@ -825,13 +877,9 @@ void stationColours(const detail::SegmentSetupBatch& b, int j, const FrameContex
       colour[c * n] = (albedo * b.diffuse0[j] + b.specular0[j]) * F.lightColor[c];
       colour[c * n + stations] = (albedo * b.diffuse1[j] + b.specular1[j]) * F.lightColor[c];
     }
-    for (int s = 1; s < stations; ++s) {
-      const int q = jobs.count++;
-      jobs.lane[q] = j;
-      jobs.u[q] = float(s) / float(stations);
-      jobs.out[q] = colour + s;
-      jobs.stride[q] = n;
-    }
+    const int at = b.stationJob[j] - 1;
+    for (int s = 1; s < stations; ++s)
+      colour[s] = b.stationR[at + s], colour[n + s] = b.stationG[at + s], colour[2 * n + s] = b.stationB[at + s];
     return;
   }
   const Vec3f p0(b.p0x[j], b.p0y[j], b.p0z[j]), p1(b.p1cx[j], b.p1cy[j], b.p1cz[j]);
@@ -844,20 +892,6 @@ void stationColours(const detail::SegmentSetupBatch& b, int j, const FrameContex
   }
 }
 
-// The queued stations lit (segmentStations) and written to their SegmentExtras.
-void flushStations(const detail::SegmentSetupFrame& F, const detail::SegmentSetupBatch& b,
-                   detail::SegmentStationJobs& jobs) {
-  if (jobs.count == 0) return;
-  for (int q = jobs.count; q < (jobs.count + detail::kMaxLanes - 1) / detail::kMaxLanes * detail::kMaxLanes; ++q)
-    jobs.lane[q] = 0, jobs.u[q] = 0;  // the last vector's spare lanes: defined values
-  detail::segmentStations(F, b, jobs);
-  for (int q = 0; q < jobs.count; ++q) {
-    float* o = jobs.out[q];
-    o[0] = jobs.r[q], o[jobs.stride[q]] = jobs.g[q], o[2 * jobs.stride[q]] = jobs.b[q];
-  }
-  jobs.count = 0;
-}
-
 }  // namespace
 
 size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, const FrameContext& frame,
@@ -868,7 +902,6 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
   }
   size_t scalar = 0;
   detail::SegmentSetupBatch b;
-  detail::SegmentStationJobs jobs;
   for (size_t base = 0; base < count; base += detail::kSegmentBatch) {
     const int n = int(std::min<size_t>(detail::kSegmentBatch, count - base));
     const bool loaded = detail::segmentLoad(F, b, segments + first + base, n, out + base);
@@ -909,35 +942,28 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
     b.first = uint32_t(first + base);
     detail::segmentToCamera(F, b, n);
     const int m = detail::segmentCull(F, b, n);  // lanes [0, m): b.lane[k] of [0, n), not decided yet
-    for (int j = 0; j < n; ++j) {  // the lanes stage 1 decided
-      const size_t i = base + size_t(j);
-      switch (int(b.decided[j])) {
-        case 1: status[i] = PrimitiveStatus::Culled; break;
-        case 4: status[i] = PrimitiveStatus::Outside; break;
-        case 2: {
-          const uint32_t index = uint32_t(first + i);
-          status[i] = prepareSegment(segments[index], index, frame, out[i]);
-          ++scalar;
-          break;
-        }
-        default: break;
-      }
+    // the lanes stage 1 decided (the others' bytes are written again below)
+    std::memcpy(status + base, b.decidedStatus, size_t(n));
+    for (uint64_t bits = b.exactLanes; bits; bits &= bits - 1) {
+      const size_t i = base + size_t(std::countr_zero(bits));
+      const uint32_t index = uint32_t(first + i);
+      status[i] = prepareSegment(segments[index], index, frame, out[i]);
+      ++scalar;
     }
     if (m == 0) continue;
-    detail::segmentSetup(F, b, m);
-    for (int k = 0; k < m; ++k) {
-      // the SegmentExtra of each turning lane's slot (its station colours below), where the slot
-      // has one from an earlier frame: fetched while the records' images are made
-      if (!(b.status[k] == 0.0f || b.status[k] == 3.0f) || !(b.stations[k] >= 0)) continue;  // drawn lanes only
-      const bool pieces = b.pieceCount[k] > 1.0f;  // their pieces in SegmentExtra
-      if (stationsInline(int(b.stations[k])) && !pieces) continue;  // their stations in the record
+    // the SegmentExtras kept in the survivors' slots (turning lanes whose stations do not fit the
+    // record, and lanes with sub-segments, keep theirs from frame to frame: which lanes these are
+    // does not depend on the view), fetched before the set-up: they missed the cache in the
+    // writes below (issue 13, i13prep4)
+    for (int k = 0; k < m; ++k)
       if (const SegmentExtra* x = out[base + size_t(b.lane[k])].extra.get()) {
         const char* c = reinterpret_cast<const char*>(&x->colour);
-        if (pieces) __builtin_prefetch(x, 1);
+        __builtin_prefetch(x, 1);
         __builtin_prefetch(c, 1);
         __builtin_prefetch(c + sizeof(x->colour) + 2 * sizeof(Vec2f) + 2 * sizeof(int), 1);
       }
-    }
+    b.stationJobs = 0;
+    detail::segmentSetup(F, b, m);
     detail::segmentRecords(F, b, m);
     for (int k = 0; k < m; ++k) {
       const size_t i = base + size_t(b.lane[k]);
@@ -976,9 +1002,8 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
       }
       const int stations = int(b.stations[k]);
       if (stations >= 0) {  // turning: shade Stations (in the record or SegmentExtra), lit at the stations
-        if (jobs.count + stations > detail::kStationJobs) flushStations(F, b, jobs);
         float* colour = untexturedStations(rec, segments[index], stations);
-        if (stations > 0) stationColours(b, k, frame, F, stations, colour, jobs);
+        if (stations > 0) stationColours(b, k, frame, F, stations, colour);
       } else if (!F.light && !F.perPixelLighting) {  // Gouraud between the ends, lit per lane
         const Vec3f albedo(b.cr[k], b.cg[k], b.cb[k]);
         const Vec3f n1 = rec.n0 + rec.dn;
@@ -989,7 +1014,6 @@ size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, co
         rec.dc = k1 - k0;
       }
     }
-    flushStations(F, b, jobs);
   }
   return scalar;
 }

@@ -79,9 +79,12 @@ struct SegmentSetupBatch {
   /// the colour (FrameContext::primitiveColor)
   alignas(64) float cr[kSegmentBatch], cg[kSegmentBatch], cb[kSegmentBatch], ca[kSegmentBatch];
   uint32_t first = 0;  ///< the index of lane 0's segment before segmentCull
-  /// segmentCull: the status of each lane [0, n) stage 1 decides (as `status` below), -1 for the
-  /// others, which it moves to lanes [0, m), lane[k] the original lane of lane k
-  alignas(64) float decided[kSegmentBatch];
+  /// segmentCull: the status of each lane [0, n) stage 1 decides as PrimitiveStatus bytes
+  /// (Culled, Outside; Drawn for the others, which the exact path or segmentSetup decide), the
+  /// lanes it leaves to the exact path as bits (issue 13, i13prep4: no branch per lane); it moves
+  /// the others to lanes [0, m), lane[k] the original lane of lane k
+  alignas(64) uint8_t decidedStatus[kSegmentBatch];
+  uint64_t exactLanes = 0;
   alignas(64) int32_t lane[kSegmentBatch];
   // output: 0 = drawn; 1 = culled; 2 = needs the exact path; 3 = drawn, bounds cut by the
   // viewport (Clipped); 4 = outside
@@ -119,6 +122,19 @@ struct SegmentSetupBatch {
   /// Gouraud intervals of a turning smooth lane (shade Stations): > 0, or 0 where lighting is
   /// deferred; -1 for a lane that does not turn
   alignas(64) float stations[kSegmentBatch];
+  /// The lit colours of the interior stations (issue 13, i13prep4; frame.light): lane k drawn with
+  /// S = stations[k] >= 2 has station s = 1 .. S - 1 (the shading normal normalize(n0 + u dn) and
+  /// the point p0 + u (p1 - p0) at u = s / S, lit as FrameContext::shade with the batch's Phong)
+  /// at stationJob[k] + s - 1 of stationR, stationG, stationB; stationJobs of them in all
+  alignas(64) int32_t stationJob[kSegmentBatch];
+  static constexpr int kStationJobs = kSegmentBatch * (kMaxSegmentPieces - 1) + kMaxLanes;
+  alignas(64) float stationR[kStationJobs], stationG[kStationJobs], stationB[kStationJobs];
+  int stationJobs = 0;
+  /// segmentSetup's bookkeeping of those jobs: per lane its first job within its vector of lanes
+  /// and its intervals (-1: none), per vector of lanes its jobs and where they start
+  alignas(64) int32_t jobFirst[kSegmentBatch];
+  alignas(64) float jobIntervals[kSegmentBatch];
+  int32_t groupJobs[kSegmentBatch], groupBase[kSegmentBatch];
   /// the records' images: chunk c of lane j at rec[c][4 j .. 4 j + 4) (segmentRecords)
   alignas(64) float rec[kRecordChunks][4 * kSegmentBatch];
 };
@@ -134,30 +150,18 @@ bool segmentLoad(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, const
 void segmentToCamera(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
 
 /// Stage 1 (culling) over lanes [0, n) of camera-space input (issue 13, i13prep2): the lanes it
-/// decides (culled, outside, or for the exact path) get their status in `decided`; the others
-/// are compacted to lanes [0, m) (`lane`: their original lanes), m returned, so that segmentSetup
-/// runs on full vectors of them (runtime dispatch).
+/// decides (culled, outside, or for the exact path) get their status in `decidedStatus` and
+/// `exactLanes`; the others are compacted to lanes [0, m) (`lane`: their original lanes), m
+/// returned, so that segmentSetup runs on full vectors of them (runtime dispatch).
 int segmentCull(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
 
 /// The SIMD set-up of lanes [0, n) of camera-space input (segmentCull's survivors; runtime
-/// dispatch). The index of lane k's segment is first + lane[k].
+/// dispatch). The index of lane k's segment is first + lane[k]. With frame.light it also lights the
+/// interior stations of the drawn lanes with two or more Gouraud intervals (stationJob).
 void segmentSetup(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
 
 /// The records' images of lanes [0, n) of a batch segmentSetup has set up (rec; runtime dispatch).
 void segmentRecords(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
-
-/// Lighting stations in SIMD: job k is lane lane[k] of the batch at u[k] in [0, 1]: the lit colour
-/// (FrameContext::shade, with the batch's Phong) of the albedo (cr, cg, cb) at the shading normal
-/// normalize(n0 + u (n1 - n0)) and the point p0 + u (p1 - p0), into r, g, b.
-inline constexpr int kStationJobs = 256;
-struct SegmentStationJobs {
-  alignas(64) int32_t lane[kStationJobs];
-  alignas(64) float u[kStationJobs], r[kStationJobs], g[kStationJobs], b[kStationJobs];
-  float* out[kStationJobs];  ///< where channel 0 goes; channel c at out[k][c * stride[k]]
-  int stride[kStationJobs];
-  int count = 0;
-};
-void segmentStations(const SegmentSetupFrame& frame, const SegmentSetupBatch& batch, SegmentStationJobs& jobs);
 
 }  // namespace detail
 
