@@ -366,7 +366,6 @@ int SegmentCull(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   const DF d;
   const hn::RebindToSigned<DF> di;
   const int lanes = int(hn::Lanes(d));
-  auto S = [&](float v) { return hn::Set(d, v); };
   float* const arrays[] = {B.p0x, B.p0y, B.p0z, B.p1x, B.p1y, B.p1z, B.wx, B.wy, B.wz, B.radius, B.smooth,
                            B.cr,  B.cg,  B.cb,  B.ca,  B.m0x, B.m0y, B.m0z, B.m1x, B.m1y, B.m1z};
   const int count = F.smoothFrame ? 21 : 15;
