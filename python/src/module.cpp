@@ -390,7 +390,8 @@ E enumFrom(const std::string& value, const char* field, std::initializer_list<st
   std::string choices;
   for (auto& [n, e] : names) {
     if (value == n) return e;
-    choices += (choices.empty() ? "" : ", ") + std::string(n);
+    if (!choices.empty()) choices += ", ";
+    choices += n;
   }
   throwBadOption(field, "expected one of " + choices + ", got '" + value + "'");
 }

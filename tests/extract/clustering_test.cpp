@@ -53,7 +53,7 @@ void expectValidClustering(const Clustering& c, const PointGeometry& g, float de
     auto m = c.membersOf(k);
     ASSERT_FALSE(m.empty());
     EXPECT_TRUE(std::is_sorted(m.begin(), m.end()));
-    if (k > 0) EXPECT_LT(c.membersOf(k - 1)[0], m[0]) << "clusters ordered by smallest member";
+    if (k > 0) { EXPECT_LT(c.membersOf(k - 1)[0], m[0]) << "clusters ordered by smallest member"; }
     for (uint32_t p : m) {
       EXPECT_EQ(c.labels[p], k);
       ++seen[p];

@@ -379,8 +379,8 @@ TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
     EXPECT_LT((pts.pointShadingNormals[i + n - 1] - s.normal1).norm(), 1e-5f);
     const Vec3f dir = (s.p1 - s.p0).normalized();
     const Vec3f q0 = (s.normal0 - s.normal0.dot(dir) * dir).normalized(), q1 = (s.normal1 - s.normal1.dot(dir) * dir).normalized();
-    if (q0.dot(fn) > cos10 + 1e-4f) EXPECT_LT((pts.points[i].normal - q0).norm(), 1e-5f);
-    if (q1.dot(fn) > cos10 + 1e-4f) EXPECT_LT((pts.points[i + n - 1].normal - q1).norm(), 1e-5f);
+    if (q0.dot(fn) > cos10 + 1e-4f) { EXPECT_LT((pts.points[i].normal - q0).norm(), 1e-5f); }
+    if (q1.dot(fn) > cos10 + 1e-4f) { EXPECT_LT((pts.points[i + n - 1].normal - q1).norm(), 1e-5f); }
     i += n;
   }
 }

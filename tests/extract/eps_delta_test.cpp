@@ -129,7 +129,7 @@ TEST(EpsDelta, NoiseDegradesGracefully) {
     EpsDeltaStats st;
     HybridModel out = extractEpsDelta(cloud, g, {.provenance = true}, &st);
     expectVerified(cloud, g, out, st.epsilon, st.delta);
-    if (noise <= 0.01f) EXPECT_GE(st.replacedFraction(), 0.8) << noise;
+    if (noise <= 0.01f) { EXPECT_GE(st.replacedFraction(), 0.8) << noise; }
     EXPECT_LE(st.replacedFraction(), previous + 0.05) << noise;
     previous = st.replacedFraction();
   }

@@ -52,17 +52,17 @@ void expectSameModel(const HybridModel& a, const HybridModel& b) {
   ASSERT_EQ(a.segments.size(), b.segments.size());
   for (size_t i = 0; i < a.points.size(); ++i) {
     EXPECT_EQ(a.points[i].position, b.points[i].position) << i;
-    if (a.attributes.normals) EXPECT_EQ(a.points[i].normal, b.points[i].normal) << i;
-    if (a.attributes.colors) EXPECT_EQ(a.points[i].color, b.points[i].color) << i;
-    if (a.attributes.radii) EXPECT_EQ(a.points[i].radius, b.points[i].radius) << i;
+    if (a.attributes.normals) { EXPECT_EQ(a.points[i].normal, b.points[i].normal) << i; }
+    if (a.attributes.colors) { EXPECT_EQ(a.points[i].color, b.points[i].color) << i; }
+    if (a.attributes.radii) { EXPECT_EQ(a.points[i].radius, b.points[i].radius) << i; }
   }
   for (size_t i = 0; i < a.segments.size(); ++i) {
     const Segment &s = a.segments[i], &t = b.segments[i];
     EXPECT_EQ(s.p0, t.p0);
     EXPECT_EQ(s.p1, t.p1);
-    if (a.attributes.normals) EXPECT_EQ(s.normal, t.normal);
-    if (a.attributes.colors) EXPECT_EQ(s.color, t.color);
-    if (a.attributes.radii) EXPECT_EQ(s.radius, t.radius);
+    if (a.attributes.normals) { EXPECT_EQ(s.normal, t.normal); }
+    if (a.attributes.colors) { EXPECT_EQ(s.color, t.color); }
+    if (a.attributes.radii) { EXPECT_EQ(s.radius, t.radius); }
     if (a.attributes.texcoords) {
       EXPECT_EQ(s.uv0, t.uv0);
       EXPECT_EQ(s.uv1, t.uv1);
@@ -297,7 +297,7 @@ TEST(SharedModelIo, ReadsEveryBundledModel) {
     if (entry.path().extension() != ".ply") continue;
     HybridModel m = readModel(entry.path());  // every file reads as points
     EXPECT_FALSE(m.points.empty()) << entry.path();
-    if (fileHoldsMesh(entry.path())) EXPECT_FALSE(readMesh(entry.path()).faces.empty()) << entry.path();
+    if (fileHoldsMesh(entry.path())) { EXPECT_FALSE(readMesh(entry.path()).faces.empty()) << entry.path(); }
   }
 }
 

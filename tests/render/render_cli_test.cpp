@@ -44,8 +44,8 @@ TEST(RenderCli, ViewsAreNumbered) {
 TEST(RenderCli, AbsurdParametersFailWithExitCode1) {
   const std::string model = (test::bundledData() / "santa_points.ply").string();
   auto dir = test::scratchDir("render_cli_bad");
-  for (const std::string& bad : {"--layers 0", "--cutoff 0.2", "--size 10by10", "--z-mode sometimes", "--up-axis w",
-                                 "--prefilter -1", "--background purple"}) {
+  for (const char* bad : {"--layers 0", "--cutoff 0.2", "--size 10by10", "--z-mode sometimes", "--up-axis w",
+                        "--prefilter -1", "--background purple"}) {
     auto r = test::runCli("render " + model + " -o " + (dir / "x.png").string() + " " + bad);
     EXPECT_EQ(r.exitCode, 1) << bad << ": " << r.out;
   }

@@ -142,7 +142,7 @@ TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
     EXPECT_EQ(a.compressed, b.compressed) << layers;
     EXPECT_GT(a.merged, 500u) << layers;  // both paths ran
     EXPECT_GT(a.allocated, 0u);
-    if (layers > 1) EXPECT_GT(a.occluded, 0u) << layers;
+    if (layers > 1) { EXPECT_GT(a.occluded, 0u) << layers; }
     EXPECT_GT(a.compressed, 0u) << layers;
     int multi = 0;
     for (int y = tile.y0; y < tile.y1; ++y)
@@ -155,7 +155,7 @@ TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
             EXPECT_NEAR(u, v, 1e-5f * std::max(1.0f, std::abs(v))) << x << "," << y << " layer " << l << " field " << f;
           }
       }
-    if (layers > 1) EXPECT_GT(multi, 10) << layers;
+    if (layers > 1) { EXPECT_GT(multi, 10) << layers; }
   }
 }
 

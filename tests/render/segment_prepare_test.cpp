@@ -332,7 +332,7 @@ TEST(SegmentPrepare, BatchesAgreeWithTheExactPathOnEveryTarget) {
       check(randomSegments(2000, eye, true, uint32_t(21 + turning), turning), cam, o, true, tally);
       EXPECT_GT(tally.compared, 300) << "target " << target;
       EXPECT_GT(tally.compared, tally.visible * 99 / 100) << "target " << target;
-      if (turning) EXPECT_GT(tally.stations, tally.visible / 2) << "target " << target;
+      if (turning) { EXPECT_GT(tally.stations, tally.visible / 2) << "target " << target; }
     }
     ++targets;
   }

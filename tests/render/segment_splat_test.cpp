@@ -673,7 +673,7 @@ TEST(SegmentSplat, SimdKernelMatchesTheClosedFormInDouble) {
                            << ": SIMD " << w << " closed form " << ref[px] << " peak " << peak;
       }
       for (const auto& [px, w] : ref)
-        if (w > 1e-4 * peak) ASSERT_TRUE(simd.count(px)) << "cutoff " << cutoff << " segment " << it << " misses a pixel";
+        if (w > 1e-4 * peak) { ASSERT_TRUE(simd.count(px)) << "cutoff " << cutoff << " segment " << it << " misses a pixel"; }
     }
     EXPECT_GT(compared, 20000u);
     EXPECT_GT(multiPiece, 5u);
