@@ -32,6 +32,11 @@ message(STATUS "linesurf: Python module for ${Python3_EXECUTABLE} (${Python3_VER
 set(LINESURF_PYTHON_DIR ${PROJECT_BINARY_DIR}/python/linesurf)
 pybind11_add_module(linesurf_python MODULE ${PROJECT_SOURCE_DIR}/python/src/module.cpp)
 target_link_libraries(linesurf_python PRIVATE linesurf_lib Python3::NumPy)
+# pybind11 links the module with -flto; let GCC split the link-time work over the cores (make's
+# jobserver or all of them) instead of warning that it runs the 7 LTRANS jobs serially
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+  target_link_options(linesurf_python PRIVATE -flto=auto)
+endif()
 set_target_properties(linesurf_python PROPERTIES OUTPUT_NAME _linesurf LIBRARY_OUTPUT_DIRECTORY ${LINESURF_PYTHON_DIR})
 foreach(f __init__.py __init__.pyi py.typed)
   configure_file(${PROJECT_SOURCE_DIR}/python/linesurf/${f} ${LINESURF_PYTHON_DIR}/${f} COPYONLY)
