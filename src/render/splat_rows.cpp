@@ -1024,15 +1024,12 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
                                    const RowSpan* spans, int count, Z3Tile& z3, Z3Rows<DZ>& zset) {
   const DF d;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
-  const SegmentKernel<kPoly> kernel(S, F);
   // the smooth normals only when the tile blends normal sums (else nothing reads them: Z3Tile)
   const bool smooth = A.smooth && z3.blendNormals();
   const VF oneF = hn::Set(d, 1.0f), zero = hn::Zero(d), iota = hn::Iota(d, 0.0f), centre = hn::Iota(d, 0.5f);
-  const VF thr0 = hn::Set(d, S.zThreshold0), thrD = hn::Set(d, S.zThreshold1 - S.zThreshold0);
-  // (the stations' and the smooth normals' constants are broadcast where they are used: most
-  // segments need neither, and hoisted they were spilled and reloaded for every segment)
-  VF attr[3], dc[3];
-  for (int k = 0; k < 3; ++k) attr[k] = hn::Set(d, A.attr[k]), dc[k] = hn::Set(d, A.dc[k]);
+  // (the kernel's, the colour's, the stations' and the smooth normals' constants are broadcast
+  // where they are used: most segments need one vector, and hoisted they were spilled and
+  // reloaded for every segment)
   const hn::RebindToSigned<DF> di;
   // at most L stations: their colours c_k and steps c_(k+1) - c_k as lane tables, looked up by a
   // lane permutation (one instruction) instead of gathered from memory (six per vector; the
@@ -1111,6 +1108,14 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
     for (int i = 0; i < n; i += L) {
       const VF x = hn::LoadU(d, px + i), y = hn::LoadU(d, py + i);
       VF w, z, u;
+      // the record's constants through pointers the compiler cannot tell are the same in every
+      // vector (beyond the thesis, issue 13): held for the segment, the kernel's ~25 broadcasts
+      // and the colour's 8 were spilled to the stack and reloaded (a pair has ~1.2 vectors);
+      // read here, they become broadcast operands of the arithmetic. The same values.
+      const SegmentRaster* Sv = &S;
+      const SegmentShadeRows* Av = &A;
+      asm volatile("" : "+r"(Sv), "+r"(Av));
+      const SegmentKernel<kPoly> kernel(*Sv, F);
       const auto keep = kernel(x, y, hn::Lt(hn::Add(iota, hn::Set(d, float(i))), nv), w, z, u);
       if (hn::AllFalse(d, keep)) {
         hn::Store(zero, d, bw + i);
@@ -1120,7 +1125,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       inserted += hn::CountTrue(d, keep);  // every one is a fragment pass 2 inserts
       u = hn::IfThenElseZero(keep, u);  // the other lanes' u may be anything (the station gather's index)
       hn::Store(z, d, bz + i);
-      hn::Store(hn::MulAdd(u, thrD, thr0), d, bt + i);
+      hn::Store(hn::MulAdd(u, hn::Set(d, Sv->zThreshold1 - Sv->zThreshold0), hn::Set(d, Sv->zThreshold0)), d, bt + i);
       if (stations >= 2) {  // piecewise linear between the lighting stations
         const VF fs = hn::Mul(u, hn::Set(d, float(stations - 1)));
         const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), hn::Set(di, stations - 2));
@@ -1137,7 +1142,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
           }
         }
       } else {
-        for (int c = 0; c < 3; ++c) hn::Store(hn::MulAdd(u, dc[c], attr[c]), d, bc[c] + i);
+        for (int c = 0; c < 3; ++c) hn::Store(hn::MulAdd(u, hn::Set(d, Av->dc[c]), hn::Set(d, Av->attr[c])), d, bc[c] + i);
       }
       if (smooth) {
         VF m[3];
