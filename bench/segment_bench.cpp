@@ -43,6 +43,12 @@ float benchSegmentLod() {
   return env ? float(std::atof(env)) : RenderOptions{}.segmentLod;
 }
 
+// RenderOptions::tailLayers for the frame benchmarks: LINESURF_BENCH_TAIL_LAYERS=1 (issue 14, i14disc)
+bool benchTailLayers() {
+  const char* env = std::getenv("LINESURF_BENCH_TAIL_LAYERS");
+  return env ? std::atoi(env) != 0 : RenderOptions{}.tailLayers;
+}
+
 std::filesystem::path sharedData() {
   auto p = std::filesystem::path(LINESURF_SOURCE_DIR) / ".." / "shared" / "data";
   if (const char* env = std::getenv("LINESURF_SHARED_DATA")) p = env;
@@ -158,6 +164,7 @@ void BM_HybridFrame(benchmark::State& state) {
   RenderOptions o;
   o.segmentMethod = kMethods[state.range(2)];
   o.segmentLod = benchSegmentLod();
+  o.tailLayers = benchTailLayers();
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;
@@ -200,6 +207,7 @@ void BM_ContourFrame(benchmark::State& state) {
   RenderOptions o;
   o.alphaBuffer = true;  // as the experiment renders meshes' models
   o.segmentLod = benchSegmentLod();
+  o.tailLayers = benchTailLayers();
   const Renderer r(*m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   size_t v = 0;

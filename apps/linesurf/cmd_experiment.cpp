@@ -29,6 +29,7 @@ struct ExperimentArgs {
   bool noImages = false;
   float segmentLod = RenderOptions{}.segmentLod;
   float coverageGain = RenderOptions{}.coverageGain;
+  bool tailLayers = RenderOptions{}.tailLayers;
   int coverageReach = RenderOptions{}.coverageReach;
 };
 
@@ -68,6 +69,7 @@ void run(const ExperimentArgs& a) {
   o.contour.mergeStripAngle = a.contourMergeStripAngle;
   o.render.segmentLod = a.segmentLod;
   o.render.coverageGain = a.coverageGain;
+  o.render.tailLayers = a.tailLayers;
   o.render.coverageReach = a.coverageReach;
 
   ExperimentResults res = runExperiment(o, progressBar());
@@ -150,6 +152,7 @@ RegisterCommand reg(70, [](CLI::App& app) {
   sub->add_option("--segment-lod", a->segmentLod,
                   "Draw segments at most this many kernel sigmas long as one point splat, [0, 4] (render --segment-lod)")
       ->capture_default_str();
+  sub->add_flag("--tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers)");
   sub->add_option("--coverage-gain", a->coverageGain,
                   "Coverage alpha gain, [0, 100] (0 = the thesis's normalised alpha; render --coverage-gain)")
       ->capture_default_str();

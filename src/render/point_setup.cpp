@@ -258,6 +258,12 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     hn::StoreU(Sx, d, B.Sx + i), hn::StoreU(Sy, d, B.Sy + i), hn::StoreU(S0, d, B.S0 + i);
     hn::StoreU(Tx, d, B.Tx + i), hn::StoreU(Ty, d, B.Ty + i), hn::StoreU(T0, d, B.T0 + i);
     hn::StoreU(nc, d, B.depthNum + i), hn::StoreU(wscale, d, B.weightScale + i), hn::StoreU(ext, d, B.depthExtent + i);
+    {  // the disc's tail form (PointCold::disc): |s B0 + t B1|^2 / (kTailDisc R sigma)^2 with b = R B
+      const VF k = hn::Div(S(1.0f / (kTailDisc * kTailDisc)), hn::Mul(hn::Mul(hn::Mul(R, R), hn::Mul(R, R)), s2));
+      hn::StoreU(hn::Mul(k, dot3(b0x, b0y, b0z, b0x, b0y, b0z)), d, B.disc0 + i);
+      hn::StoreU(hn::Mul(hn::Add(k, k), dot3(b0x, b0y, b0z, b1x, b1y, b1z)), d, B.disc1 + i);
+      hn::StoreU(hn::Mul(k, dot3(b1x, b1y, b1z, b1x, b1y, b1z)), d, B.disc2 + i);
+    }
     hn::StoreU(lx, d, B.onx + i), hn::StoreU(ly, d, B.ony + i), hn::StoreU(lz, d, B.onz + i);
   }
 }
@@ -440,6 +446,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
       PointCold& cold = *new (out.cold + k) PointCold;
       cold.index = index;
       cold.normal[0] = b.onx[j], cold.normal[1] = b.ony[j], cold.normal[2] = b.onz[j];
+      cold.disc[0] = b.disc0[j], cold.disc[1] = b.disc1[j], cold.disc[2] = b.disc2[j];
       o.N = {b.Nx[j], b.Ny[j], b.N0[j]};
       o.S = {b.Sx[j], b.Sy[j], b.S0[j]};
       o.T = {b.Tx[j], b.Ty[j], b.T0[j]};

@@ -259,6 +259,8 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
     }
   }
   cold.normal[0] = ln.x(), cold.normal[1] = ln.y(), cold.normal[2] = ln.z();
+  const float rd = detail::kTailDisc * opt.cutoffRadius * sigmaR, rs2 = rd * rd;  // the disc's tail form
+  cold.disc[0] = s.B0.squaredNorm() / rs2, cold.disc[1] = 2 * s.B0.dot(s.B1) / rs2, cold.disc[2] = s.B1.squaredNorm() / rs2;
   if (!opt.perPixelLighting)
     light(frame, s, ln, bounds, out, PreparedPoint::gouraud(bounds, false) ? new (slot.gouraud) PointGouraud : nullptr);
   return status;
@@ -277,11 +279,12 @@ detail::PointRaster pointRaster(const PreparedPoint& sp, const FrameContext& fra
 }
 
 void rasterizePoints(const PointSlots& slots, const uint32_t* refs, int n, const SplatContext& ctx) {
-  static_assert(sizeof(PointGouraud) == 12 * sizeof(float) && sizeof(PointCold) == 4 * sizeof(float));
+  static_assert(sizeof(PointGouraud) == 12 * sizeof(float) && sizeof(PointCold) == 8 * sizeof(float));
   const detail::PointRowsFrame F{ctx.frame.cutoffQ, ctx.frame.cam().nearDepth(), ctx.frame.cam().farDepth()};
   detail::PointRunSlots s;
   s.hot = slots.hot, s.bounds = slots.bounds;
-  s.normals = slots.cold->normal, s.normalStride = 4;
+  s.normals = slots.cold->normal, s.normalStride = 8;
+  if (ctx.tile.tailLayers()) s.disc = slots.cold->disc, s.discStride = 8;
   s.gouraud = ctx.frame.opt().perPixelLighting ? nullptr : slots.gouraud->C0.data(), s.gouraudStride = 12;
   ctx.tile.addFragments(detail::pointRunZ3(F, s, refs, n, ctx.tile));
 }

@@ -68,6 +68,10 @@ static_assert(sizeof(PreparedPoint) == 64);
 struct PointCold {
   float normal[3] = {};
   uint32_t index = 0;
+  /// the tail form of the splat's own disc (beyond the thesis, issue 14; detail::PointTail): a
+  /// fragment at plane coordinates (s, t) lies outside kTailDisc times the disc |p - c| <= cutoff
+  /// sigma_r where disc[0] s^2 + disc[1] s t + disc[2] t^2 > 1 (disc[3] unused). Zero: never.
+  float disc[4] = {};
 };
 
 /// Where a prepared point's parts go: slot j of each array (the arrays may be uninitialised

@@ -100,12 +100,12 @@ struct Renderer::Buffers {
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
     : model_(model), options_(options), sphere_(boundingSphere(model)), buffers_(std::make_shared<Buffers>()) {
   validate(options_);
+  if (model_.attributes.colors) {
+    for (const Point& p : model_.points) opaqueModel_ = opaqueModel_ && p.color.w() >= 1;
+    for (const Segment& s : model_.segments) opaqueModel_ = opaqueModel_ && s.color.w() >= 1;
+  }
+  if (model_.attributes.texcoords && model_.texture) opaqueModel_ = false;
   if (options_.coverageGain > 0) {
-    if (model_.attributes.colors) {
-      for (const Point& p : model_.points) opaqueModel_ = opaqueModel_ && p.color.w() >= 1;
-      for (const Segment& s : model_.segments) opaqueModel_ = opaqueModel_ && s.color.w() >= 1;
-    }
-    if (model_.attributes.texcoords && model_.texture) opaqueModel_ = false;
     if (opaqueModel_) {
       // at silhouettes only: the mean density around each primitive, else the least (coverage.h)
       coverage_ = detail::coverageConstants(model_, options_.reconstructionScale, options_.cutoffRadius,
@@ -230,6 +230,8 @@ RenderResult Renderer::render(const Camera& cam) const {
   // fragment is opaque on its own) with the tile's scale 2 g cMax (Z3Tile::setCoverageScale).
   const bool coverage = coverageMax_ > 0 && !(opt.alphaOverride >= 0 && opt.alphaOverride < 1) && opt.defaultColor.w() >= 1;
   const float coverageScale = coverage ? 2 * opt.coverageGain * coverageMax_ : 0.0f;
+  // every fragment of the frame opaque (tail layers, Z3Tile::setTailLayers, assume it)
+  const bool opaqueFrame = opaqueModel_ && !(opt.alphaOverride >= 0 && opt.alphaOverride < 1) && opt.defaultColor.w() >= 1;
   const float invC = coverage ? 0.5f / coverageMax_ : 0.0f;
   const float* const covC = coverage_.data();
   const detail::PointSetupFrame setup = pointSetupFrame(frame);
@@ -370,6 +372,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
     z3.setCoverageScale(coverageScale);
     z3.setCoverageOccludes(!silhouettes);  // at silhouettes only: an opaque frame's layers
+    z3.setTailLayers(opt.tailLayers && opaqueFrame && coverageScale <= 0);  // (Z3Tile: an opaque frame)
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     const size_t kEnd = tileStart[tile + 1];

@@ -135,6 +135,7 @@ const std::array<int32_t, kRecordSlots>& recordSources() {
     put(r + offsetof(R, k), offsetof(B, k)), put(r + offsetof(R, erfScale), offsetof(B, erfScale));
     put(r + offsetof(R, scale0), offsetof(B, scale0)), put(r + offsetof(R, slope), offsetof(B, slope));
     put(r + offsetof(R, zThreshold0), offsetof(B, zt0)), put(r + offsetof(R, zThreshold1), offsetof(B, zt1));
+    put(r + offsetof(R, tailB), offsetof(B, tailB));
     put(a + 4 * Z3Tile::kR, offsetof(B, ar)), put(a + 4 * Z3Tile::kG, offsetof(B, ag));
     put(a + 4 * Z3Tile::kB, offsetof(B, ab)), put(a + 4 * Z3Tile::kA, offsetof(B, aa));
     put(a + 4 * Z3Tile::kNx, offsetof(B, n0x)), put(a + 4 * Z3Tile::kNy, offsetof(B, n0y));
@@ -621,6 +622,7 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     };
     if (F.zPerPrimitive) St(hn::Mul(S(F.zScale), extent(M0)), B.zt0), St(hn::Mul(S(F.zScale), extent(M1)), B.zt1);
     else St(S(F.zFixed), B.zt0), St(S(F.zFixed), B.zt1);
+    St(hn::Mul(S(kTailDisc), hn::Mul(R, sigma)), B.tailB);
     St(qx1, B.p1cx), St(qy1, B.p1cy), St(qz1, B.p1cz);
     // stage 6: shading normals (smooth: the endpoint normals on the plane normal's side) and Phong
     VF n0x = nx, n0y = ny, n0z = nz, n1x = nx, n1y = ny, n1z = nz;

@@ -114,6 +114,7 @@ struct SegmentSetupBatch {
   /// the normal is n0), the colour's change dc and the normal's dn to u = 1, the index, and the
   /// word holding `smooth` and `shade` (the template's with those bytes set)
   alignas(64) float zt0[kSegmentBatch], zt1[kSegmentBatch];  ///< z thresholds at p0, p1
+  alignas(64) float tailB[kSegmentBatch];  ///< SegmentRaster's
   alignas(64) float ar[kSegmentBatch], ag[kSegmentBatch], ab[kSegmentBatch], aa[kSegmentBatch];
   alignas(64) float dcx[kSegmentBatch], dcy[kSegmentBatch], dcz[kSegmentBatch];
   alignas(64) float dnx[kSegmentBatch], dny[kSegmentBatch], dnz[kSegmentBatch];

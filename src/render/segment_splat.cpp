@@ -245,6 +245,7 @@ void rasterConstants(const Strip& st, const Footprint& fp, double radius, const 
   k.zThreshold0 = frame.zThreshold(float(R * std::sqrt(g.dot(fp.M0 * g)) + radius));
   k.zThreshold1 = frame.zThreshold(float(R * std::sqrt(g.dot(fp.M1 * g)) + radius));
   k.nearD = cam.nearDepth(), k.farD = cam.farDepth();
+  k.tailB = float(detail::kTailDisc * R * double(frame.opt().reconstructionScale) * radius);
   k.clipDepth = depthClipped;
   k.pieceCount = fp.K;
   if (fp.K > 1) {

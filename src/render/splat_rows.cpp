@@ -93,6 +93,20 @@ struct PointKernel {
   }
 };
 
+// The prefilter tail of a point splat (beyond the thesis, issue 14; Z3Tile::setTailLayers): a
+// fragment whose ray meets the splat's plane outside kTailDisc times its own disc |p - c| <=
+// cutoff sigma_r, i.e. g0 s^2 + g1 s t + g2 t^2 > 1 with p - c = s B0 + t B1 (PointCold::disc):
+// only the screen prefilter put it there, and its depth is the plane's, extrapolated. Its depth
+// is returned negated (the rows' pass 2 reads the sign back).
+struct PointTail {
+  VF g0, g1, g2;
+  PointTail(DF d, const float* disc) : g0(hn::Set(d, disc[0])), g1(hn::Set(d, disc[1])), g2(hn::Set(d, disc[2])) {}
+  HWY_INLINE VF z(DF d, VF s, VF t, VF z) const {
+    const VF Q = hn::MulAdd(g0, hn::Mul(s, s), hn::MulAdd(g1, hn::Mul(s, t), hn::Mul(g2, hn::Mul(t, t))));
+    return hn::IfThenElse(hn::Gt(Q, hn::Set(d, 1.0f)), hn::Neg(z), z);
+  }
+};
+
 // Packs the lanes of `keep` into the block at `at`; returns how many. Compress in registers and
 // store whole vectors (the arrays are padded): a compressing store to memory is microcoded on
 // some CPUs (Zen 4).
@@ -304,7 +318,8 @@ struct SegmentKernel {
     return hn::IfThenElseZero(inside, w);
   }
 
-  HWY_INLINE hn::Mask<D> operator()(V px, V py, hn::Mask<D> valid, V& w, V& z, V& u) const {
+  HWY_INLINE hn::Mask<D> operator()(V px, V py, hn::Mask<D> valid, V& w, V& z, V& u, V* bOut = nullptr,
+                                    V* aOut = nullptr) const {
     const V zero = F.zero;
     // the ray through the pixel meets the strip's plane (in front of the eye) at depth z
     const V nr = hn::MulAdd(Ndx, px, hn::MulAdd(Ndy, py, N0));
@@ -314,6 +329,8 @@ struct SegmentKernel {
     if (S.clipDepth) inside = hn::And(inside, hn::And(hn::Ge(z, F.nearD), hn::Le(z, F.farD)));
     const V a = hn::MulSub(hn::MulAdd(Adx, px, hn::MulAdd(Ady, py, A0)), iN, a0);
     const V b = hn::MulSub(hn::MulAdd(Bdx, px, hn::MulAdd(Bdy, py, B0)), iN, b0);
+    if (bOut) *bOut = b;
+    if (aOut) *aOut = a;
     if (S.pieceCount == 1) {
       // (no footprint box test: the sub-segment's own test, qmin < R^2 and a cut kernel interval,
       // is the capsule of the cutoff that the box holds)
@@ -595,6 +612,7 @@ struct Z3Rows {
   bool opaque;
   int nAttr;
   float coverage;  // Z3Tile::coverageScale(): a layer is opaque once its coverage reaches 1
+  bool tails;      // Z3Tile::tailLayers(): a tail fragment occludes nothing (its layer's flag -1)
   float* behindBase;  // Z3Tile::behindPlane(0) (its planes `stride` apart), or null
   int32_t* behindCnt;
   // per-lane counts of the lanes opened and of those dropped behind (a vector subtract of the
@@ -605,11 +623,16 @@ struct Z3Rows {
   Z3Rows(Z3Tile& z3, bool opaqueFragments)
       : base(z3.plane(0, 0)), stride(size_t(z3.plane(0, 1) - z3.plane(0, 0))), cnt(z3.counts()),
         opaque(opaqueFragments || !z3.coverageOccludes()), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1),
-        coverage(z3.coverageOccludes() ? z3.coverageScale() : 0.0f), behindBase(z3.behindPlane(0)),
-        behindCnt(z3.behindCounts()) {}
+        coverage(z3.coverageOccludes() ? z3.coverageScale() : 0.0f), tails(z3.tailLayers()),
+        behindBase(z3.behindPlane(0)), behindCnt(z3.behindCounts()) {}
   HWY_INLINE float* field(int f, size_t p) const { return base + size_t(f) * stride + p; }
   template <class AttrAt>
   HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt) {
+    return (*this)(p, inside, w, z, thr, attrAt, hn::FirstN(d, 0));
+  }
+  // tail: the lanes that are tail fragments (Z3Tile::setTailLayers; read only when `tails`)
+  template <class AttrAt>
+  HWY_INLINE hn::Mask<D> operator()(size_t p, hn::Mask<D> inside, V w, V z, V thr, AttrAt&& attrAt, hn::Mask<D> tail) {
     const V zero = hn::Zero(d);
     const auto count = hn::LoadU(di, cnt + p);
     const auto open = hn::And(inside, hn::RebindMask(d, hn::Eq(count, hn::Zero(di))));
@@ -617,8 +640,11 @@ struct Z3Rows {
     const V z0 = hn::LoadU(d, field(Z3Tile::kZ, p));
     const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, field(Z3Tile::kThr, p))));
     const auto fast = hn::Or(open, hn::And(single, within));
-    const auto behind =
-        hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(hn::LoadU(d, field(Z3Tile::kOpaque, p)), zero))));
+    const V flag0 = hn::LoadU(d, field(Z3Tile::kOpaque, p));
+    auto behind = hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(flag0, zero))));
+    // a tail in front of the single layer (skipped) or behind it (occluded: in an opaque frame
+    // every layer is opaque or tail-only) is dropped
+    if (tails && opaque) behind = hn::Or(behind, hn::AndNot(within, hn::And(single, tail)));
     if (!hn::AllFalse(d, fast)) {
       auto blend = [&](int k) {
         const V add = hn::Mul(w, attrAt(k));
@@ -632,6 +658,11 @@ struct Z3Rows {
       if (coverage > 0) {  // (a single layer: nothing behind it to free)
         const auto covered = hn::Ge(hn::Mul(hn::LoadU(d, field(Z3Tile::kA, p)), hn::Set(d, coverage)), hn::Set(d, 1.0f));
         hn::BlendedStore(hn::IfThenElseZero(covered, hn::Set(d, 1.0f)), fast, d, field(Z3Tile::kOpaque, p));
+      } else if (opaque && tails) {
+        // a tail opens a tail-only layer (-1); a fragment that is not a tail makes one occlude
+        const V one = hn::Set(d, 1.0f);
+        const V flag = hn::IfThenElse(tail, hn::IfThenElse(open, hn::Neg(one), flag0), one);
+        hn::BlendedStore(flag, fast, d, field(Z3Tile::kOpaque, p));
       } else if (opaque) {
         hn::BlendedStore(hn::Set(d, 1.0f), open, d, field(Z3Tile::kOpaque, p));
       } else {
@@ -670,7 +701,7 @@ inline constexpr int kRowChunk = 1024;  // pixels (Wp x rows) per chunk
 // ones, hold no Gouraud constants in registers)
 template <class DZ, int kWp, bool kGouraud>
 HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const PointRowsFrame& F, const float* normal,
-                                 const float* G, const PixelRect& r, Z3Tile& z3) {
+                                 const float* G, const float* disc, const PixelRect& r, Z3Tile& z3) {
   const DF d;
   const int Wp = kWp > 0 ? kWp : WpRun;
   const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
@@ -700,6 +731,8 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
     ct[k] = hn::Set(dz, kGouraud ? G[6 + k] : 0.0f), cst[k] = hn::Set(dz, kGouraud ? G[9 + k] : 0.0f);
   }
   Z3Rows<DZ> z3rows(z3, P.color[3] >= 1.0f);
+  const bool tails = disc && (disc[0] > 0 || disc[2] > 0);  // (passed only with Z3Tile::tailLayers(); zero: none)
+  const PointTail tailer(d, tails ? disc : F.noDisc);
   uint64_t inserted = 0;
   const int chunkRows = std::max(rowsPerVec, (kRowChunk / Wp) / rowsPerVec * rowsPerVec);
   const VF Wv = hn::Set(d, float(W));
@@ -714,7 +747,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
       auto inside = hn::And(a.hit, hn::And(hn::Lt(cx, Wv), hn::Lt(ry, hn::Set(d, float(H)))));
       if (clipDepth) inside = hn::And(inside, hn::And(hn::Ge(a.z, nearD), hn::Le(a.z, farD)));
       hn::Store(hn::IfThenElseZero(inside, a.w), d, bw + k);
-      hn::Store(a.z, d, bz + k);
+      hn::Store(tails ? tailer.z(d, a.s, a.t, a.z) : a.z, d, bz + k);
       if (kGouraud) hn::Store(a.s, d, bs + k), hn::Store(a.t, d, bt + k);
     }
     // 2. into the Z^3 tile
@@ -723,17 +756,20 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
       const size_t rowBase = z3.index(r.x0, y);
       for (int c = 0; c < W; c += LZ) {
         const int k = row * Wp + c;
-        const VZ w = hn::LoadU(dz, bw + k), z = hn::LoadU(dz, bz + k);
+        const VZ w = hn::LoadU(dz, bw + k);
+        VZ z = hn::LoadU(dz, bz + k);
         const auto inside = hn::Gt(w, zeroZ);
         if (hn::AllFalse(dz, inside)) continue;  // a corner of the bounds the splat misses
         const size_t p = rowBase + size_t(c);
         VZ s = zeroZ, t = zeroZ;
         if (kGouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
+        const auto tail = hn::Lt(z, zeroZ);  // (PointTail: negated when a tail)
+        if (tails) z = hn::Abs(z);
         const auto rest = z3rows(p, inside, w, z, thr, [&](int a) {
           if (kGouraud && a < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
             return hn::Add(hn::Add(hn::Add(c0[a], hn::Mul(s, cs[a])), hn::Mul(t, ct[a])), hn::Mul(hn::Mul(s, t), cst[a]));
           return attr[a];
-        });
+        }, tail);
         inserted += hn::CountTrue(dz, inside);
         if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
         // the other fragments (a new layer in front of or behind others, compression, occlusion)
@@ -745,7 +781,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
             const float si = bs[k + i], ti = bt[k + i];
             for (int a = 0; a < 3; ++a) fa[a] = G[a] + si * G[3 + a] + ti * G[6 + a] + (si * ti) * G[9 + a];
           }
-          z3.insert(r.x0 + c + i, y, bz[k + i], P.zThreshold, bw[k + i], fa);
+          z3.insert(r.x0 + c + i, y, std::fabs(bz[k + i]), P.zThreshold, bw[k + i], fa, bz[k + i] < 0);
         }
       }
     }
@@ -756,15 +792,15 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
 
 template <bool kGouraud>
 HWY_INLINE uint64_t PointRowsG(const PointHot& P, const PointRowsFrame& F, const float* normal, const float* G,
-                               const PixelRect& r, Z3Tile& z3) {
+                               const float* disc, const PixelRect& r, Z3Tile& z3) {
   // rows Wp lanes apart in the weight buffer; the Z^3 pass runs on vectors of at most Wp lanes
   const int W = r.width();
   using D4 = hn::CappedTag<float, 4>;
   using D8 = hn::CappedTag<float, 8>;
   using D16 = hn::CappedTag<float, 16>;
-  if (W <= 4) return PointRowsT<D4, 4, kGouraud>(D4(), 4, P, F, normal, G, r, z3);
-  if (W <= 8) return PointRowsT<D8, 8, kGouraud>(D8(), 8, P, F, normal, G, r, z3);
-  return PointRowsT<D16, 0, kGouraud>(D16(), (W + 15) / 16 * 16, P, F, normal, G, r, z3);
+  if (W <= 4) return PointRowsT<D4, 4, kGouraud>(D4(), 4, P, F, normal, G, disc, r, z3);
+  if (W <= 8) return PointRowsT<D8, 8, kGouraud>(D8(), 8, P, F, normal, G, disc, r, z3);
+  return PointRowsT<D16, 0, kGouraud>(D16(), (W + 15) / 16 * 16, P, F, normal, G, disc, r, z3);
 }
 
 // A small flat point splat: its rect r at most kWp pixels wide and kSmallRows tall (beyond the
@@ -803,18 +839,20 @@ struct PointRun {
   ~PointRun() { z3.addFastCounts(z4.opened() + z8.opened(), z4.occluded() + z8.occluded()); }
 
   // one splat; G: its Gouraud colours (C0, Cs, Ct, Cst), or null for a flat splat
-  HWY_INLINE void splat(const PointHot& P, const float* normal, const float* G, const PixelRect& r) {
+  // disc: its tail form (PointTail), or null (no tail test)
+  HWY_INLINE void splat(const PointHot& P, const float* normal, const float* G, const PixelRect& r,
+                        const float* disc = nullptr) {
     const int W = r.width(), H = r.height();
     if (!G && H <= kSmallRows) {
-      if (W <= 4) return small<4>(P, normal, r, col4, row4, z4);
-      if (W <= 8) return small<8>(P, normal, r, col8, row8, z8);
+      if (W <= 4) return small<4>(P, normal, r, col4, row4, z4, disc);
+      if (W <= 8) return small<8>(P, normal, r, col8, row8, z8, disc);
     }
-    inserted += G ? PointRowsG<true>(P, F, normal, G, r, z3) : PointRowsG<false>(P, F, normal, nullptr, r, z3);
+    inserted += G ? PointRowsG<true>(P, F, normal, G, disc, r, z3) : PointRowsG<false>(P, F, normal, nullptr, disc, r, z3);
   }
 
   template <int kWp, class DZ>
   HWY_INLINE void small(const PointHot& P, const float* normal, const PixelRect& r, VF colLane, VF rowLane,
-                        Z3Rows<DZ>& zr) {
+                        Z3Rows<DZ>& zr, const float* disc) {
     const DZ dz;
     using VZ = hn::Vec<DZ>;
     const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
@@ -824,6 +862,8 @@ struct PointRun {
     const VF x0 = hn::Set(d, float(r.x0) + 0.5f), y0 = hn::Set(d, float(r.y0) + 0.5f);
     const bool clipDepth = std::signbit(P.weightScaleSigned);
     HWY_ALIGN float bw[kSmallRows * kWp + kMaxLanes], bz[kSmallRows * kWp + kMaxLanes];
+    const bool tails = disc && (disc[0] > 0 || disc[2] > 0);  // (passed only with Z3Tile::tailLayers(); zero: none)
+    const PointTail tailer(d, tails ? disc : F.noDisc);
     // 1. the kernel of all rows
     for (int k = 0; k < H * kWp; k += L) {
       const int row = k / kWp, col = k - row * kWp;  // of the vector's first lane
@@ -833,7 +873,7 @@ struct PointRun {
       if (clipDepth) inside = hn::And(inside, hn::And(hn::Ge(a.z, nearD), hn::Le(a.z, farD)));
       const VF w = hn::IfThenElseZero(inside, a.w);
       hn::Store(w, d, bw + k);
-      hn::Store(a.z, d, bz + k);
+      hn::Store(tails ? tailer.z(d, a.s, a.t, a.z) : a.z, d, bz + k);
       inserted += hn::CountTrue(d, hn::Gt(w, hn::Zero(d)));
     }
     // 2. into the Z^3 tile, row by row
@@ -847,16 +887,19 @@ struct PointRun {
       const size_t rowBase = z3.index(r.x0, r.y0 + row);
       for (int c = 0; c < W; c += LZ) {
         const int k = row * kWp + c;
-        const VZ w = hn::Load(dz, bw + k), z = hn::Load(dz, bz + k);
+        const VZ w = hn::Load(dz, bw + k);
+        VZ z = hn::Load(dz, bz + k);
         const auto inside = hn::Gt(w, zeroZ);
         if (hn::AllFalse(dz, inside)) continue;  // a corner of the bounds the splat misses
-        const auto rest = zr(rowBase + size_t(c), inside, w, z, thr, [&](int a) { return attr[a]; });
+        const auto tail = hn::Lt(z, zeroZ);  // (PointTail: negated when a tail)
+        if (tails) z = hn::Abs(z);
+        const auto rest = zr(rowBase + size_t(c), inside, w, z, thr, [&](int a) { return attr[a]; }, tail);
         if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
         // the other fragments (a new layer in front of or behind others, compression, occlusion)
         HWY_ALIGN float mk[kMaxLanes];
         hn::Store(hn::VecFromMask(dz, rest), dz, mk);
         for (int i = 0; i < LZ; ++i)
-          if (mk[i] != 0) z3.insert(r.x0 + c + i, r.y0 + row, bz[k + i], P.zThreshold, bw[k + i], fa);
+          if (mk[i] != 0) z3.insert(r.x0 + c + i, r.y0 + row, std::fabs(bz[k + i]), P.zThreshold, bw[k + i], fa, bz[k + i] < 0);
       }
     }
   }
@@ -895,12 +938,14 @@ uint64_t PointRunT(const PointRowsFrame& F, const PointRunSlots& S, const uint32
   for (int i = 0; i < n; ++i) {
     if (i + kRunAhead < n) __builtin_prefetch(S.hot + refs[i + kRunAhead]);
     if (i + 2 * kRunAhead < n) __builtin_prefetch(S.bounds + refs[i + 2 * kRunAhead]);
+    if (S.disc && i + kRunAhead < n) __builtin_prefetch(S.disc + size_t(refs[i + kRunAhead]) * S.discStride);
     const uint32_t j = refs[i];
     const PixelRect& b = S.bounds[j];
     const PixelRect r = b.intersect(tile);  // not empty: the bins hold the splats touching the tile
     const float* normal = blend ? S.normals + size_t(j) * S.normalStride : nullptr;
     const bool gouraud = S.gouraud && (b.width() > kPointFlatShadeSpan || b.height() > kPointFlatShadeSpan);
-    run.splat(S.hot[j], normal, gouraud ? S.gouraud + size_t(j) * S.gouraudStride : nullptr, r);
+    run.splat(S.hot[j], normal, gouraud ? S.gouraud + size_t(j) * S.gouraudStride : nullptr, r,
+              S.disc ? S.disc + size_t(j) * S.discStride : nullptr);
   }
   return run.inserted;
 }
@@ -1069,6 +1114,8 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   // (a local copy: the tile's stores would make the compiler reload the run's one)
   Z3Rows<DZ> z3rows = zset;
   z3rows.opaque = A.attr[Z3Tile::kA] >= 1.0f || !z3.coverageOccludes();  // (as Z3Rows sets it)
+  // tail layers (Z3Tile::setTailLayers, SegmentRaster::tailB): a tail's depth goes negated to pass 2
+  const bool tails = z3.tailLayers() && S.tailB > 0;
   uint64_t inserted = 0;
   int r = 0, rx = count > 0 ? spans[0].x0 : 0;  // the next span and where in it the next chunk starts
   while (r < count) {
@@ -1107,7 +1154,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
     const VF nv = hn::Set(d, float(n));
     for (int i = 0; i < n; i += L) {
       const VF x = hn::LoadU(d, px + i), y = hn::LoadU(d, py + i);
-      VF w, z, u;
+      VF w, z, u, b, a;
       // the record's constants through pointers the compiler cannot tell are the same in every
       // vector (beyond the thesis, issue 13): held for the segment, the kernel's ~25 broadcasts
       // and the colour's 8 were spilled to the stack and reloaded (a pair has ~1.2 vectors);
@@ -1116,7 +1163,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       const SegmentShadeRows* Av = &A;
       asm volatile("" : "+r"(Sv), "+r"(Av));
       const SegmentKernel<kPoly> kernel(*Sv, F);
-      const auto keep = kernel(x, y, hn::Lt(hn::Add(iota, hn::Set(d, float(i))), nv), w, z, u);
+      const auto keep = kernel(x, y, hn::Lt(hn::Add(iota, hn::Set(d, float(i))), nv), w, z, u, &b, &a);
       if (hn::AllFalse(d, keep)) {
         hn::Store(zero, d, bw + i);
         continue;
@@ -1124,8 +1171,15 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       hn::Store(hn::IfThenElseZero(keep, w), d, bw + i);
       inserted += hn::CountTrue(d, keep);  // every one is a fragment pass 2 inserts
       u = hn::IfThenElseZero(keep, u);  // the other lanes' u may be anything (the station gather's index)
+      const VF thr = hn::MulAdd(u, hn::Set(d, Sv->zThreshold1 - Sv->zThreshold0), hn::Set(d, Sv->zThreshold0));
+      if (tails) {  // outside the strip's own capsule [0, length] x [-tailB, tailB] (with its caps' box)
+        const VF tailB = hn::Set(d, Sv->tailB);
+        const auto tl = hn::Or(hn::Gt(hn::Abs(b), tailB),
+                               hn::Or(hn::Lt(a, hn::Neg(tailB)), hn::Gt(a, hn::Add(hn::Set(d, Sv->length), tailB))));
+        z = hn::IfThenElse(tl, hn::Neg(z), z);
+      }
       hn::Store(z, d, bz + i);
-      hn::Store(hn::MulAdd(u, hn::Set(d, Sv->zThreshold1 - Sv->zThreshold0), hn::Set(d, Sv->zThreshold0)), d, bt + i);
+      hn::Store(thr, d, bt + i);
       if (stations >= 2) {  // piecewise linear between the lighting stations
         const VF fs = hn::Mul(u, hn::Set(d, float(stations - 1)));
         const auto k = hn::Min(hn::ConvertTo(di, hn::Floor(fs)), hn::Set(di, stations - 2));
@@ -1164,12 +1218,15 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       const VZ w = hn::LoadU(dz, bw + k);
       const auto inside = hn::And(hn::Gt(w, zeroZ), hn::FirstN(dz, size_t(width - c)));
       if (hn::AllFalse(dz, inside)) return;
-      const VZ z = hn::LoadU(dz, bz + k), thr = hn::LoadU(dz, bt + k);
+      VZ z = hn::LoadU(dz, bz + k);
+      const VZ thr = hn::LoadU(dz, bt + k);
+      const auto tail = hn::Lt(z, zeroZ);  // (negated when a tail)
+      if (tails) z = hn::Abs(z);
       const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
         if (a < 3) return hn::LoadU(dz, bc[a] + k);
         if (smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
         return constAttr[a];
-      });
+      }, tail);
       if (HWY_LIKELY(hn::AllFalse(dz, rest))) return;
       // the other fragments (a new layer in front of or behind others, compression, occlusion)
       HWY_ALIGN float mk[kMaxLanes];
@@ -1181,7 +1238,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
         for (int a = 0; a < 3; ++a) fa[a] = bc[a][k + i];
         if (smooth)
           for (int a = 0; a < 3; ++a) fa[Z3Tile::kNx + a] = bn[a][k + i];
-        z3.insert(run.x0 + c + i, run.y, bz[k + i], bt[k + i], bw[k + i], fa);
+        z3.insert(run.x0 + c + i, run.y, std::fabs(bz[k + i]), bt[k + i], bw[k + i], fa, bz[k + i] < 0);
       }
     };
     for (int q = 0, at = 0; q < (kOneChunk ? count : nRuns); ++q) {

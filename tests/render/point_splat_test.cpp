@@ -208,6 +208,44 @@ TEST(EwaPoint, TransparencyIsOrderIndependent) {
   EXPECT_LT(maxAbsDiff(base, renderImage(shuffled, cam, o).color), 1e-4);
 }
 
+// Tail layers (RenderOptions::tailLayers, beyond the thesis, issue 14): a grazing splat in front
+// of a facing plane hides it only where its rays meet its own disc, not where only its screen
+// prefilter's tail reaches (there the tail's depth is its plane's, extrapolated: the fold
+// speckles); alone over the background its tails still anti-alias its silhouette.
+TEST(EwaPoint, TailLayersKeepAGrazingSplatsTailFromHidingThePlaneBehind) {
+  HybridModel plane = shapes::plane(2, 2, 61, 61);
+  for (Point& q : plane.points) q.color = Color(0, 1, 0, 1), q.position.z() = -0.5f;  // beyond its z threshold
+  HybridModel grazing;
+  Point g;
+  g.position = Vec3f(0, 0.0074f, 0.3f);  // on a row of pixel centres
+  g.normal = Vec3f(0, std::sin(1.5359f), std::cos(1.5359f));  // 88 degrees from the view direction
+  g.radius = 0.05f;
+  g.color = Color(1, 0, 0, 1);
+  grazing.points.push_back(g);
+  grazing.attributes = plane.attributes;
+  HybridModel both = plane;
+  both.points.push_back(g);
+  const Camera cam = Camera::lookAt(Vec3f(0, 0, 3), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 20, 64, 64);
+  RenderOptions off = unlit(), on = unlit();
+  on.tailLayers = true;
+  auto redRows = [](const Image& im) {  // the rows where the splat shows
+    int n = 0;
+    for (int y = 0; y < im.height; ++y) {
+      bool red = false;
+      for (int x = 0; x < im.width; ++x) red = red || im.at(x, y).x() > im.at(x, y).y();
+      n += red;
+    }
+    return n;
+  };
+  // its disc is a fraction of a pixel tall on the screen, its prefilter's tails reach a row beyond it
+  EXPECT_GE(redRows(renderImage(both, cam, off).color), 2);
+  EXPECT_EQ(redRows(renderImage(both, cam, on).color), 1);  // the disc's own row only
+  // alone, the tails are its silhouette's anti-aliasing: the same image
+  EXPECT_EQ(renderImage(grazing, cam, on).color.pixels, renderImage(grazing, cam, off).color.pixels);
+  // and the plane alone (no tail in front of anything) renders as without tail layers, up to rounding
+  EXPECT_LT(maxAbsDiff(renderImage(plane, cam, on).color, renderImage(plane, cam, off).color), 1e-5);
+}
+
 TEST(EwaPoint, ImageIdenticalForOneAndManyThreads) {
   HybridModel s = shapes::sphere(1, 20000);
   RenderOptions o;
@@ -227,6 +265,14 @@ TEST(EwaPoint, ImageIdenticalForOneAndManyThreads) {
   o.tileSize = 64;
   EXPECT_EQ(renderImage(s, cam, o).color.pixels, one.color.pixels);
   EXPECT_GT(many.stats.pointsCulled, 5000u);  // the back half
+  // with tail layers (RenderOptions::tailLayers) too
+  o.tailLayers = true;
+  o.tileSize = 16;
+  const RenderResult tails = renderImage(s, cam, o);
+  {
+    ThreadLimit limit(1);
+    EXPECT_EQ(renderImage(s, cam, o).color.pixels, tails.color.pixels);
+  }
 }
 
 // The resolve of one-layer pixels in SIMD rows (taken unless lighting is deferred or another

@@ -49,6 +49,63 @@ TEST(RenderZ3, OpaqueFrontFragmentHidesSurfacesBehindInAnyOrder) {
   }
 }
 
+// Tail layers (Z3Tile::setTailLayers, beyond the thesis, issue 14): a prefilter tail occludes
+// nothing. attr: colour c, alpha 1, weight 1, normal +z.
+void insertTail(Z3Tile& t, float depth, Vec3f c, float w, bool tail, float thr = 0.1f) {
+  const float attr[Z3Tile::kAttrs] = {c.x(), c.y(), c.z(), 1, 1, 0, 0, 1};
+  t.insert(0, 0, depth, thr, w, attr, tail);
+}
+
+TEST(RenderZ3, TailInFrontOfASurfaceDoesNotHideItInAnyOrder) {
+  for (int order = 0; order < 2; ++order) {
+    for (bool tails : {false, true}) {
+      Z3Tile t({0, 0, 1, 1}, 4);
+      t.setTailLayers(tails);
+      if (order == 0) {  // the tail first: it opens a tail-only layer, the surface behind drops it
+        insertTail(t, 1.0f, Vec3f(1, 0, 0), 0.01f, true);
+        insertTail(t, 3.0f, Vec3f(0, 0, 1), 2.0f, false);
+      } else {  // the surface first: the tail in front of it is skipped
+        insertTail(t, 3.0f, Vec3f(0, 0, 1), 2.0f, false);
+        insertTail(t, 1.0f, Vec3f(1, 0, 0), 0.01f, true);
+      }
+      EXPECT_EQ(t.layerCount(0, 0), 1) << order << tails;
+      const ResolvedPixel p = t.resolve(0, 0);
+      // without tail layers the tail is the opaque front layer (the fold speckle)
+      const Color want = tails ? Color(0, 0, 1, 1) : Color(1, 0, 0, 1);
+      EXPECT_NEAR((p.color - want).norm(), 0.0f, 1e-6f) << order << tails;
+      EXPECT_FLOAT_EQ(p.depth, tails ? 3.0f : 1.0f);
+    }
+  }
+}
+
+TEST(RenderZ3, TailOnlyLayerIsResolvedOverTheBackground) {
+  // a silhouette's anti-aliasing: a pixel that only a tail reaches keeps it, as without tail layers
+  for (bool tails : {false, true}) {
+    Z3Tile t({0, 0, 1, 1}, 4);
+    t.setTailLayers(tails);
+    insertTail(t, 2.0f, Vec3f(0.2f, 0.4f, 0.6f), 0.05f, true);
+    insertTail(t, 2.05f, Vec3f(0.6f, 0.4f, 0.2f), 0.05f, true);  // merges (step a)
+    EXPECT_EQ(t.layerCount(0, 0), 1);
+    const ResolvedPixel p = t.resolve(0, 0);
+    EXPECT_NEAR((p.color - Color(0.4f, 0.4f, 0.4f, 1)).norm(), 0.0f, 1e-6f) << tails;
+  }
+}
+
+TEST(RenderZ3, SurfaceMergingIntoATailLayerMakesItOcclude) {
+  Z3Tile t({0, 0, 1, 1}, 4);
+  t.setTailLayers(true);
+  insertTail(t, 1.0f, Vec3f(1, 0, 0), 0.1f, true);
+  insertTail(t, 4.0f, Vec3f(0, 1, 0), 1.0f, true);    // a tail behind a tail-only layer: occluded
+  EXPECT_EQ(t.layerCount(0, 0), 1);
+  insertTail(t, 1.05f, Vec3f(1, 0, 0), 1.0f, false);  // the surface itself: the layer occludes now
+  insertTail(t, 3.0f, Vec3f(0, 0, 1), 5.0f, false);   // behind an opaque layer: occluded
+  EXPECT_EQ(t.layerCount(0, 0), 1);
+  EXPECT_NEAR((t.resolve(0, 0).color - Color(1, 0, 0, 1)).norm(), 0.0f, 1e-6f);
+  // coverage alpha decides occlusion itself: no tail layers there
+  t.setCoverageScale(1.0f);
+  EXPECT_FALSE(t.tailLayers());
+}
+
 TEST(RenderZ3, TransparentLayersCompositeBackToFront) {
   Z3Tile t({0, 0, 1, 1}, 4);
   t.insert(0, 0, frag(3.0f, Vec3f(0, 0, 1), 1, 1.0f));   // opaque blue far

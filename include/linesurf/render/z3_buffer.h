@@ -19,6 +19,8 @@
 /// that reaches 1, so a partly covered layer keeps what lies behind it; or, without coverage
 /// occlusion (setCoverageOccludes(false), coverage at silhouettes only), at once as without
 /// coverage, with what it hides summed per pixel (resolveBehind).
+/// Tail layers (beyond the thesis, issue 14, setTailLayers): a prefilter tail fragment occludes
+/// nothing (a tail-only layer has opaque flag -1) and is not composited in front of another layer.
 /// Storage: a fixed number of layers per pixel in structure-of-arrays planes, one plane of
 /// floats per (layer, field), row-major over the tile, so that the SIMD point rows
 /// (detail/splat_rows.h, pointRowsZ3) test and merge a whole row of pixels per instruction (the
@@ -89,7 +91,9 @@ class Z3Tile {
   /// ignored), linear depth, z threshold, attr[kAttrs] = (r, g, b, alpha, 1, nx, ny, nz).
   /// The common case (merge into an existing layer, step a) is inline. The caller counts the
   /// fragments of positive weight it inserts (addFragments): no counter update per fragment.
-  void insert(int x, int y, float depth, float zThreshold, float weight, const float* attr) {
+  /// tail: the fragment lies in a splat's prefilter tail (outside the primitive's own disc or
+  /// strip); with tailLayers() it occludes nothing (see setTailLayers).
+  void insert(int x, int y, float depth, float zThreshold, float weight, const float* attr, bool tail = false) {
     if (!(weight > 0)) return;
     const size_t p = index(x, y);
     float* px = data_.data() + p;
@@ -99,7 +103,7 @@ class Z3Tile {
       for (int k = 0; k < kAttrs; ++k) px[k * fs] = weight * attr[k];
       px[kZ * fs] = depth;
       px[kThr * fs] = zThreshold;
-      px[kOpaque * fs] = fragmentOpaque(weight, attr[kA]) ? 1.0f : 0.0f;
+      px[kOpaque * fs] = fragmentOpaque(weight, attr[kA]) ? (tail && tailLayers() ? -1.0f : 1.0f) : 0.0f;
       count_[p] = 1;
       ++counters_.allocated;
       return;
@@ -112,7 +116,7 @@ class Z3Tile {
       const float t = zThreshold > ly[kThr * fs] ? zThreshold : ly[kThr * fs];
       if (dz <= t && dz < hitDz) { hit = i; hitDz = dz; }
     }
-    if (hit < 0) return insertNew(p, depth, zThreshold, weight, attr);
+    if (hit < 0) return insertNew(p, depth, zThreshold, weight, attr, tail);
     float* ly = px + hit * layerStride_;
     for (int k = 0; k < kAttrs; ++k) ly[k * fs] += weight * attr[k];
     if (coverage_ > 0) {  // opaque once covered: what lies behind is freed (step b)
@@ -122,6 +126,9 @@ class Z3Tile {
       }
     } else if (attr[kA] < 1.0f) {
       ly[kOpaque * fs] = 0;
+    } else if (ly[kOpaque * fs] < 0 && !tail) {  // a tail-only layer gets a fragment of its own: it occludes (step b)
+      ly[kOpaque * fs] = 1;
+      count_[p] = hit + 1;
     }
   }
   void addFragments(uint64_t n) { fragments_ += n; }
@@ -153,18 +160,24 @@ class Z3Tile {
     const size_t fs = capacity_;
     Vec3f c = Vec3f::Zero();
     float a = 0;
+    int front = 0;  // the nearest layer composited (tail-only layers in front of others are skipped)
     for (int i = 0; i < n && a < 1.0f; ++i) {
       const float* ly = px + i * layerStride_;
       const float iw = 1.0f / ly[kW * fs];
-      const float al = frontOpaque && i == 0 ? 1.0f : layerAlpha(ly[kA * fs], iw);
+      float al = frontOpaque && i == 0 ? 1.0f : layerAlpha(ly[kA * fs], iw);
+      if (ly[kOpaque * fs] < 0 && i + 1 < n) {  // tail-only, over a layer behind it (setTailLayers)
+        al = 0;
+        if (front == i) ++front;
+      }
       const float t = (1 - a) * al;
       c += t * shade(Vec3f(ly[kR * fs] * iw, ly[kG * fs] * iw, ly[kB * fs] * iw),
                      Vec3f(ly[kNx * fs], ly[kNy * fs], ly[kNz * fs]), ly[kZ * fs]);
       a += t;
     }
     out.color = Color(c.x(), c.y(), c.z(), a);
-    out.depth = px[kZ * fs];
-    const Vec3f nrm(px[kNx * fs], px[kNy * fs], px[kNz * fs]);
+    const float* fl = px + std::min(front, n - 1) * layerStride_;
+    out.depth = fl[kZ * fs];
+    const Vec3f nrm(fl[kNx * fs], fl[kNy * fs], fl[kNz * fs]);
     const float nn = nrm.norm();
     out.normal = nn > 0 ? Vec3f(nrm / nn) : Vec3f::Zero();
     return out;
@@ -250,6 +263,17 @@ class Z3Tile {
     const Vec3f c = shade(Vec3f(B(kR) * iw, B(kG) * iw, B(kB) * iw), Vec3f(B(kNx), B(kNy), B(kNz)), B(kBehindZ) * iw);
     return Color(a * c.x(), a * c.y(), a * c.z(), a);
   }
+  /// Tail layers (beyond the thesis, issue 14; RenderOptions::tailLayers): in an opaque frame
+  /// without coverage, a tail fragment (insert's tail: only the screen prefilter put it there,
+  /// outside the primitive's own disc or strip, so its depth is the plane's, extrapolated)
+  /// occludes nothing. On an empty pixel it opens a tail-only layer (opaque flag -1), which a
+  /// fragment that is not a tail turns opaque by merging into it; in front of a layer it is
+  /// skipped (dropped: a tail-only layer over another is not composited), behind an opaque or
+  /// tail-only one occluded; a fragment that is not a tail drops the tail-only layers in front of
+  /// it. A tail-only layer with nothing behind it is resolved as any layer (the anti-aliasing of a
+  /// silhouette against the background). Off (the default): every opaque fragment occludes.
+  bool tailLayers() const { return tails_ && coverage_ <= 0; }
+  void setTailLayers(bool on) { tails_ = on; }
   /// A layer's alpha from its sum A and 1/W (either mode).
   float layerAlpha(float A, float invW) const {
     return coverage_ > 0 ? std::min(A * coverage_, 1.0f) : std::clamp(A * invW, 0.0f, 1.0f);
@@ -264,7 +288,7 @@ class Z3Tile {
   void compress(float* px, int& n);
   void addBehind(size_t p, float w, const float* attr, float depth);  // a fragment (see behindPlane)
   void layerBehind(size_t p, const float* layer);                     // a freed layer's sums
-  void insertNew(size_t pixel, float depth, float zThreshold, float weight, const float* attr);  // steps b and c
+  void insertNew(size_t pixel, float depth, float zThreshold, float weight, const float* attr, bool tail);  // steps b and c
   PixelRect rect_;
   int layers_;
   size_t capacity_ = 0;     ///< elements per plane (pixels + kPad): the stride between fields
@@ -275,6 +299,7 @@ class Z3Tile {
   uint64_t fragments_ = 0, direct_ = 0;
   bool blendNormals_ = true;
   float coverage_ = 0;
+  bool tails_ = false;
   bool coverageOccludes_ = true;
   std::vector<float> behind_;          ///< kBehindFields planes of capacity_ (setCoverageOccludes(false))
   std::vector<int32_t> behindCount_;   ///< per pixel: 0 = nothing behind yet

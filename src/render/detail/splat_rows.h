@@ -118,6 +118,10 @@ struct SegmentRaster {
   float scale0 = 0, slope = 0;
   float zThreshold0 = 0, zThreshold1 = 0;  ///< z threshold at p0 and p1, linear in u between
   float nearD = 0, farD = 0;
+  /// tail layers (Z3Tile::setTailLayers): a fragment is a tail where its plane coordinates lie
+  /// outside [-tailB, length + tailB] x [-tailB, tailB], tailB = kTailDisc cutoff sigma_r (the
+  /// strip's own half-width, widened as a point's disc is); 0: never
+  float tailB = 0;
   bool clipDepth = false;
   int pieceCount = 1;
   const SegmentPiece* pieces = nullptr;  ///< pieceCount > 1: owned by the prepared segment
@@ -203,10 +207,16 @@ struct PointHot {
 /// A point splat spanning at most this many pixels each way is lit once (flat); a wider one is
 /// Gouraud-shaded when lighting is not deferred (point_splat.h).
 inline constexpr int kPointFlatShadeSpan = 6;
+/// Tail layers (Z3Tile::setTailLayers, RenderOptions::tailLayers): a fragment is a tail where its
+/// ray meets the primitive's plane outside this many times its own disc (a point: radius cutoff
+/// sigma_r) or strip (a segment: half-width cutoff sigma_r). 1.5, not 1: a grazing surface whose
+/// discs leave pixel centres uncovered keeps its fragments (measured, docs/decisions.md).
+inline constexpr float kTailDisc = 1.5f;
 
 /// The frame's constants of the point rows (PointRaster's cutoffQ, nearD, farD).
 struct PointRowsFrame {
   float cutoffQ = 0, nearD = 0, farD = 0;
+  float noDisc[4] = {};  ///< a tail form that never holds (PointTail's default)
 };
 
 /// The per-slot arrays of the prepared points: hot records, bounds, normals (3 floats every
@@ -218,6 +228,10 @@ struct PointRunSlots {
   const float* normals = nullptr;
   const float* gouraud = nullptr;
   size_t normalStride = 0, gouraudStride = 0;
+  /// the points' tail forms (g0, g1, g2: PointCold::disc) every discStride floats; null: no tail
+  /// test (Z3Tile::setTailLayers)
+  const float* disc = nullptr;
+  size_t discStride = 0;
 };
 
 /// pointRowsZ3 for the splats in slots refs[0 .. n) in turn (each one's bounds touch the tile),
@@ -260,6 +274,8 @@ struct PointSetupBatch {
   alignas(64) float Nx[kSetupBatch], Ny[kSetupBatch], N0[kSetupBatch], Sx[kSetupBatch], Sy[kSetupBatch],
       S0[kSetupBatch], Tx[kSetupBatch], Ty[kSetupBatch], T0[kSetupBatch];
   alignas(64) float depthNum[kSetupBatch], weightScale[kSetupBatch], depthExtent[kSetupBatch];
+  /// the disc's tail form (PointCold::disc): g0, g1, g2
+  alignas(64) float disc0[kSetupBatch], disc1[kSetupBatch], disc2[kSetupBatch];
   /// pixel bounds (pixelBounds: centres inside the splat's screen bounds, within the viewport)
   alignas(64) int32_t x0[kSetupBatch], y0[kSetupBatch], x1[kSetupBatch], y1[kSetupBatch];
   /// unit shading normal on the viewer's side (the plane normal, or the shading normal)
