@@ -152,7 +152,7 @@ RegisterCommand reg(70, [](CLI::App& app) {
   sub->add_option("--segment-lod", a->segmentLod,
                   "Draw segments at most this many kernel sigmas long as one point splat, [0, 4] (render --segment-lod)")
       ->capture_default_str();
-  sub->add_flag("--tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers)");
+  sub->add_flag("--tail-layers,!--no-tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers; default on)");
   sub->add_option("--coverage-gain", a->coverageGain,
                   "Coverage alpha gain, [0, 100] (0 = the thesis's normalised alpha; render --coverage-gain)")
       ->capture_default_str();

@@ -372,7 +372,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
     z3.setCoverageScale(coverageScale);
     z3.setCoverageOccludes(!silhouettes);  // at silhouettes only: an opaque frame's layers
-    z3.setTailLayers(opt.tailLayers && opaqueFrame && coverageScale <= 0);  // (Z3Tile: an opaque frame)
+    z3.setTailLayers(opt.tailLayers && opt.segmentMethod == SegmentMethod::ScreenSpace && opaqueFrame && coverageScale <= 0);  // (Z3Tile: an opaque frame)
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     const size_t kEnd = tileStart[tile + 1];

@@ -227,7 +227,7 @@ TEST(EwaPoint, TailLayersKeepAGrazingSplatsTailFromHidingThePlaneBehind) {
   both.points.push_back(g);
   const Camera cam = Camera::lookAt(Vec3f(0, 0, 3), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 20, 64, 64);
   RenderOptions off = unlit(), on = unlit();
-  on.tailLayers = true;
+  off.tailLayers = false, on.tailLayers = true;
   auto redRows = [](const Image& im) {  // the rows where the splat shows
     int n = 0;
     for (int y = 0; y < im.height; ++y) {

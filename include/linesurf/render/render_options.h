@@ -107,8 +107,10 @@ struct RenderOptions {
   /// only over the background (a silhouette's anti-aliasing). Removes most fold speckles (a
   /// grazing splat's tail as the opaque front layer): on the 7 contour meshes Table 5 and the
   /// line and point models against the mesh get better, frames cost ~2% (lines) to ~4-5%
-  /// (points) more. Only in an opaque frame without coverage alpha. Off by default.
-  bool tailLayers = false;
+  /// (points) more. Only in an opaque frame without coverage alpha and with the ScreenSpace
+  /// segment method (the Approx and Reference methods are the thesis's comparison paths: their
+  /// frames keep the thesis's Z^3 for points too). On by default since stop 26.
+  bool tailLayers = true;
   static constexpr int kMaxLayers = 8;
 
   // --- shading (§6.2.2) -----------------------------------------------------------------------
