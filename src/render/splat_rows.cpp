@@ -620,6 +620,13 @@ struct Z3Rows {
   hn::Vec<hn::RebindToSigned<D>> openedV = hn::Zero(di), occludedV = hn::Zero(di);
   uint64_t opened() const { return uint64_t(hn::GetLane(hn::SumOfLanes(di, openedV))); }
   uint64_t occluded() const { return uint64_t(hn::GetLane(hn::SumOfLanes(di, occludedV))); }
+  // pass 1 hands a tail's depth on negated (PointTail, the segment rows): the tail lanes, with z
+  // made positive again
+  HWY_INLINE hn::Mask<D> takeTails(V& z) const {
+    const auto tail = hn::Lt(z, hn::Zero(d));
+    if (tails) z = hn::Abs(z);
+    return tail;
+  }
   Z3Rows(Z3Tile& z3, bool opaqueFragments)
       : base(z3.plane(0, 0)), stride(size_t(z3.plane(0, 1) - z3.plane(0, 0))), cnt(z3.counts()),
         opaque(opaqueFragments || !z3.coverageOccludes()), nAttr(z3.blendNormals() ? Z3Tile::kAttrs : Z3Tile::kW + 1),
@@ -763,8 +770,7 @@ HWY_NOINLINE uint64_t PointRowsT(DZ dz, int WpRun, const PointHot& P, const Poin
         const size_t p = rowBase + size_t(c);
         VZ s = zeroZ, t = zeroZ;
         if (kGouraud) s = hn::LoadU(dz, bs + k), t = hn::LoadU(dz, bt + k);
-        const auto tail = hn::Lt(z, zeroZ);  // (PointTail: negated when a tail)
-        if (tails) z = hn::Abs(z);
+        const auto tail = z3rows.takeTails(z);
         const auto rest = z3rows(p, inside, w, z, thr, [&](int a) {
           if (kGouraud && a < 3)  // bilinear Gouraud over the quad, in the plane coordinates (s, t)
             return hn::Add(hn::Add(hn::Add(c0[a], hn::Mul(s, cs[a])), hn::Mul(t, ct[a])), hn::Mul(hn::Mul(s, t), cst[a]));
@@ -891,8 +897,7 @@ struct PointRun {
         VZ z = hn::Load(dz, bz + k);
         const auto inside = hn::Gt(w, zeroZ);
         if (hn::AllFalse(dz, inside)) continue;  // a corner of the bounds the splat misses
-        const auto tail = hn::Lt(z, zeroZ);  // (PointTail: negated when a tail)
-        if (tails) z = hn::Abs(z);
+        const auto tail = zr.takeTails(z);
         const auto rest = zr(rowBase + size_t(c), inside, w, z, thr, [&](int a) { return attr[a]; }, tail);
         if (HWY_LIKELY(hn::AllFalse(dz, rest))) continue;
         // the other fragments (a new layer in front of or behind others, compression, occlusion)
@@ -1220,8 +1225,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       if (hn::AllFalse(dz, inside)) return;
       VZ z = hn::LoadU(dz, bz + k);
       const VZ thr = hn::LoadU(dz, bt + k);
-      const auto tail = hn::Lt(z, zeroZ);  // (negated when a tail)
-      if (tails) z = hn::Abs(z);
+      const auto tail = z3rows.takeTails(z);
       const auto rest = z3rows(rowBase + size_t(c), inside, w, z, thr, [&](int a) {
         if (a < 3) return hn::LoadU(dz, bc[a] + k);
         if (smooth && a >= Z3Tile::kNx) return hn::LoadU(dz, bn[a - Z3Tile::kNx] + k);
