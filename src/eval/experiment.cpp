@@ -174,7 +174,7 @@ void summarise(MethodResult& m) {
 TruthSummary summariseTruth(const std::vector<ExperimentView>& views, bool candidate) {
   TruthSummary t;
   std::vector<double> mse, ssim, mad;
-  uint64_t bad = 0, covered = 0;
+  uint64_t bad = 0, covered = 0, badOff = 0, inBand = 0;
   t.minSsim = std::numeric_limits<double>::infinity();
   for (const ExperimentView& v : views) {
     const ImageMetrics& m = candidate ? v.candidateVsTruth : v.referenceVsTruth;
@@ -185,7 +185,9 @@ TruthSummary summariseTruth(const std::vector<ExperimentView>& views, bool candi
     mad.push_back(m.meanAbsDiff);
     t.minSsim = std::min(t.minSsim, m.ssim);
     bad += b;
+    badOff += candidate ? v.candidateBadOffSilhouettes : v.referenceBadOffSilhouettes;
     covered += c;
+    if (candidate) inBand += v.coveredInSilhouetteBand;
     if (c) t.maxBadFraction = std::max(t.maxBadFraction, double(b) / double(c));
   }
   if (views.empty()) t.minSsim = 0;
@@ -194,25 +196,33 @@ TruthSummary summariseTruth(const std::vector<ExperimentView>& views, bool candi
   t.ssim = meanStd(ssim).mean;
   t.meanAbsDiff = meanStd(mad).mean;
   t.badFraction = covered ? double(bad) / double(covered) : 0.0;
+  t.badOffSilhouettesFraction = covered ? double(badOff) / double(covered) : 0.0;
+  t.silhouetteBandFraction = covered ? double(inBand) / double(covered) : 0.0;
   return t;
 }
 
-/// Pixels covered (alpha > 0) in either image, and among them those whose 8-bit colours differ
-/// by more than 64 grey levels in any channel.
-std::pair<uint64_t, uint64_t> badPixels(const Image& truth, const Image& truthAlpha, const Image& img,
-                                        const Image& imgAlpha) {
-  uint64_t covered = 0, bad = 0;
+/// Pixels covered (alpha > 0) in either image, among them those whose 8-bit colours differ by
+/// more than 64 grey levels in any channel, and of those the ones outside `band` (the truth's
+/// silhouettes, silhouetteBand).
+struct BadPixels {
+  uint64_t covered = 0, bad = 0, badOffBand = 0, coveredInBand = 0;
+};
+BadPixels badPixels(const Image& truth, const Image& truthAlpha, const std::vector<uint8_t>& band, const Image& img,
+                    const Image& imgAlpha) {
+  BadPixels r;
   auto q = [](float v) { return int(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
   for (size_t i = 0; i < truth.pixels.size(); ++i) {
     if (!(truthAlpha.pixels[i].w() > 0) && !(imgAlpha.pixels[i].w() > 0)) continue;
-    ++covered;
+    ++r.covered;
+    r.coveredInBand += band[i];
     for (int c = 0; c < 3; ++c)
       if (std::abs(q(truth.pixels[i][c]) - q(img.pixels[i][c])) > 64) {
-        ++bad;
+        ++r.bad;
+        if (!band[i]) ++r.badOffBand;
         break;
       }
   }
-  return {covered, bad};
+  return r;
 }
 
 double dataReduction(size_t referencePoints, size_t points, size_t segments) {
@@ -273,7 +283,9 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
   if (truthMesh) {
     MeshRenderOptions mo;
     mo.supersampling = o.groundTruthSupersampling;
-    truth = std::make_unique<MeshRenderer>(*truthMesh, ro, mo);
+    RenderOptions to = ro;
+    to.depthBuffer = true;  // for the silhouette band of the > 64 count
+    truth = std::make_unique<MeshRenderer>(*truthMesh, to, mo);
   }
   const bool images = !o.outDir.empty();
   const fs::path modelDir = o.outDir / model.name;
@@ -294,8 +306,12 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
       model.referenceImages.push_back(rel);
     }
     std::optional<MeshRenderResult> meshImg;
+    std::vector<uint8_t> band;
     if (truth) {
       meshImg = truth->render(cams[size_t(v)]);
+      // an inner silhouette: a depth step between neighbours steeper than a surface turned 80 degrees
+      // from the camera would make (tan 80 = 5.67 pixel footprints, depth / focal length, per pixel)
+      band = silhouetteBand(*meshImg->alpha, *meshImg->depth, 1, 5.67 / double(cams[size_t(v)].focalPixels()));
       if (keep) {
         const std::string rel = model.name + "/" + viewName(v) + "_mesh.png";
         writePng(o.outDir / rel, meshImg->color, false);
@@ -322,8 +338,15 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
         ev.hasTruth = true;
         ev.candidateVsTruth = compareImages(meshImg->color, rc.color);
         ev.referenceVsTruth = compareImages(meshImg->color, rr.color);
-        std::tie(ev.coveredPixels, ev.candidateBadPixels) = badPixels(meshImg->color, *meshImg->alpha, rc.color, *rc.alpha);
-        std::tie(ev.referenceCoveredPixels, ev.referenceBadPixels) = badPixels(meshImg->color, *meshImg->alpha, rr.color, *rr.alpha);
+        const BadPixels bc = badPixels(meshImg->color, *meshImg->alpha, band, rc.color, *rc.alpha);
+        const BadPixels br = badPixels(meshImg->color, *meshImg->alpha, band, rr.color, *rr.alpha);
+        ev.coveredPixels = bc.covered;
+        ev.candidateBadPixels = bc.bad;
+        ev.candidateBadOffSilhouettes = bc.badOffBand;
+        ev.coveredInSilhouetteBand = bc.coveredInBand;
+        ev.referenceCoveredPixels = br.covered;
+        ev.referenceBadPixels = br.bad;
+        ev.referenceBadOffSilhouettes = br.badOffBand;
       }
       c.result->views.push_back(ev);
       if (keep) {

@@ -111,4 +111,39 @@ Image differenceHeatmap(const Image& a, const Image& b, double saturate) {
   return out;
 }
 
+std::vector<uint8_t> silhouetteBand(const Image& alpha, const Image& depth, int reach, double jump) {
+  checkSizes(alpha, depth);
+  if (reach < 0) throwBadParameter("silhouette band reach", "must be >= 0");
+  if (!(jump > 0)) throwBadParameter("silhouette band depth jump", "must be > 0");
+  const int W = alpha.width, H = alpha.height;
+  auto covered = [&](int x, int y) { return alpha.at(x, y)[0] > 0; };
+  auto apart = [&](int x0, int y0, int x1, int y1) {
+    const bool c0 = covered(x0, y0), c1 = covered(x1, y1);
+    if (c0 != c1) return true;
+    if (!c0) return false;
+    const double z0 = depth.at(x0, y0)[0], z1 = depth.at(x1, y1)[0];
+    return std::abs(z0 - z1) > jump * std::min(z0, z1);
+  };
+  // silhouette pixels: both pixels of a pair that lies apart, and the partly covered ones
+  std::vector<uint8_t> sil(size_t(W) * H, 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const float a = alpha.at(x, y)[0];
+      if (a > 0 && a < 1) sil[size_t(y) * W + x] = 1;
+      if (x + 1 < W && apart(x, y, x + 1, y)) sil[size_t(y) * W + x] = sil[size_t(y) * W + x + 1] = 1;
+      if (y + 1 < H && apart(x, y, x, y + 1)) sil[size_t(y) * W + x] = sil[size_t(y + 1) * W + x] = 1;
+    }
+  // square dilation by `reach`, separable: rows, then columns
+  std::vector<uint8_t> rows(sil.size(), 0), band(sil.size(), 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (sil[size_t(y) * W + x])
+        for (int u = std::max(0, x - reach); u <= std::min(W - 1, x + reach); ++u) rows[size_t(y) * W + u] = 1;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (rows[size_t(y) * W + x])
+        for (int v = std::max(0, y - reach); v <= std::min(H - 1, y + reach); ++v) band[size_t(v) * W + x] = 1;
+  return band;
+}
+
 }  // namespace linesurf

@@ -125,6 +125,11 @@ TEST(Experiment, SmokeRunOnBundledModels) {
         EXPECT_GT(mr.referenceTruth.ssim, 0.65);
         EXPECT_LT(mr.candidateTruth.badFraction, 0.3);
         EXPECT_LT(mr.referenceTruth.badFraction, 0.3);
+        // the part away from the mesh's silhouettes is a part, and the band is neither empty nor all
+        EXPECT_LE(mr.candidateTruth.badOffSilhouettesFraction, mr.candidateTruth.badFraction);
+        EXPECT_LE(mr.referenceTruth.badOffSilhouettesFraction, mr.referenceTruth.badFraction);
+        EXPECT_GT(mr.candidateTruth.silhouetteBandFraction, 0.01);
+        EXPECT_LT(mr.candidateTruth.silhouetteBandFraction, 0.9);
       }
     }
   }
@@ -147,6 +152,7 @@ TEST(Experiment, SmokeRunOnBundledModels) {
   EXPECT_NE(md.find("Against the mesh"), std::string::npos);
   EXPECT_TRUE(j["models"][0]["methods"][0].contains("candidate_vs_mesh"));
   EXPECT_TRUE(j["models"][0]["methods"][0]["views"][0].contains("reference_vs_mesh"));
+  EXPECT_TRUE(j["models"][0]["methods"][0]["candidate_vs_mesh"].contains("fraction_over_64_off_silhouettes"));
   EXPECT_NE(html.find("href=\"rockerarm_points/points.html\""), std::string::npos);
   EXPECT_NE(html.find("href=\"santa_points/shape-greedy/viewer.html\""), std::string::npos);
 }

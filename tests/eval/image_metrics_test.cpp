@@ -56,3 +56,34 @@ TEST(ImageMetrics, HeatmapBlackWhereEqualBrightWhereDifferent) {
   EXPECT_EQ(h.at(0, 0), Color(0, 0, 0, 1));
   EXPECT_EQ(h.at(3, 0), Color(1, 1, 1, 1));
 }
+
+// A 20x20 frame: a covered square [5, 15)^2, its left half at depth 1 and its right half at depth
+// 2 (an inner silhouette at x = 9 | 10), one partly covered pixel at (12, 12).
+TEST(ImageMetrics, SilhouetteBandHoldsOutlinesDepthStepsAndPartialPixels) {
+  Image alpha(20, 20, Color(0, 0, 0, 0)), depth(20, 20, Color(0, 0, 0, 0));
+  for (int y = 5; y < 15; ++y)
+    for (int x = 5; x < 15; ++x) {
+      alpha.at(x, y) = Color(1, 1, 1, 1);
+      const float z = x < 10 ? 1.0f : 2.0f;
+      depth.at(x, y) = Color(z, z, z, 1);
+    }
+  alpha.at(12, 12) = Color(0.5f, 0.5f, 0.5f, 0.5f);
+  auto in = [](const std::vector<uint8_t>& b, int x, int y) { return b[size_t(y) * 20 + x] != 0; };
+  const std::vector<uint8_t> b0 = silhouetteBand(alpha, depth, 0, 0.5);
+  ASSERT_EQ(b0.size(), 400u);
+  EXPECT_TRUE(in(b0, 4, 7) && in(b0, 5, 7));     // both sides of the outline
+  EXPECT_TRUE(in(b0, 9, 7) && in(b0, 10, 7));    // both sides of the depth step
+  EXPECT_TRUE(in(b0, 12, 12));                   // partly covered
+  EXPECT_FALSE(in(b0, 7, 7) || in(b0, 3, 7) || in(b0, 0, 0) || in(b0, 12, 8));
+  const std::vector<uint8_t> b1 = silhouetteBand(alpha, depth, 1, 0.5);
+  EXPECT_TRUE(in(b1, 3, 7) && in(b1, 6, 6) && in(b1, 8, 7) && in(b1, 11, 11));
+  EXPECT_FALSE(in(b1, 2, 7) || in(b1, 7, 7) || in(b1, 12, 8));
+  EXPECT_TRUE(silhouetteBand(alpha, depth, 2, 0.5)[size_t(7) * 20 + 7]);
+  // a step of 1 at depth 1 is no silhouette when the jump allowed is 2 x the depth
+  const std::vector<uint8_t> flat = silhouetteBand(alpha, depth, 0, 2.0);
+  EXPECT_FALSE(in(flat, 9, 7) || in(flat, 10, 7));
+  EXPECT_TRUE(in(flat, 4, 7));
+  EXPECT_THROW(silhouetteBand(alpha, depth, -1, 0.5), Error);
+  EXPECT_THROW(silhouetteBand(alpha, depth, 1, 0.0), Error);
+  EXPECT_THROW(silhouetteBand(alpha, Image(10, 10), 1, 0.5), Error);
+}

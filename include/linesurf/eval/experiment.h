@@ -91,6 +91,10 @@ struct ExperimentView {
   ImageMetrics candidateVsTruth, referenceVsTruth;
   uint64_t coveredPixels = 0, candidateBadPixels = 0;          ///< candidate vs truth
   uint64_t referenceCoveredPixels = 0, referenceBadPixels = 0; ///< reference vs truth
+  /// Of the pixels over 64, those more than 1 pixel from both sides of every silhouette of the mesh image
+  /// (silhouetteBand: its outline and its depth steps steeper than a surface at 80 degrees), i.e. not an edge's anti-aliasing.
+  uint64_t candidateBadOffSilhouettes = 0, referenceBadOffSilhouettes = 0;
+  uint64_t coveredInSilhouetteBand = 0;  ///< of coveredPixels, those within the band
 };
 
 /// Agreement of a model's images with the mesh images over the views (ground truth, issue 14).
@@ -101,6 +105,10 @@ struct TruthSummary {
   double meanAbsDiff = 0; ///< mean over the views, grey levels
   /// Pixels differing by > 64 grey levels / covered pixels, pooled over the views; and the worst view.
   double badFraction = 0, maxBadFraction = 0;
+  /// The part of badFraction more than 1 pixel from the mesh image's silhouettes (same denominator).
+  double badOffSilhouettesFraction = 0;
+  /// The candidate's covered pixels that lie within the band (0 for the reference's summary).
+  double silhouetteBandFraction = 0;
 };
 
 /// Mean and standard deviation of a per-view quantity.
