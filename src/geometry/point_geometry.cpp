@@ -67,17 +67,14 @@ inline Vec3f canonicalDirection(Vec3f d) {
 
 // ---------------------------------------------------------------------------------------------
 // Stage 1: exact k nearest neighbours (nanoflann kd-tree).
-void computeNeighbours(const std::vector<Vec3f>& pos, int k, PointGeometry& g, std::vector<uint32_t>& orderOut,
-                       const ProgressFn& progress) {
+void computeNeighbours(const std::vector<Vec3f>& pos, const KdTree& tree, int k, PointGeometry& g,
+                       std::vector<uint32_t>& orderOut, const ProgressFn& progress) {
   const size_t n = pos.size();
   orderOut.resize(n);
   std::iota(orderOut.begin(), orderOut.end(), 0u);
   g.neighbours.assign(n * size_t(k), kNone);
   g.neighbourDistances.assign(n * size_t(k), kInf);
   if (n < 2) return;
-  CloudAdaptor adaptor{&pos};
-  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
   if (tree.vAcc.size() == n) orderOut.assign(tree.vAcc.begin(), tree.vAcc.end());
   // One result more than needed (self + k + 1) tells whether the k-th place is tied; only then
   // a radius search collects every tied point, so ties are always broken by index.
@@ -322,22 +319,49 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
 
 // ---------------------------------------------------------------------------------------------
 // Stages 3 and 4.
-// Hole-free radius = this x the largest star circumradius: the splat's cutoff reaches the
-// Voronoi vertices in the tangent plane exactly at 1.0; 10% covers the surface's deviation from
-// it and pixel sampling (sphere 200k at 1024^2 left 2 pixels open at 1.0).
+// Hole-free radius (issue 14, beyond the thesis) = this x the farthest vertex of the point's
+// Voronoi cell among its nearest neighbours in its tangent plane, i.e. the largest circumradius
+// of its closed Delaunay star: the splat's cut-off reaches the cell's vertices at 1.0; 10% covers
+// the surface's deviation from the plane, normal error and pixel sampling.
 constexpr double kCoverMargin = 1.1;
+// The cell of a closed star of the k nearest neighbours contains the true cell (fewer points, a
+// larger cell), so its radius is safe. An open (boundary) star leaves its open side out and can
+// be 5x too small: 12 directions within a half-plane, 0.6% of the points of a uniformly random
+// sampling. So an open star's radius comes from the star of 2k, then 4k nearest neighbours, the
+// first that closes; one still open at 4k is a border of the surface and keeps the k-star's
+// radius (docs/decisions.md, "Issue 14 (i14pf)").
+constexpr int kCoverGrowth = 4;
 
-void computeDelaunay(const std::vector<Vec3f>& pos, const std::vector<uint32_t>& order, int k, float dupTol, bool useCgal, PointGeometry& g,
-                     const ProgressFn& progress) {
+/// Largest circumradius of the star triangles (0, q_a, q_b), consecutive counter-clockwise
+/// neighbours turning by less than pi: R = |a| |b| |a - b| / (2 |a x b|); a boundary star's open
+/// side is left out.
+double starCircumradius(std::span<const Vec2d> q, const detail::LocalStar& star) {
+  double rmax = 0;
+  const size_t s = star.ids.size();
+  for (size_t t = 0; t < s && s >= 2; ++t) {
+    if (star.boundary && t + 1 == s) break;  // the open side of a boundary star
+    const Vec2d a = q[size_t(star.ids[t])], b = q[size_t(star.ids[(t + 1) % s])];
+    const double cr = a.x() * b.y() - a.y() * b.x();
+    if (!(cr > 0)) continue;
+    rmax = std::max(rmax, a.norm() * b.norm() * (a - b).norm() / (2 * cr));
+  }
+  return rmax;
+}
+
+void computeDelaunay(const std::vector<Vec3f>& pos, const KdTree* tree, const std::vector<uint32_t>& order, int k, float dupTol,
+                     bool useCgal, PointGeometry& g, const ProgressFn& progress) {
   const size_t n = pos.size();
   std::vector<uint32_t> tmpIdx(n * size_t(k), kNone);
   std::vector<float> tmpW(n * size_t(k), 0.0f);
   std::vector<uint32_t> count(n, 0);
   const double minDist2 = double(dupTol) * dupTol;
+  const size_t kMax = size_t(k) * kCoverGrowth;
   forBlocks(n, progress, "local Delaunay", 256, [&](size_t b, size_t e) {
-    detail::LocalStar star;
+    detail::LocalStar star, grown;
     detail::StarScratch scratch;
-    std::vector<Vec2d> q(static_cast<size_t>(k));
+    std::vector<Vec2d> q(static_cast<size_t>(k)), qg(kMax);
+    std::vector<uint32_t> idx(kMax + 1);
+    std::vector<float> d2(kMax + 1);
     for (size_t o = b; o < e; ++o) {
       const size_t i = order[o];
       const Vec3d p = pos[i].cast<double>();
@@ -351,8 +375,11 @@ void computeDelaunay(const std::vector<Vec3f>& pos, const std::vector<uint32_t>&
         q[size_t(m)] = Vec2d(d.dot(x), d.dot(y));
       }
       std::span<const Vec2d> qs(q.data(), size_t(m));
-      if (useCgal) detail::localDelaunayStarCgal(qs, minDist2, star);
-      else detail::localDelaunayStar(qs, minDist2, star, scratch);
+      auto build = [&](std::span<const Vec2d> pts, detail::LocalStar& out) {
+        if (useCgal) detail::localDelaunayStarCgal(pts, minDist2, out);
+        else detail::localDelaunayStar(pts, minDist2, out, scratch);
+      };
+      build(qs, star);
       double total = 0;
       for (double a : star.areas) total += a;
       const size_t s = star.ids.size();
@@ -362,19 +389,31 @@ void computeDelaunay(const std::vector<Vec3f>& pos, const std::vector<uint32_t>&
       }
       count[i] = uint32_t(s);
       if (star.triangles == 0) g.flags[i] |= kPointNoStar;
-      if (!g.coverRadius.empty()) {
-        // largest circumradius of the star triangles (0, q_a, q_b), consecutive counter-clockwise
-        // neighbours turning by less than pi: R = |a| |b| |a - b| / (2 |a x b|)
-        double rmax = 0;
-        for (size_t t = 0; t < s && s >= 2; ++t) {
-          if (star.boundary && t + 1 == s) break;  // the open side of a boundary star
-          const Vec2d a = q[size_t(star.ids[t])], b = q[size_t(star.ids[(t + 1) % s])];
-          const double cr = a.x() * b.y() - a.y() * b.x();
-          if (!(cr > 0)) continue;
-          rmax = std::max(rmax, a.norm() * b.norm() * (a - b).norm() / (2 * cr));
+      if (g.coverRadius.empty()) continue;
+      double rmax = starCircumradius(qs, star);
+      // An open star from a full row (m == k; a shorter row lists the cloud): grow it.
+      if (tree && m == k && star.boundary) {
+        for (size_t want = 2 * size_t(k); want <= kMax && want < n; want *= 2) {
+          nanoflann::KNNResultSet<float, uint32_t> rs(want + 1);  // + the point itself
+          rs.init(idx.data(), d2.data());
+          tree->findNeighbors(rs, pos[i].data(), nanoflann::SearchParams());
+          size_t mg = 0;
+          for (size_t t = 0; t < rs.size() && mg < want; ++t) {
+            if (idx[t] == i) continue;
+            const Vec3d d = pos[idx[t]].cast<double>() - p;
+            qg[mg++] = Vec2d(d.dot(x), d.dot(y));
+          }
+          const std::span<const Vec2d> qgs(qg.data(), mg);
+          build(qgs, grown);
+          if (!grown.boundary) {
+            rmax = starCircumradius(qgs, grown);
+            break;
+          }
         }
-        g.coverRadius[i] = float(kCoverMargin * rmax);
+        // still open with 4k neighbours: a border of the surface, its open side has none; the
+        // k-star's radius stays (a wider star only adds long triangles along the border)
       }
+      g.coverRadius[i] = float(kCoverMargin * rmax);
     }
   });
   g.delaunayOffsets.assign(n + 1, 0);
@@ -506,7 +545,10 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   std::vector<Vec3f> pos(n);
   for (size_t i = 0; i < n; ++i) pos[i] = cloud.points[i].position;
   std::vector<uint32_t> order;
-  computeNeighbours(pos, k, g, order, progress);
+  CloudAdaptor adaptor{&pos};
+  KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  if (n >= 2) tree.buildIndex();
+  computeNeighbours(pos, tree, k, g, order, progress);
   g.times.neighbours = timer.seconds();
 
   timer.reset();
@@ -528,7 +570,7 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   if (options.delaunayNeighbours || options.curvature || options.coverRadius) {
     timer.reset();
     if (options.coverRadius) g.coverRadius.assign(n, 0.0f);
-    computeDelaunay(pos, order, k, dupTol, options.cgalDelaunay, g, progress);
+    computeDelaunay(pos, n >= 2 ? &tree : nullptr, order, k, dupTol, options.cgalDelaunay, g, progress);
     if (!options.delaunayNeighbours && !options.curvature) {  // stage 3 ran only for the radii
       g.delaunayOffsets.clear();
       g.delaunayIndices.clear();

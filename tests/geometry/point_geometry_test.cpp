@@ -350,6 +350,44 @@ TEST(PointGeometry, CoverRadiusIsTheLargestStarCircumradius) {
   EXPECT_GT(gh.coverRadius[c], 1.4f * h);  // the gap's circumradius (>= 2 h / 2 x 1.1 + ...)
 }
 
+// Uniformly random samples of a plane: a point's 12 nearest neighbours lie within a half-plane
+// for 0.6% of the points (12 / 2^11); their open star left the open side of the Voronoi cell out.
+// The cover radius is at least 1.1 x the farthest vertex of the exact cell (the star over every
+// point within reach) on every interior point (a closed star of fewer points has a larger cell).
+TEST(PointGeometry, CoverRadiusReachesTheWholeVoronoiCell) {
+  auto cloud = shapes::plane(1, 1, 150, 150, {.irregular = true, .seed = 4});
+  auto g = computePointGeometry(cloud, recompute());
+  const size_t n = cloud.points.size();
+  detail::LocalStar star;
+  detail::StarScratch scratch;
+  std::vector<Vec2d> q;
+  size_t interior = 0, below = 0, above = 0;  // above: a closed 12-star missing a Delaunay neighbour
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3f p = cloud.points[i].position;
+    if (std::max(std::abs(p.x()), std::abs(p.y())) > 0.4f) continue;  // the plane spans [-0.5, 0.5]^2
+    ++interior;
+    q.clear();
+    for (size_t j = 0; j < n; ++j) {
+      const Vec3f d = cloud.points[j].position - p;
+      if (j != i && d.squaredNorm() < 0.06f * 0.06f) q.emplace_back(d.x(), d.y());
+    }
+    detail::localDelaunayStar(q, 1e-12, star, scratch);
+    ASSERT_FALSE(star.boundary);
+    double rmax = 0;
+    for (size_t t = 0; t < star.ids.size(); ++t) {
+      const Vec2d a = q[size_t(star.ids[t])], b = q[size_t(star.ids[(t + 1) % star.ids.size()])];
+      rmax = std::max(rmax, a.norm() * b.norm() * (a - b).norm() / (2 * (a.x() * b.y() - a.y() * b.x())));
+    }
+    ASSERT_LT(2 * rmax, 0.06);  // the reference star is certified
+    const double r = g.coverRadius[i] / 1.1;
+    below += r < rmax * (1 - 1e-4);
+    above += r > rmax * (1 + 1e-4);
+  }
+  std::printf("cover radius vs the exact cell, %zu interior points: %zu below, %zu above\n", interior, below, above);
+  EXPECT_GT(interior, 12000u);
+  EXPECT_EQ(below, 0u);  // the 12-neighbour star of before: 49 of 14,375
+}
+
 TEST(PointGeometry, NeighboursAreExactKNearest) {
   // A noisy surface, a dense clump, duplicates and far outliers: the grid must stay exact.
   std::mt19937 rng(5);

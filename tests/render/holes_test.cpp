@@ -104,6 +104,21 @@ TEST(Holes, RandomSphere200k) {
   checkShape("sphere 200k", shapes::sphere(1, 200000, random(2)), [](const Vec3f& p) { return p.norm() - 1; });
 }
 
+// The radius rule alone closes the point models: no screen prefilter to widen the splats, the
+// discs of 1.1 x the farthest vertex of each point's Voronoi cell (an open 12-neighbour star
+// regrown until it closes) still leave no pixel open. The open stars of before left 1 (sphere
+// 200k) and 1 + 2 (torus) pixels at 1024^2 here ("Issue 14 (i14pf)").
+TEST(Holes, PointModelsCloseWithoutPrefilter) {
+  RenderOptions o;
+  o.prefilterVariance = 0;
+  expectClosed("sphere 100k points, no prefilter", withGeometry(shapes::sphere(1, 100000, random(1)), nullptr),
+               [](const Vec3f& p) { return p.norm() - 1; }, o);
+  expectClosed("sphere 200k points, no prefilter", withGeometry(shapes::sphere(1, 200000, random(2)), nullptr),
+               [](const Vec3f& p) { return p.norm() - 1; }, o);
+  expectClosed("torus 200k points, no prefilter", withGeometry(shapes::torus(1, 0.35f, 800, 250, random(3)), nullptr),
+               [](const Vec3f& p) { return Vec2f(Vec2f(p.x(), p.y()).norm() - 1.0f, p.z()).norm() - 0.35f; }, o);
+}
+
 // Coverage alpha at silhouettes only (RenderOptions::coverageReach, the default reach 2; gain 1.5
 // as for contour models): the gaps between random samples stay opaque, no pixel 3 pixels inside
 // the silhouette has alpha <= 1/2. Measured over the 6 renders of the 200k sphere | torus, coverage
