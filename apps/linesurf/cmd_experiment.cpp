@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "command.h"
+#include "options_bind.h"
 #include "linesurf/core/error.h"
 #include "linesurf/eval/experiment.h"
 
@@ -29,6 +30,7 @@ struct ExperimentArgs {
   bool noImages = false;
   float segmentLod = RenderOptions{}.segmentLod;
   float coverageGain = RenderOptions{}.coverageGain;
+  float prefilterVariance = RenderOptions{}.prefilterVariance;
   bool tailLayers = RenderOptions{}.tailLayers;
   int coverageReach = RenderOptions{}.coverageReach;
 };
@@ -69,6 +71,7 @@ void run(const ExperimentArgs& a) {
   o.contour.mergeStripAngle = a.contourMergeStripAngle;
   o.render.segmentLod = a.segmentLod;
   o.render.coverageGain = a.coverageGain;
+  o.render.prefilterVariance = a.prefilterVariance;
   o.render.tailLayers = a.tailLayers;
   o.render.coverageReach = a.coverageReach;
 
@@ -152,6 +155,8 @@ RegisterCommand reg(70, [](CLI::App& app) {
   sub->add_option("--segment-lod", a->segmentLod,
                   "Draw segments at most this many kernel sigmas long as one point splat, [0, 4] (render --segment-lod)")
       ->capture_default_str();
+  bind(sub, "prefilterVariance", a->prefilterVariance,
+       "Screen prefilter variance, pixels^2 in [0, 100] (0 = none; render --prefilter-variance)", "--prefilter");
   sub->add_flag("--tail-layers,!--no-tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers; default on)");
   sub->add_option("--coverage-gain", a->coverageGain,
                   "Coverage alpha gain, [0, 100] (0 = the thesis's normalised alpha; render --coverage-gain)")

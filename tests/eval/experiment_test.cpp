@@ -249,6 +249,10 @@ TEST(Experiment, CliExitsNonZeroWhenAModelFails) {
   EXPECT_NE(r.out.find("ball_points"), std::string::npos) << r.out;
   r = test::runCli("experiment " + good.string() + " -o " + out.string() + " --methods nonsense");
   EXPECT_EQ(r.exitCode, 1) << r.out;
+  // the render options' validation names the experiment's flag
+  r = test::runCli("experiment " + good.string() + " -o " + out.string() + " --views 1 --size 64 --methods greedy --prefilter-variance -1");
+  EXPECT_EQ(r.exitCode, 1) << r.out;
+  EXPECT_NE(r.out.find("--prefilter-variance"), std::string::npos) << r.out;
 }
 
 // The shared models are found and mapped to the thesis's names; one small cloud runs end to end.
