@@ -56,11 +56,12 @@ struct Light {
 struct RenderOptions {
   // --- filtering (§4.2.2) -------------------------------------------------------------------
   /// Variance of the screen-space Gaussian prefilter, pixels^2. 0 disables the prefilter (plain
-  /// object-space splatting, aliases under minification). Default 0.35 px^2, not the thesis's
-  /// identity (Zwicker et al. 2001): 1 paints small splats' colour ~1 px past every silhouette;
-  /// 0.35 is the narrowest that keeps the hole tests closed and still more than halves the
-  /// grazing checkerboard's error against no prefilter (docs/decisions.md, "Issue 14 (i14edge)").
-  float prefilterVariance = 0.35f;
+  /// object-space splatting, aliases under minification). Default 0.25 px^2 (pbrt's Gaussian
+  /// pixel filter, sigma 0.5), not the thesis's identity (Zwicker et al. 2001): 1 paints small
+  /// splats' colour ~1 px past every silhouette; 0.25 keeps the hole tests closed with the
+  /// geometry stage's regrown open stars and still halves the grazing checkerboard's error against
+  /// no prefilter (docs/decisions.md, "Issue 14 (i14edge)" and "Issue 14 (i14pf)").
+  float prefilterVariance = 0.25f;
   /// Cut-off of the resampling Gaussian, in standard deviations; fragments beyond it are not
   /// generated. [1, 5], default 2 (weights below e^-2 = 13.5% of the peak are dropped; 2.5
   /// costs 56% more fragments for no visible change, see docs/rendering.md).
