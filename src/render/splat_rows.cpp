@@ -850,15 +850,23 @@ struct PointRun {
                         const float* disc = nullptr) {
     const int W = r.width(), H = r.height();
     if (!G && H <= kSmallRows) {
-      if (W <= 4) return small<4>(P, normal, r, col4, row4, z4, disc);
-      if (W <= 8) return small<8>(P, normal, r, col8, row8, z8, disc);
+      if (disc) {  // (passed only with Z3Tile::tailLayers())
+        if (W <= 4) return small<4, true>(P, normal, r, col4, row4, z4, disc);
+        if (W <= 8) return small<8, true>(P, normal, r, col8, row8, z8, disc);
+      } else {
+        if (W <= 4) return small<4, false>(P, normal, r, col4, row4, z4, disc);
+        if (W <= 8) return small<8, false>(P, normal, r, col8, row8, z8, disc);
+      }
     }
     inserted += G ? PointRowsG<true>(P, F, normal, G, disc, r, z3) : PointRowsG<false>(P, F, normal, nullptr, disc, r, z3);
   }
 
-  template <int kWp, class DZ>
+  template <int kWp, bool kTails, class DZ>
   HWY_INLINE void small(const PointHot& P, const float* normal, const PixelRect& r, VF colLane, VF rowLane,
-                        Z3Rows<DZ>& zr, const float* disc) {
+                        Z3Rows<DZ>& zrun, const float* disc) {
+    Z3Rows<DZ> copy = zrun;  // with tail layers, a local copy: its members stay in registers
+    if (kTails) copy.tails = true, copy.coverage = 0, copy.behindBase = nullptr;  // (Z3Tile::tailLayers(): no coverage)
+    Z3Rows<DZ>& zr = kTails ? copy : zrun;
     const DZ dz;
     using VZ = hn::Vec<DZ>;
     const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
@@ -907,6 +915,7 @@ struct PointRun {
           if (mk[i] != 0) z3.insert(r.x0 + c + i, r.y0 + row, std::fabs(bz[k + i]), P.zThreshold, bw[k + i], fa, bz[k + i] < 0);
       }
     }
+    if (kTails) zrun.openedV = copy.openedV, zrun.occludedV = copy.occludedV;
   }
 };
 
