@@ -648,10 +648,11 @@ struct Z3Rows {
     const auto within = hn::Le(hn::Abs(hn::Sub(z, z0)), hn::Max(thr, hn::LoadU(d, field(Z3Tile::kThr, p))));
     const auto fast = hn::Or(open, hn::And(single, within));
     const V flag0 = hn::LoadU(d, field(Z3Tile::kOpaque, p));
-    auto behind = hn::AndNot(within, hn::And(single, hn::And(hn::Gt(z, z0), hn::Gt(flag0, zero))));
-    // a tail in front of the single layer (skipped) or behind it (occluded: in an opaque frame
-    // every layer is opaque or tail-only) is dropped
-    if (tails && opaque) behind = hn::Or(behind, hn::AndNot(within, hn::And(single, tail)));
+    // behind a single opaque layer; with tail layers in an opaque frame a tail in front of the
+    // single layer (skipped) or behind it (occluded: every layer is opaque or tail-only) too
+    auto drop = hn::And(hn::Gt(z, z0), hn::Gt(flag0, zero));
+    if (tails && opaque) drop = hn::Or(drop, tail);
+    const auto behind = hn::AndNot(within, hn::And(single, drop));
     if (!hn::AllFalse(d, fast)) {
       auto blend = [&](int k) {
         const V add = hn::Mul(w, attrAt(k));
