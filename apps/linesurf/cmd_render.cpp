@@ -218,7 +218,7 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bind(vis, "layers", o.layers, "Fragment layers per pixel [1, 8]");
   vis->add_flag(flagName("tailLayers") + ",!--no-tail-layers", o.tailLayers,
                 "Tail layers (beyond the thesis): a fragment outside 1.5x its primitive's own disc or strip (a prefilter "
-                "tail) occludes nothing and is composited only over the background (fewer fold speckles; point frames 4-13% slower; default on)");
+                "tail) occludes nothing and is composited only over the background (fewer fold speckles; point frames up to 3% slower; default on)");
   bindEnum(vis, "zThresholdMode", o.zThresholdMode,
            {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}},
            "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)", "--z-mode");

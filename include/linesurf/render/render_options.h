@@ -108,7 +108,8 @@ struct RenderOptions {
   /// only over the background (a silhouette's anti-aliasing). Removes most fold speckles (a
   /// grazing splat's tail as the opaque front layer): on the 7 contour meshes Table 5 and the
   /// line and point models against the mesh get better; line frames cost −3 to +10% and point
-  /// frames +4% (BM_ContourFrame) to +6-13% (the experiment's views) more. Only in an opaque frame without coverage alpha and with the ScreenSpace
+  /// frames −2 to +3% more (BM_ContourFrame, stop 27; +6-13% at stop 26, before the small point
+  /// path's Z^3 rows were specialised for tails). Only in an opaque frame without coverage alpha and with the ScreenSpace
   /// segment method (the Approx and Reference methods are the thesis's comparison paths: their
   /// frames keep the thesis's Z^3 for points too). On by default since stop 26.
   bool tailLayers = true;
