@@ -10,7 +10,6 @@
 #include <memory>
 #include <optional>
 #include <system_error>
-#include <tuple>
 
 #include <time.h>
 
