@@ -30,6 +30,7 @@ struct ExperimentArgs {
   bool noImages = false;
   float segmentLod = RenderOptions{}.segmentLod;
   float coverageGain = RenderOptions{}.coverageGain;
+  float tailCoverage = RenderOptions{}.tailCoverage;
   float prefilterVariance = RenderOptions{}.prefilterVariance;
   bool tailLayers = RenderOptions{}.tailLayers;
   int coverageReach = RenderOptions{}.coverageReach;
@@ -71,6 +72,7 @@ void run(const ExperimentArgs& a) {
   o.contour.mergeStripAngle = a.contourMergeStripAngle;
   o.render.segmentLod = a.segmentLod;
   o.render.coverageGain = a.coverageGain;
+  o.render.tailCoverage = a.tailCoverage;
   o.render.prefilterVariance = a.prefilterVariance;
   o.render.tailLayers = a.tailLayers;
   o.render.coverageReach = a.coverageReach;
@@ -158,6 +160,8 @@ RegisterCommand reg(70, [](CLI::App& app) {
   bind(sub, "prefilterVariance", a->prefilterVariance,
        "Screen prefilter variance, pixels^2 in [0, 100] (0 = none; render --prefilter-variance)", "--prefilter");
   sub->add_flag("--tail-layers,!--no-tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers; default on)");
+  sub->add_option("--tail-coverage", a->tailCoverage,
+                  "Tail coverage gain, [0, 100] (0 = off: the normalised alpha past silhouettes; render --tail-coverage)");
   sub->add_option("--coverage-gain", a->coverageGain,
                   "Coverage alpha gain, [0, 100] (0 = the thesis's normalised alpha; render --coverage-gain)")
       ->capture_default_str();

@@ -219,6 +219,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   vis->add_flag(flagName("tailLayers") + ",!--no-tail-layers", o.tailLayers,
                 "Tail layers (beyond the thesis): a fragment outside 1.5x its primitive's own disc or strip (a prefilter "
                 "tail) occludes nothing and is composited only over the background (fewer fold speckles; point frames up to 3% slower; default on)");
+  bind(vis, "tailCoverage", o.tailCoverage,
+       "Tail coverage (beyond the thesis): a pixel past a silhouette reached only by tails takes alpha gain x its kernel "
+       "sum over the model's median kernel density, [0, 100] (0 = the normalised alpha 1)");
   bindEnum(vis, "zThresholdMode", o.zThresholdMode,
            {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}},
            "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)", "--z-mode");

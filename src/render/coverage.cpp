@@ -50,7 +50,9 @@ float weightAt(const Kernel& k, const Vec3f& x, const Vec3f& nx, float cut) {
 
 }  // namespace
 
-std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least) {
+std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least,
+                                     size_t stride) {
+  if (stride == 0) stride = 1;
   const size_t np = model.points.size(), ns = model.segments.size(), n = np + ns;
   std::vector<Kernel> ks(n);
   std::vector<Vec3f> centre(n), normal(n);
@@ -130,7 +132,7 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
     }
   }
   parallelFor(0, n, [&](size_t i) {
-    if (!ok[i]) return;
+    if (!ok[i] || i % stride != 0) return;
     const Kernel& k = ks[i];
     const float ringR = kRingRadius * k.radius;
     // the kernels that may reach the centre or the ring (distance to the kernel's segment within its
@@ -238,6 +240,16 @@ int64_t silhouetteBehind(const SilhouettePixel& c, const float* frontZ, const ui
     }
   }
   return best >= 0 ? best : farthest;
+}
+
+float medianCoverageConstant(const HybridModel& model, float reconstructionScale, float cutoff) {
+  const size_t n = model.points.size() + model.segments.size();
+  const size_t stride = std::max<size_t>(1, n / 4096);
+  std::vector<float> c = coverageConstants(model, reconstructionScale, cutoff, false, stride);
+  std::erase_if(c, [](float v) { return !(v > 0) || !std::isfinite(v); });
+  if (c.empty()) return 0.0f;
+  std::nth_element(c.begin(), c.begin() + ptrdiff_t(c.size() / 2), c.end());
+  return c[c.size() / 2];
 }
 
 }  // namespace linesurf::detail

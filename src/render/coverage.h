@@ -29,8 +29,15 @@ namespace linesurf::detail {
 /// (coverage at silhouettes only, where the interior is opaque anyway: the edge of a sampling then
 /// ends within half a cell of its samples' cells, as a box-filtered surface's does; the least
 /// density moved a grid of points' edge out by 1.8 half cells; docs/decisions.md "Issue 14 (lead,
-/// stop 24)").
-std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least = true);
+/// stop 24)"). stride > 1: only every stride-th primitive's constant is computed (the others are 0;
+/// RenderOptions::tailCoverage takes the median of a sample).
+std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least = true,
+                                     size_t stride = 1);
+
+/// The median of coverageConstants(model, reconstructionScale, cutoff, false) over a sample of at
+/// most ~4096 primitives, evenly strided (RenderOptions::tailCoverage); 0 for a model without a
+/// usable primitive.
+float medianCoverageConstant(const HybridModel& model, float reconstructionScale, float cutoff);
 
 /// Coverage at silhouettes only (RenderOptions::coverageReach > 0; beyond the thesis, issue 14).
 /// The resolve writes every pixel with its front layer opaque (the normalised alpha of an opaque

@@ -95,6 +95,14 @@ struct Renderer::Buffers {
   std::vector<float> frontZ;
   std::vector<std::vector<detail::SilhouettePixel>> silhouette;
   std::vector<uint8_t> partial;  ///< 1 where a pixel's front layer is partly covered
+  /// Tail coverage (RenderOptions::tailCoverage): 1 where a pixel holds a layer, and per tile its
+  /// tail-only pixels with their faded alpha
+  std::vector<uint8_t> covered;
+  struct TailPixel {
+    uint32_t x, y;
+    float alpha;
+  };
+  std::vector<std::vector<TailPixel>> tailPixels;
 };
 
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
@@ -112,6 +120,8 @@ Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
                                             options_.coverageReach == 0);
       for (float c : coverage_) coverageMax_ = std::max(coverageMax_, c);
     }
+  } else if (options_.tailCoverage > 0 && options_.tailLayers && opaqueModel_) {
+    tailCoverageC_ = detail::medianCoverageConstant(model_, options_.reconstructionScale, options_.cutoffRadius);
   }
 }
 
@@ -361,6 +371,12 @@ RenderResult Renderer::render(const Camera& cam) const {
   std::vector<Z3Counters> tileCounters(tiles);
   std::vector<std::pair<double, double>> tileSeconds(tiles);  // rasterise, resolve
   const Color bg = opt.background;
+  // tail layers in this frame (Z3Tile::setTailLayers), and tail coverage's scale s: a tail-only
+  // pixel's alpha is min(1, s W) where it borders an empty pixel (after every tile, below)
+  const bool tailsOn = opt.tailLayers && opt.segmentMethod == SegmentMethod::ScreenSpace && opaqueFrame && coverageScale <= 0;
+  const float tailScale = tailsOn ? opt.tailCoverage * tailCoverageC_ : 0.0f;
+  uint8_t* const covered = tailScale > 0 ? (buf.covered.resize(res.color.pixels.size()), buf.covered.data()) : nullptr;
+  if (covered) buf.tailPixels.resize(std::max(buf.tailPixels.size(), tiles));
   auto doTile = [&](size_t tile) {
     const int tx = int(tile % size_t(tilesX)), ty = int(tile / size_t(tilesX));
     PixelRect rect{tx * T, ty * T, std::min(cam.width(), (tx + 1) * T), std::min(cam.height(), (ty + 1) * T)};
@@ -372,7 +388,7 @@ RenderResult Renderer::render(const Camera& cam) const {
     z3.setBlendNormals(opt.perPixelLighting || opt.normalBuffer);
     z3.setCoverageScale(coverageScale);
     z3.setCoverageOccludes(!silhouettes);  // at silhouettes only: an opaque frame's layers
-    z3.setTailLayers(opt.tailLayers && opt.segmentMethod == SegmentMethod::ScreenSpace && opaqueFrame && coverageScale <= 0);  // (Z3Tile: an opaque frame)
+    z3.setTailLayers(tailsOn);  // (Z3Tile: an opaque frame)
     SplatContext ctx{frame, rect, z3};
     const double t0 = threadCpuSeconds();
     const size_t kEnd = tileStart[tile + 1];
@@ -414,6 +430,8 @@ RenderResult Renderer::render(const Camera& cam) const {
     const int32_t* layerCounts = z3.counts();
     std::vector<detail::SilhouettePixel>* cands = silhouettes ? &buf.silhouette[tile] : nullptr;
     if (cands) cands->clear();
+    std::vector<Buffers::TailPixel>* tailPx = covered ? &buf.tailPixels[tile] : nullptr;
+    if (tailPx) tailPx->clear();
     // a resolved pixel composited over the background, as the image stores it
     auto overBackground = [&](const Color& px) {
       const float a = px.w();
@@ -465,6 +483,21 @@ RenderResult Renderer::render(const Camera& cam) const {
         if (res.alpha) res.alpha->at(x, y) = Color(a, a, a, a);
         if (res.normal)
           res.normal->at(x, y) = Color(0.5f * (px.normal.x() + 1), 0.5f * (px.normal.y() + 1), 0.5f * (px.normal.z() + 1), 1);
+      }
+      if (tailPx) {  // tail coverage: which pixels hold a layer, and the tail-only ones (a tail-only
+                     // layer is always a pixel's only one in an opaque frame, Z3Tile::setTailLayers)
+        const size_t p0 = z3.index(rect.x0, y);
+        const float* flag = z3.plane(0, Z3Tile::kOpaque) + p0;
+        const float* W = z3.plane(0, Z3Tile::kW) + p0;
+        uint8_t* row = covered + size_t(y) * size_t(cam.width());
+        for (int x = rect.x0; x < rect.x1; ++x) {
+          const int i = x - rect.x0, n = rowCounts[i];
+          row[x] = n > 0;
+          if (n == 1 && flag[i] < 0) {
+            const float a = std::min(1.0f, tailScale * W[i]);
+            if (a < 1.0f) tailPx->push_back({uint32_t(x), uint32_t(y), a});
+          }
+        }
       }
     }
     if (cands) {
@@ -537,6 +570,35 @@ RenderResult Renderer::render(const Camera& cam) const {
       for (const auto& [i, c] : out[tile]) res.color.pixels[i] = c;
       for (const auto& [i, c] : outAlpha[tile]) res.alpha->pixels[i] = c;
     }
+  }
+  if (covered) {
+    // Tail coverage: a tail-only pixel next to an empty one (3 x 3) lies past a silhouette, where
+    // only the prefilter reached: its colour (written opaque) is composited over the background
+    // with its faded alpha. One that no empty pixel borders fills a gap inside a surface and stays
+    // opaque. Reads only the covered mask, writes only these pixels: independent of tile order.
+    const int w = cam.width(), h = cam.height();
+    for (size_t tile = 0; tile < tiles; ++tile)
+      for (const Buffers::TailPixel& t : buf.tailPixels[tile]) {
+        bool border = false;
+        for (int dy = -1; dy <= 1 && !border; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = int(t.x) + dx, yy = int(t.y) + dy;
+            if (xx >= 0 && yy >= 0 && xx < w && yy < h && !covered[size_t(yy) * size_t(w) + size_t(xx)]) {
+              border = true;
+              break;
+            }
+          }
+        if (!border) continue;
+        Color& c = res.color.at(int(t.x), int(t.y));
+        const float a = t.alpha;
+        Color r;
+        r.head<3>() = a * c.head<3>() + (1 - a) * bg.w() * bg.head<3>();
+        r.w() = a + (1 - a) * bg.w();
+        if (bg.w() > 0 && r.w() > 0 && r.w() < 1) r.head<3>() /= r.w();  // straight colour for PNG
+        if (bg.w() == 0 && a > 0) r.head<3>() /= a;
+        c = r;
+        if (res.alpha) res.alpha->at(int(t.x), int(t.y)) = Color(a, a, a, a);
+      }
   }
   for (const auto& [raster, resolve] : tileSeconds) {
     st.fragmentThreadSeconds += raster;

@@ -39,6 +39,7 @@ void validate(const RenderOptions& o) {
   if (!inRange(o.segmentLod, 0, 4))
     throwBadOption("segmentLod", "must be in [0, 4] kernel standard deviations (0 = every segment exact)");
   if (!inRange(o.coverageGain, 0, 100)) throwBadOption("coverageGain", "must be in [0, 100] (0 = off)");
+  if (!inRange(o.tailCoverage, 0, 100)) throwBadOption("tailCoverage", "must be in [0, 100] (0 = off)");
   if (o.coverageReach < 0 || o.coverageReach > 16) throwBadOption("coverageReach", "must be in [0, 16] pixels (0 = everywhere)");
   if (o.tileSize < 8 || o.tileSize > 1024) throwBadOption("tileSize", "must be in [8, 1024] pixels");
 }

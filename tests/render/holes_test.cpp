@@ -134,6 +134,20 @@ TEST(Holes, CoverageAtSilhouettesKeepsRandomSpheresOpaque) {
   expectClosed("sphere 100k eps-delta, coverage", extractEpsDelta(points, geo), sdf, o, 3, 0.5f);
 }
 
+TEST(Holes, TailCoverageKeepsRandomSpheresOpaque) {
+  // tail coverage fades only tail-only pixels with nothing behind them: none lies inside
+  const Sdf sdf = [](const Vec3f& p) { return p.norm() - 1; };
+  PointGeometry geo;
+  const HybridModel points = withGeometry(shapes::sphere(1, 100000, random(1)), &geo);
+  RenderOptions o;
+  o.tailCoverage = 1;
+  expectClosed("sphere 100k points, tail coverage", points, sdf, o, 1.5f, 0.5f);
+  expectClosed("sphere 100k eps-delta, tail coverage", extractEpsDelta(points, geo), sdf, o, 1.5f, 0.5f);
+  ShapeApproxOptions so;
+  expectClosed("sphere 100k shape-approx, tail coverage", extractShapeApprox(points, geo, clusterShapeApprox(geo, so), so),
+               sdf, o, 1.5f, 0.5f);
+}
+
 TEST(Holes, RandomTorus200k) {
   // torus about z, R = 1, r = 0.35
   checkShape("torus 200k", shapes::torus(1, 0.35f, 800, 250, random(3)), [](const Vec3f& p) {

@@ -113,6 +113,18 @@ struct RenderOptions {
   /// segment method (the Approx and Reference methods are the thesis's comparison paths: their
   /// frames keep the thesis's Z^3 for points too). On by default since stop 26.
   bool tailLayers = true;
+  /// Tail coverage (beyond the thesis; issue 14, docs/decisions.md "Issue 14 (lead, stop 28)"):
+  /// with tail layers, a pixel that only tails reached (its centre off every primitive's own disc
+  /// or strip by half its size; nothing lies behind such a layer) and that borders an empty pixel
+  /// (3 x 3) lies past a silhouette: it is composited over the background with alpha
+  /// min(1, g c W) instead of the normalised 1, W its weight sum, c the model's median inverse
+  /// kernel density (src/render/coverage.h, over a sample of ~4096 primitives), g this gain. The
+  /// fringe of full colour that the prefilter paints past a silhouette fades as a box-filtered
+  /// edge does; tail-only pixels that no empty pixel borders (gaps inside a surface) stay opaque.
+  /// Lines and points against the mesh improve on all seven contour meshes, but Table 5 (line vs
+  /// point model) gets worse on all seven (the point models' outline is notched between discs),
+  /// so 0 (off) is the default. 1 is the unbiased gain. [0, 100].
+  float tailCoverage = 0.0f;
   static constexpr int kMaxLayers = 8;
 
   // --- shading (§6.2.2) -----------------------------------------------------------------------

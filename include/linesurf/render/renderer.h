@@ -65,6 +65,8 @@ class Renderer {
   /// (the mode's condition)
   std::vector<float> coverage_;
   float coverageMax_ = 0;
+  /// Tail coverage (RenderOptions::tailCoverage): the model's median coverage constant
+  float tailCoverageC_ = 0;
   bool opaqueModel_ = true;
   struct Buffers;  // per-frame buffers reused by the next frame (renderer.cpp)
   std::shared_ptr<Buffers> buffers_;
