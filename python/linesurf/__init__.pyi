@@ -106,7 +106,7 @@ def render(model: PointsLike, *, size: Tuple[int, int] = (512, 512), azimuth: fl
            shininess: float = 24.0, light: Optional[Sequence[float]] = None, world_light: bool = False,
            default_color: Optional[Sequence[float]] = None, per_pixel_lighting: bool = False,
            background: Union[str, Sequence[float]] = "white", segment_method: str = "screen",
-           segment_lod: float = 0.0, coverage_gain: float = 0.0, coverage_reach: int = 2, k: int = 12, tile_size: int = 64, depth: bool = False, alpha: bool = False,
+           segment_lod: float = 0.0, coverage_gain: float = 0.0, coverage_reach: int = 2, tail_coverage: float = 0.0, k: int = 12, tile_size: int = 64, depth: bool = False, alpha: bool = False,
            normal: bool = False) -> Union[npt.NDArray[np.uint8], Dict[str, npt.NDArray[Any]]]: ...
 
 def compare(a: ImageLike, b: ImageLike) -> Dict[str, float]: ...

@@ -1025,7 +1025,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
          const std::string& z_threshold_mode, std::optional<float> z_threshold, float alpha_override,
          bool backface_culling, float ambient, float diffuse, float specular, float shininess,
          std::optional<std::vector<double>> light, bool world_light, std::optional<std::vector<double>> default_color,
-         bool per_pixel_lighting, py::object background, const std::string& segment_method, float segment_lod, float coverage_gain, int coverage_reach, int k,
+         bool per_pixel_lighting, py::object background, const std::string& segment_method, float segment_lod, float coverage_gain, int coverage_reach, float tail_coverage, int k,
          int tile_size, bool depth, bool alpha, bool normal) -> py::object {
         RenderOptions o;
         o.prefilterVariance = prefilter_variance, o.cutoffRadius = cutoff_radius;
@@ -1051,6 +1051,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
                                                   {{"approx", SegmentMethod::Approx}, {"screen", SegmentMethod::ScreenSpace},
                                                    {"reference", SegmentMethod::Reference}});
         o.segmentLod = segment_lod, o.coverageGain = coverage_gain, o.coverageReach = coverage_reach;
+        o.tailCoverage = tail_coverage;
         o.tileSize = tile_size, o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
         validate(o);
         ViewOptions v;
@@ -1100,7 +1101,8 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
       py::arg("per_pixel_lighting") = false, py::arg("background") = "white", py::arg("segment_method") = "screen",
       py::arg("segment_lod") = RenderOptions{}.segmentLod,
       py::arg("coverage_gain") = RenderOptions{}.coverageGain,
-      py::arg("coverage_reach") = RenderOptions{}.coverageReach, py::arg("k") = 12, py::arg("tile_size") = 64, py::arg("depth") = false, py::arg("alpha") = false,
+      py::arg("coverage_reach") = RenderOptions{}.coverageReach, py::arg("tail_coverage") = RenderOptions{}.tailCoverage,
+      py::arg("k") = 12, py::arg("tile_size") = 64, py::arg("depth") = false, py::arg("alpha") = false,
       py::arg("normal") = false,
       R"doc(Renders a point or hybrid model by EWA splatting (thesis §4-§6.2) = `linesurf render`.
 

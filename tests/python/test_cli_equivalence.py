@@ -89,6 +89,7 @@ CAMERAS = [
      dict(size=(128, 128), z_threshold_mode="fixed", layers=2, per_pixel_lighting=True, zoom=1.5)),
     (["--size", "128x96", "--coverage-gain", "1.5", "--prefilter", "1"], dict(size=(128, 96), coverage_gain=1.5, prefilter_variance=1)),
     (["--size", "128x96", "--coverage-gain", "1.5", "--coverage-reach", "0"], dict(size=(128, 96), coverage_gain=1.5, coverage_reach=0)),
+    (["--size", "128x96", "--tail-coverage", "1"], dict(size=(128, 96), tail_coverage=1)),
 ]
 
 

@@ -43,6 +43,8 @@ PARAMS = [
      "--alpha-override", "alpha_override"),
     (lambda m: linesurf.render(m, coverage_gain=-1), ["render", "{model}", "--coverage-gain", "-1"],
      "--coverage-gain", "coverage_gain"),
+    (lambda m: linesurf.render(m, tail_coverage=-1), ["render", "{model}", "--tail-coverage", "-1"],
+     "--tail-coverage", "tail_coverage"),
     (lambda m: linesurf.render(m, coverage_reach=17), ["render", "{model}", "--coverage-reach", "17"],
      "--coverage-reach", "coverage_reach"),
     (lambda m: linesurf.render(m, zoom=float("nan")), ["render", "{model}", "--zoom", "nan"], "--zoom", "zoom"),
