@@ -489,15 +489,14 @@ RenderResult Renderer::render(const Camera& cam) const {
         const size_t p0 = z3.index(rect.x0, y);
         const float* flag = z3.plane(0, Z3Tile::kOpaque) + p0;
         const float* W = z3.plane(0, Z3Tile::kW) + p0;
-        uint8_t* row = covered + size_t(y) * size_t(cam.width());
-        for (int x = rect.x0; x < rect.x1; ++x) {
-          const int i = x - rect.x0, n = rowCounts[i];
-          row[x] = n > 0;
-          if (n == 1 && flag[i] < 0) {
+        uint8_t* row = covered + size_t(y) * size_t(cam.width()) + rect.x0;
+        const int n = rect.width();
+        for (int i = 0; i < n; ++i) row[i] = rowCounts[i] > 0;  // (two loops: this one vectorises)
+        for (int i = 0; i < n; ++i)
+          if (flag[i] < 0 && rowCounts[i] == 1) {
             const float a = std::min(1.0f, tailScale * W[i]);
-            if (a < 1.0f) tailPx->push_back({uint32_t(x), uint32_t(y), a});
+            if (a < 1.0f) tailPx->push_back({uint32_t(rect.x0 + i), uint32_t(y), a});
           }
-        }
       }
     }
     if (cands) {
