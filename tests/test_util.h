@@ -2,13 +2,41 @@
 // Helpers shared by the tests: paths to bundled and shared data, running the CLI.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 
 #include <unistd.h>
 
+#include "linesurf/core/image.h"
+#include "linesurf/core/model.h"
+
 namespace linesurf::test {
+
+/// The largest difference of any channel (alpha included) between two images of equal size.
+inline float maxAbsDiff(const Image& a, const Image& b) {
+  float m = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, (a.pixels[i] - b.pixels[i]).cwiseAbs().maxCoeff());
+  return m;
+}
+
+/// A square 2 x 2 in the plane z = 0 as 41 strips along x, spacing h = 0.05 in y, normal +z, grey,
+/// radius radiusScale x h.
+inline HybridModel squareStrips(float radiusScale = 1) {
+  HybridModel m;
+  const int n = 41;
+  const float h = 2.0f / float(n - 1);
+  for (int j = 0; j < n; ++j) {
+    Segment s;
+    const float y = -1 + float(j) * h;
+    s.p0 = Vec3f(-1, y, 0), s.p1 = Vec3f(1, y, 0), s.normal = Vec3f(0, 0, 1), s.radius = radiusScale * h;
+    s.color = Color(0.8f, 0.8f, 0.8f, 1);
+    m.segments.push_back(s);
+  }
+  m.attributes = {true, false, true, false};
+  return m;
+}
 
 /// tests/data inside the repository.
 inline std::filesystem::path testData() { return std::filesystem::path(LINESURF_SOURCE_DIR) / "tests" / "data"; }

@@ -371,6 +371,16 @@ RenderResult Renderer::render(const Camera& cam) const {
   std::vector<Z3Counters> tileCounters(tiles);
   std::vector<std::pair<double, double>> tileSeconds(tiles);  // rasterise, resolve
   const Color bg = opt.background;
+  // a resolved pixel (premultiplied) composited over the background, as the image stores it
+  auto overBackground = [&bg](const Color& px) {
+    const float a = px.w();
+    Color c = px;
+    c.head<3>() += (1 - a) * bg.w() * bg.head<3>();
+    c.w() = a + (1 - a) * bg.w();
+    if (bg.w() > 0 && c.w() > 0 && c.w() < 1) c.head<3>() /= c.w();  // straight colour for PNG
+    if (bg.w() == 0 && a > 0) c.head<3>() /= a;
+    return c;
+  };
   // tail layers in this frame (Z3Tile::setTailLayers), and tail coverage's scale s: a tail-only
   // pixel's alpha is min(1, s W) where it borders an empty pixel (after every tile, below)
   const bool tailsOn = opt.tailLayers && opt.segmentMethod == SegmentMethod::ScreenSpace && opaqueFrame && coverageScale <= 0;
@@ -432,16 +442,6 @@ RenderResult Renderer::render(const Camera& cam) const {
     if (cands) cands->clear();
     std::vector<Buffers::TailPixel>* tailPx = covered ? &buf.tailPixels[tile] : nullptr;
     if (tailPx) tailPx->clear();
-    // a resolved pixel composited over the background, as the image stores it
-    auto overBackground = [&](const Color& px) {
-      const float a = px.w();
-      Color c = px;
-      c.head<3>() += (1 - a) * bg.w() * bg.head<3>();
-      c.w() = a + (1 - a) * bg.w();
-      if (bg.w() > 0 && c.w() > 0 && c.w() < 1) c.head<3>() /= c.w();  // straight colour for PNG
-      if (bg.w() == 0 && a > 0) c.head<3>() /= a;
-      return c;
-    };
     // per-pixel lighting is deferred: each layer lit once, with its blended normal, at the pixel's
     // ray and the layer's depth; otherwise the fragments carry Gouraud colours (keep)
     auto shadeAt = [&](int x, int y) {
@@ -576,27 +576,20 @@ RenderResult Renderer::render(const Camera& cam) const {
     // with its faded alpha. One that no empty pixel borders fills a gap inside a surface and stays
     // opaque. Reads only the covered mask, writes only these pixels: independent of tile order.
     const int w = cam.width(), h = cam.height();
+    auto bordersEmpty = [&](int x, int y) {
+      for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
+        for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx)
+          if (!covered[size_t(yy) * size_t(w) + size_t(xx)]) return true;
+      return false;
+    };
     for (size_t tile = 0; tile < tiles; ++tile)
       for (const Buffers::TailPixel& t : buf.tailPixels[tile]) {
-        bool border = false;
-        for (int dy = -1; dy <= 1 && !border; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int xx = int(t.x) + dx, yy = int(t.y) + dy;
-            if (xx >= 0 && yy >= 0 && xx < w && yy < h && !covered[size_t(yy) * size_t(w) + size_t(xx)]) {
-              border = true;
-              break;
-            }
-          }
-        if (!border) continue;
-        Color& c = res.color.at(int(t.x), int(t.y));
+        const int x = int(t.x), y = int(t.y);
+        if (!bordersEmpty(x, y)) continue;
+        Color& c = res.color.at(x, y);  // written opaque: its straight colour
         const float a = t.alpha;
-        Color r;
-        r.head<3>() = a * c.head<3>() + (1 - a) * bg.w() * bg.head<3>();
-        r.w() = a + (1 - a) * bg.w();
-        if (bg.w() > 0 && r.w() > 0 && r.w() < 1) r.head<3>() /= r.w();  // straight colour for PNG
-        if (bg.w() == 0 && a > 0) r.head<3>() /= a;
-        c = r;
-        if (res.alpha) res.alpha->at(int(t.x), int(t.y)) = Color(a, a, a, a);
+        c = overBackground(Color(a * c.x(), a * c.y(), a * c.z(), a));
+        if (res.alpha) res.alpha->at(x, y) = Color(a, a, a, a);
       }
   }
   for (const auto& [raster, resolve] : tileSeconds) {

@@ -12,15 +12,13 @@
 #include "linesurf/core/shapes.h"
 #include "linesurf/render/renderer.h"
 #include "linesurf/render/z3_buffer.h"
+#include "test_util.h"
 
 namespace linesurf {
 namespace {
 
-float maxAbsDiff(const Image& a, const Image& b) {
-  float m = 0;
-  for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, (a.pixels[i] - b.pixels[i]).cwiseAbs().maxCoeff());
-  return m;
-}
+using test::maxAbsDiff;
+using test::squareStrips;
 
 // Grid samples jittered by this fraction of the spacing (Gaussian): troughs between them.
 constexpr float kJitter = 0.4f;
@@ -30,22 +28,8 @@ shapes::SampleOptions jittered() {
   return o;
 }
 
-// A square 2 x 2 as points on a grid, or as strips along x at the same spacing.
+// A square 2 x 2 as points on a grid, or as strips along x at the same spacing (test_util.h).
 HybridModel squarePoints() { return shapes::plane(2, 2, 41, 41); }
-HybridModel squareStrips() {
-  HybridModel m;
-  const int n = 41;
-  const float h = 2.0f / float(n - 1);
-  for (int j = 0; j < n; ++j) {
-    Segment s;
-    const float y = -1 + float(j) * h;
-    s.p0 = Vec3f(-1, y, 0), s.p1 = Vec3f(1, y, 0), s.normal = Vec3f(0, 0, 1), s.radius = h;
-    s.color = Color(0.8f, 0.8f, 0.8f, 1);
-    m.segments.push_back(s);
-  }
-  m.attributes = {true, false, true, false};
-  return m;
-}
 
 // A closed surface's silhouette where the kernels are wide against its curvature (Al's arms and
 // fingers): a cylinder of radius kR along z (|z| <= 1.5) as points on a grid or as strips along its

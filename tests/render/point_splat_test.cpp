@@ -16,6 +16,7 @@
 #include "linesurf/core/shapes.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/render/renderer.h"
+#include "test_util.h"
 
 namespace linesurf {
 namespace {
@@ -26,11 +27,7 @@ double meanAbsDiff(const Image& a, const Image& b) {
   for (size_t i = 0; i < a.pixels.size(); ++i) s += (a.pixels[i].head<3>() - b.pixels[i].head<3>()).cwiseAbs().sum();
   return s / (3.0 * double(a.pixels.size()));
 }
-double maxAbsDiff(const Image& a, const Image& b) {
-  double m = 0;
-  for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, double((a.pixels[i] - b.pixels[i]).cwiseAbs().maxCoeff()));
-  return m;
-}
+using test::maxAbsDiff;
 
 // Unlit material: the rendered colour is the albedo, so images compare with analytic ones.
 RenderOptions unlit() {

@@ -12,15 +12,12 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/shapes.h"
 #include "linesurf/render/renderer.h"
+#include "test_util.h"
 
 namespace linesurf {
 namespace {
 
-float maxAbsDiff(const Image& a, const Image& b) {
-  float m = 0;
-  for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, (a.pixels[i] - b.pixels[i]).cwiseAbs().maxCoeff());
-  return m;
-}
+using test::maxAbsDiff;
 
 // A square 2 x 2 as points on a 41 x 41 grid (spacing h = 0.05), or as strips along x at the same
 // spacing, seen head-on from so far that a sample spacing is ~1 pixel: the splats are small
@@ -30,20 +27,7 @@ constexpr int kSize = 128;
 // lies 1.0 px past the edge samples: past 1.5 disc radii (0.84 px: tails), within the resampling
 // filter's cut-off (1.16 px)
 constexpr float kDistance = 8.578f;
-HybridModel squareStrips() {
-  HybridModel m;
-  const int n = 41;
-  const float h = 2.0f / float(n - 1);
-  for (int j = 0; j < n; ++j) {
-    Segment s;
-    const float y = -1 + float(j) * h;
-    s.p0 = Vec3f(-1, y, 0), s.p1 = Vec3f(1, y, 0), s.normal = Vec3f(0, 0, 1), s.radius = 0.55f * h;
-    s.color = Color(0.8f, 0.8f, 0.8f, 1);
-    m.segments.push_back(s);
-  }
-  m.attributes = {true, false, true, false};
-  return m;
-}
+HybridModel squareStrips() { return test::squareStrips(0.55f); }  // the contour models' radius (0.55 d)
 HybridModel squarePoints() {
   HybridModel m = shapes::plane(2, 2, 41, 41);
   for (Point& p : m.points) p.radius = 0.55f * 0.05f;  // the contour models' radius (0.55 d)
