@@ -76,7 +76,7 @@
       return out;
     };
     if (np) {
-      model.points = arrays(meta.points, np, ['position', 'normal', 'shadingNormal', 'radius', 'color', 'cluster'], 'point');
+      model.points = arrays(meta.points, np, ['position', 'normal', 'shadingNormal', 'radius', 'color', 'cluster', 'mass'], 'point');
       if (!model.points.position || !model.points.normal || !model.points.radius)
         throw new Error('points need positions, normals and radii');
     }
@@ -130,11 +130,12 @@ layout(location = 2) in float aRad;
 layout(location = 3) in vec4 aCol;
 layout(location = 4) in float aCluster;
 layout(location = 5) in vec3 aSNrm;  // shading normal (issue 14), or zero: light by the plane normal
+layout(location = 6) in float aMass; // the point's mass (issue 14; 1 when the model has none)
 out vec2 vST;          // position in the cut-off ellipse, standard deviations
 out vec3 vP;           // camera-space position
 flat out vec3 vN;      // the lighting normal
 flat out vec3 vAlbedo;
-flat out float vScale; // 1 / (r0 r1), §5.2.3.3
+flat out float vScale; // mass / (r0 r1), §5.2.3.3
 flat out float vThr;
 void main() {
   vST = vec2(0.0); vP = vec3(0.0); vN = vec3(0.0, 0.0, 1.0); vAlbedo = vec3(0.0); vScale = 0.0; vThr = 0.0;
@@ -191,7 +192,7 @@ void main() {
     m /= ml;
     vN = nn > 0.0 || dot(m, c) <= 0.0 ? m : -m;
   }
-  vScale = 1.0 / (r0 * r1);
+  vScale = aMass / (r0 * r1);
   // depth half-extent of the cut-off ellipse plus the radius (delta-z, §6.2.3.2)
   vThr = uZThr * (R * sqrt(r0 * r0 * E0.z * E0.z + r1 * r1 * E1.z * E1.z) + radius);
   vAlbedo = uColorMode == 1 ? uKindColor : uColorMode == 2 ? (aCluster >= 0.0 ? clusterColor(aCluster) : aCol.rgb) : aCol.rgb;
@@ -587,6 +588,8 @@ void main() {
       else { gl.disableVertexAttribArray(4); gl.vertexAttrib1f(4, -1); }
       if (P.shadingNormal) attrib(5, P.shadingNormal, true);
       else { gl.disableVertexAttribArray(5); gl.vertexAttrib3f(5, 0, 0, 0); }
+      if (P.mass) attrib(6, P.mass, false);
+      else { gl.disableVertexAttribArray(6); gl.vertexAttrib1f(6, 1); }
       quadIndices(model.np);
     }
     if (model.ns) {
@@ -655,6 +658,7 @@ void main() {
     {  // the optional attributes the page draws with
       const has = [];
       if (model.np && model.points.shadingNormal) has.push('point shading normals');
+      if (model.np && model.points.mass) has.push('point masses');
       if (model.ns && model.segments.normal0 && model.segments.normal1) has.push('segment endpoint normals');
       if ((model.np && model.points.color) || (model.ns && model.segments.color)) has.push('colours');
       if (model.np && model.points.cluster) has.push('cluster ids');

@@ -32,6 +32,7 @@ struct ExperimentArgs {
   float coverageGain = RenderOptions{}.coverageGain;
   float tailCoverage = RenderOptions{}.tailCoverage;
   float prefilterVariance = RenderOptions{}.prefilterVariance;
+  float reconstructionScale = RenderOptions{}.reconstructionScale;
   bool tailLayers = RenderOptions{}.tailLayers;
   int coverageReach = RenderOptions{}.coverageReach;
 };
@@ -74,6 +75,7 @@ void run(const ExperimentArgs& a) {
   o.render.coverageGain = a.coverageGain;
   o.render.tailCoverage = a.tailCoverage;
   o.render.prefilterVariance = a.prefilterVariance;
+  o.render.reconstructionScale = a.reconstructionScale;
   o.render.tailLayers = a.tailLayers;
   o.render.coverageReach = a.coverageReach;
 
@@ -159,6 +161,8 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str();
   bind(sub, "prefilterVariance", a->prefilterVariance,
        "Screen prefilter variance, pixels^2 in [0, 100] (0 = none; render --prefilter-variance)", "--prefilter");
+  bind(sub, "reconstructionScale", a->reconstructionScale,
+       "Reconstruction sigma as a fraction of the primitive radius, (0, 4] (render --recon-scale)", "--recon-scale");
   sub->add_flag("--tail-layers,!--no-tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers; default on)");
   sub->add_option("--tail-coverage", a->tailCoverage,
                   "Tail coverage gain, [0, 100] (0 = off: the normalised alpha past silhouettes; render --tail-coverage)");

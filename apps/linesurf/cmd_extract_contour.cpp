@@ -123,6 +123,8 @@ RegisterCommand reg(33, [](CLI::App& app) {
   bind(sub, "mergeStripAngle", o.mergeStripAngle,
        "Merging, smooth models: largest tilt of the merged strip's plane from the original ones, degrees [0, 90)");
   bind(sub, "mergeMaxPieces", o.mergeMaxPieces, "Merging: most original segments in one merged segment (1: no merging)");
+  sub->add_flag("--point-masses,!--no-point-masses", o.pointMasses,
+                "Points weigh the contour length they stand for (beyond the thesis; default on; off: each weighs 1)");
   sub->add_flag("--flat", a->flat,
                 "One normal per segment (the thesis) instead of interpolated vertex normals at both endpoints");
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY instead of binary");

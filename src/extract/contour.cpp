@@ -174,6 +174,10 @@ struct Interpolator {
   }
 };
 
+// The least point mass written: a point standing for (almost) no length still weighs something, so
+// that every point is a valid splat (the masses must be > 0).
+constexpr double kMinPointMass = 1e-3;
+
 void weightsOf(const EdgePoint& e, double w[3]) {
   w[0] = w[1] = w[2] = 0;
   w[e.a] = 1 - e.lambda;
@@ -443,6 +447,12 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   model.segments.resize(stats.segments);
   model.points.resize(stats.points);
   if (shading) model.pointShadingNormals.resize(stats.points);
+  float* masses = nullptr;
+  if (options.pointMasses && stats.points > 0) {
+    std::vector<float>& m = model.pointProperties[kPointMassProperty];
+    m.assign(stats.points, 1.0f);
+    masses = m.data();
+  }
   if (options.recordFaces) {
     stats.segmentFaces.resize(stats.segments);
     stats.pointFaces.resize(stats.points);
@@ -491,6 +501,10 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
             }
             p.color = interp.color(f, w);
             p.radius = radius;
+            if (masses) {  // the length it stands for / radius (a segment's weight per length)
+              const double spacing = n > 1 ? l / double(n - 1) : 0.0, share = j == 0 || j + 1 == n ? 0.5 : 1.0;
+              masses[pi] = float(std::clamp(share * spacing / double(radius), kMinPointMass, 1e6));
+            }
             if (options.recordFaces) stats.pointFaces[pi] = uint32_t(f);
             ++pi;
           }

@@ -99,6 +99,11 @@ void validateModel(const HybridModel& m, const std::string& name, Error::Kind ki
     for (size_t i = 0; i < values.size(); ++i)
       if (!std::isfinite(values[i]))
         c.fail(fmt::format("element vertex {}", i), fmt::format("property '{}' is {} (not finite)", prop, values[i]));
+    if (prop == kPointMassProperty)
+      for (size_t i = 0; i < values.size(); ++i)
+        if (!(values[i] > 0) || values[i] > 1e6f)
+          c.fail(fmt::format("element vertex {}", i),
+                 fmt::format("property '{}' is {:g} (a point's mass must be in (0, 1e6])", prop, values[i]));
   }
   if (!m.provenance.empty() && m.provenance.size() != m.segments.size())
     c.fail("provenance", fmt::format("{} lists for {} segments", m.provenance.size(), m.segments.size()));

@@ -25,6 +25,7 @@ struct Kernel {
   Vec3f p0, e, n;      // start (a point's centre), unit direction (segments), unit normal (or zero)
   float length = 0;    // 0 for a point
   float sigma = 0, radius = 0, invRadius = 0;
+  float mass = 1;      // a point's mass (pointMasses), as the renderer scales its weight
 };
 
 // w(x): a point exp(-d^2 / 2 s^2) / s^2 (d in its plane); a segment (1 / (r s^2)) times the integral
@@ -38,7 +39,7 @@ float weightAt(const Kernel& k, const Vec3f& x, const Vec3f& nx, float cut) {
   const float s2 = k.sigma * k.sigma;
   if (k.length == 0) {
     const float q = (d.squaredNorm() - off * off) / s2;
-    return q <= cut * cut ? std::exp(-0.5f * q) / s2 : 0.0f;
+    return q <= cut * cut ? k.mass * std::exp(-0.5f * q) / s2 : 0.0f;
   }
   const float a = k.e.dot(d);
   const float b2 = std::max(0.0f, d.squaredNorm() - a * a - off * off);
@@ -58,10 +59,12 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
   std::vector<Vec3f> centre(n), normal(n);
   std::vector<uint8_t> ok(n, 0);
   float cell = 0;
+  const std::vector<float>* masses = pointMasses(model);
   for (size_t i = 0; i < np; ++i) {
     const Point& p = model.points[i];
     if (!usable(p.radius) || !p.position.allFinite() || !p.normal.allFinite()) continue;
     Kernel& k = ks[i];
+    if (masses) k.mass = (*masses)[i];
     k.p0 = p.position, k.e = Vec3f::Zero();
     const float nn = p.normal.norm();
     k.n = nn > 0 ? Vec3f(p.normal / nn) : Vec3f::Zero();

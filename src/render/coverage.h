@@ -8,8 +8,9 @@
 /// coverage is that sum divided by the density itself: sum_k c_k w_k(x) with c_k = 1 / min sum_j
 /// w_j(x), the inverse of the model's least kernel density around the primitive (x: its centre and
 /// a ring at 0.6 r in its plane; a Shepard normalisation that also lifts the troughs between
-/// samples). Inside a surface it is >= ~1 whatever the sampling; past a silhouette it falls off with
-/// the kernels' tails, as a box-filtered mesh's coverage does. The density counts the primitives of the
+/// samples; a point's weights are scaled by its mass, pointMasses). Inside a surface it is >= ~1
+/// whatever the sampling; past a silhouette it falls off with the kernels' tails, as a box-filtered
+/// mesh's coverage does. The density counts the primitives of the
 /// same sheet only (normals within 90 degrees, centre within the kernel's cut-off of the plane), so
 /// that the two sides of a thin part do not halve each other's coverage.
 #include <cstdint>

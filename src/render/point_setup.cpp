@@ -452,6 +452,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
       o.T = {b.Tx[j], b.Ty[j], b.T0[j]};
       o.depthNum = b.depthNum[j];
       o.weightScaleSigned = b.weightScale[j];  // no depth clipping here
+      if (frame.pointMasses) o.weightScaleSigned *= frame.pointMasses[index];
       o.zThreshold = frame.zThreshold(b.depthExtent[j] + point.radius);
       const Color col = frame.primitiveColor(point.color);
       Vec3f c = col.head<3>();

@@ -243,7 +243,7 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   }
   out.N = raster.N, out.S = raster.S, out.T = raster.T;
   out.depthNum = raster.depthNum;
-  out.setWeightScale(raster.weightScale, clipped);
+  out.setWeightScale(frame.pointMasses ? raster.weightScale * frame.pointMasses[index] : raster.weightScale, clipped);
   // depth half-extent of the cutoff ellipse plus the primitive radius (delta-z, §6.2.3.2)
   out.zThreshold = frame.zThreshold(s.depthExtent + point.radius);
   const Color col = frame.primitiveColor(point.color);

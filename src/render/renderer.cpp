@@ -12,6 +12,9 @@
 #include <new>
 #include <type_traits>
 
+#include <fmt/format.h>
+
+#include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
@@ -108,6 +111,10 @@ struct Renderer::Buffers {
 Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
     : model_(model), options_(options), sphere_(boundingSphere(model)), buffers_(std::make_shared<Buffers>()) {
   validate(options_);
+  if (const std::vector<float>* m = pointMasses(model_))
+    for (size_t i = 0; i < m->size(); ++i)
+      if (!((*m)[i] > 0 && (*m)[i] <= 1e6f))
+        throwBadParameter("pointProperties['mass']", fmt::format("point {} has mass {:g}; masses must be in (0, 1e6]", i, (*m)[i]));
   if (model_.attributes.colors) {
     for (const Point& p : model_.points) opaqueModel_ = opaqueModel_ && p.color.w() >= 1;
     for (const Segment& s : model_.segments) opaqueModel_ = opaqueModel_ && s.color.w() >= 1;
@@ -170,6 +177,7 @@ RenderResult Renderer::render(const Camera& cam) const {
   frame.endpointNormals = model_.attributes.endpointNormals;
   if (model_.attributes.shadingNormals && model_.pointShadingNormals.size() == model_.points.size())
     frame.pointShadingNormals = model_.pointShadingNormals.data();
+  if (const std::vector<float>* m = pointMasses(model_)) frame.pointMasses = m->data();
 
   // 1. prepare (parallel) and count the tile bins. Points go in chunks of kChunkBatches batches
   // of detail::kSetupBatch; a chunk writes its visible points densely into its own range of

@@ -100,11 +100,13 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
                         model.pointProperties.at("cluster").size() == model.points.size();
   // per-point shading normals (issue 14): used exactly when `linesurf render` uses them (Renderer)
   const bool shading = model.attributes.shadingNormals && model.pointShadingNormals.size() == model.points.size();
+  // point masses (issue 14): used exactly when the Renderer uses them
+  const std::vector<float>* masses = pointMasses(model);
 
   Blob blob;
   json meta = {{"format", "linesurf-view"}, {"version", 1}, {"name", o.name}};
   {
-    std::vector<float> pos, rad, cluster;
+    std::vector<float> pos, rad, cluster, mass;
     std::vector<int16_t> nrm, snrm;
     std::vector<uint8_t> col;
     for (size_t i = 0; i < model.points.size(); ++i) {
@@ -125,6 +127,7 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
         snrm.insert(snrm.end(), {snorm16(m.x()), snorm16(m.y()), snorm16(m.z())});
       }
       rad.push_back(p.radius * invR);
+      if (masses) mass.push_back((*masses)[i] > 0 && std::isfinite((*masses)[i]) ? (*masses)[i] : 1.0f);
       if (model.attributes.colors)
         col.insert(col.end(), {unorm8(p.color.x()), unorm8(p.color.y()), unorm8(p.color.z()), unorm8(p.color.w())});
       if (clusters) {
@@ -141,6 +144,7 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
       if (shading) pts["shadingNormal"] = blob.add(snrm, "i16", 3);
       if (model.attributes.colors) pts["color"] = blob.add(col, "u8", 4);
       if (clusters) pts["cluster"] = blob.add(cluster, "f32", 1);
+      if (masses) pts["mass"] = blob.add(mass, "f32", 1);
       meta["points"] = pts;
     }
   }

@@ -170,12 +170,13 @@ else
   fail=1
 fi
 
-# The panel says which optional attributes light the model (issue 14: point shading normals).
+# The panel says which optional attributes light and weigh the model (issue 14: point shading
+# normals and masses).
 dom=$(chrome al_contour_points.html "" --window-size=512,512 --virtual-time-budget=5000 --dump-dom | tr '\n' ' ')
-if grep -q '<div class="row" id="attributes">model carries: point shading normals</div>' <<<"$dom"; then
-  echo "ok   panel: 'model carries: point shading normals'"
+if grep -q '<div class="row" id="attributes">model carries: point shading normals, point masses</div>' <<<"$dom"; then
+  echo "ok   panel: 'model carries: point shading normals, point masses'"
 else
-  echo "FAIL panel: no 'model carries: point shading normals' ($(grep -o '<div class="row" id="attributes"[^<]*' <<<"$dom"))"
+  echo "FAIL panel: no 'model carries: point shading normals, point masses' ($(grep -o '<div class="row" id="attributes"[^<]*' <<<"$dom"))"
   fail=1
 fi
 

@@ -381,8 +381,25 @@ TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
     const Vec3f q0 = (s.normal0 - s.normal0.dot(dir) * dir).normalized(), q1 = (s.normal1 - s.normal1.dot(dir) * dir).normalized();
     if (q0.dot(fn) > cos10 + 1e-4f) { EXPECT_LT((pts.points[i].normal - q0).norm(), 1e-5f); }
     if (q1.dot(fn) > cos10 + 1e-4f) { EXPECT_LT((pts.points[i + n - 1].normal - q1).norm(), 1e-5f); }
+    // point masses (issue 14): the length each stands for over the radius, half a spacing at the
+    // ends, so the segment's points weigh l / r together, as the segment does
+    double sum = 0;
+    for (size_t j = 0; j < n; ++j) {
+      const double spacing = s.length() / double(n - 1), share = j == 0 || j + 1 == n ? 0.5 : 1.0;
+      const float m = (*pointMasses(pts))[i + j];
+      EXPECT_NEAR(m, std::max(1e-3, share * spacing / s.radius), 1e-5 * spacing / s.radius) << k << " " << j;
+      sum += m;
+    }
+    EXPECT_NEAR(sum, std::max(double(s.length()) / s.radius, 1e-3 * double(n)), 1e-4 * n) << k;
     i += n;
   }
+  // the thesis's unit splats on request
+  ContourOptions unit = o;
+  unit.pointMasses = false;
+  const HybridModel unitPts = extractContour(mesh, unit);
+  EXPECT_EQ(pointMasses(unitPts), nullptr);
+  EXPECT_TRUE(unitPts.pointProperties.empty());
+  EXPECT_EQ(pointMasses(segs), nullptr);  // no points, no masses
 }
 
 TEST(Contour, PointsBelowMakesAHybridModel) {
@@ -401,6 +418,13 @@ TEST(Contour, PointsBelowMakesAHybridModel) {
   EXPECT_EQ(hybrid.segments.size(), segs.segments.size() - shortOnes);
   EXPECT_EQ(hybrid.points.size(), shortPoints);
   for (const Segment& s : hybrid.segments) EXPECT_GE(s.length(), o.pointsBelow);
+  // the points weigh what the short segments they replace weigh (length / radius)
+  ASSERT_NE(pointMasses(hybrid), nullptr);
+  double mass = 0, length = 0;
+  for (float m : *pointMasses(hybrid)) mass += m;
+  for (const Segment& s : segs.segments)
+    if (s.length() < o.pointsBelow) length += s.length() / s.radius;
+  EXPECT_NEAR(mass, length, 1e-3 * length + 1e-3 * double(shortPoints));
 }
 
 TEST(Contour, TexturedGridUvsReproduceTheTexture) {

@@ -144,14 +144,17 @@ TEST(SmoothLines, ContourShadingNormalsAreTheInterpolatedVertexNormals) {
   EXPECT_GT(along, 0.1f);
 }
 
-TEST(SmoothLines, PlyRoundTripKeepsPointShadingNormals) {
+TEST(SmoothLines, PlyRoundTripKeepsPointShadingNormalsAndMasses) {
   ContourOptions o;
   o.allPoints = true;
   const HybridModel pts = extractContour(shapes::sphereMesh(1, 1), o);
   ASSERT_TRUE(pts.attributes.shadingNormals);
   const auto dir = roundTripBothEncodings(pts, "shading_normals_ply", [&](const HybridModel& back) {
     ASSERT_TRUE(back.attributes.shadingNormals);
-    EXPECT_TRUE(back.pointProperties.empty());  // not read as extra properties
+    // the shading normals are not read as extra properties; the masses are the one property
+    ASSERT_EQ(back.pointProperties.size(), 1u);
+    ASSERT_NE(pointMasses(back), nullptr);
+    EXPECT_EQ(*pointMasses(back), *pointMasses(pts));
     ASSERT_EQ(back.pointShadingNormals.size(), pts.points.size());
     for (size_t i = 0; i < pts.points.size(); ++i) {
       EXPECT_EQ(back.pointShadingNormals[i], pts.pointShadingNormals[i]) << i;

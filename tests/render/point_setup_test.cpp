@@ -107,16 +107,20 @@ TEST(PointSetup, BatchesGiveTheReferenceStatusOfEveryPoint) {
 TEST(PointSetup, SimdLanesMatchTheScalarReference) {
   for (int variant = 0; variant < 4; ++variant) {
     const float radiusScale = variant % 2 ? 0.03f : 1.0f;  // small radii: the prefilter stretches grazing splats
-    const bool shading = variant >= 2;
+    const bool shading = variant >= 2;  // shading normals and point masses
     HybridModel m = noisySphere();
     for (Point& p : m.points) p.radius *= radiusScale;
     // shading normals: the exact sphere normal (the plane normals are noisy)
     std::vector<Vec3f> sn;
-    for (const Point& p : m.points) sn.push_back(p.position.normalized());
+    std::vector<float> mass;
+    for (const Point& p : m.points) {
+      sn.push_back(p.position.normalized());
+      mass.push_back(0.25f + 0.5f * float(mass.size() % 7));
+    }
     RenderOptions o;
     const Camera cam = Camera::lookAt(Vec3f(0, 0.5f, 4), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 40, 200, 150);
-    FrameContext frame = FrameContext::make(cam, o, boundingSphere(m));
-    if (shading) frame.pointShadingNormals = sn.data();
+    FrameContext frame = FrameContext::make(cam, o, boundingSphere(m)), massless = frame;
+    if (shading) frame.pointShadingNormals = massless.pointShadingNormals = sn.data(), frame.pointMasses = mass.data();
     const detail::PointSetupFrame setup = pointSetupFrame(frame);
     Slots out(detail::kSetupBatch);
     PointSetupCounts counts;
@@ -132,6 +136,12 @@ TEST(PointSetup, SimdLanesMatchTheScalarReference) {
         ASSERT_EQ(preparePoint(m.points[index], index, frame, ref.at(0)), PrimitiveStatus::Drawn);
         const PreparedPoint& r = ref.hot[0];
         const PixelRect& rb = ref.bounds[0];
+        if (shading) {  // a mass scales the weight and nothing else
+          Slots one(1);
+          ASSERT_EQ(preparePoint(m.points[index], index, massless, one.at(0)), PrimitiveStatus::Drawn);
+          EXPECT_FLOAT_EQ(r.weightScale(), mass[index] * one.hot[0].weightScale());
+          EXPECT_EQ(r.zThreshold, one.hot[0].zThreshold);
+        }
         const Point& p = m.points[index];
         const Vec3f nc = cam.rotation() * p.normal;
         stretched += std::abs(nc.dot(cam.toCamera(p.position).normalized())) < 0.1f;

@@ -179,6 +179,27 @@ TEST(ViewerPage, CarriesPointShadingNormals) {
   }
 }
 
+TEST(ViewerPage, CarriesPointMasses) {
+  HybridModel m = smallHybrid();
+  EXPECT_FALSE(json::parse(scriptText(viewerPage(m), "linesurf-meta"))["points"].contains("mass"));
+  std::vector<float>& mass = m.pointProperties[kPointMassProperty];
+  for (size_t i = 0; i < m.points.size(); ++i) mass.push_back(0.5f + float(i));
+  m.points[1].radius = 0;  // left out with its mass
+  const std::string page = viewerPage(m);
+  const json meta = json::parse(scriptText(page, "linesurf-meta"));
+  const std::vector<uint8_t> data = fromBase64(scriptText(page, "linesurf-data"));
+  ASSERT_EQ(meta["points"]["count"], 4);
+  const json& jm = meta["points"]["mass"];
+  ASSERT_EQ(jm["type"], "f32");
+  ASSERT_EQ(jm["components"], 1);
+  const size_t drawn[] = {0, 2, 3, 4};
+  for (size_t k = 0; k < 4; ++k) {
+    float v;
+    std::memcpy(&v, data.data() + jm["offset"].get<size_t>() + k * 4, 4);
+    EXPECT_EQ(v, mass[drawn[k]]) << "point " << drawn[k];
+  }
+}
+
 TEST(ViewCli, WritesAPageAndRefusesBadInput) {
   const auto dir = test::scratchDir("view_cli");
   auto ok = test::runCli("view " + (test::bundledData() / "rockerarm_points.ply").string() + " -o " +

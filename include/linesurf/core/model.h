@@ -67,6 +67,7 @@ struct HybridModel {
   /// "Issue 14 (i14shade)"). Kept beside `points`, not in Point (the renderer's hot data).
   std::vector<Vec3f> pointShadingNormals;
   /// Extra per-point scalar properties (e.g. curvature "k_min"), each of points.size().
+  /// One is read by the renderer: kPointMassProperty ("mass", see pointMasses()).
   std::map<std::string, std::vector<float>> pointProperties;
   /// Optional per-segment list of the input point indices it replaced (--provenance).
   std::vector<std::vector<uint32_t>> provenance;
@@ -76,6 +77,23 @@ struct HybridModel {
   bool empty() const { return points.empty() && segments.empty(); }
   Bounds3f bounds() const;
 };
+
+/// The point property that scales a point splat's kernel (beyond the thesis, issue 14): finite,
+/// > 0, in units of the thesis's splat (1). A splat of mass m weighs as m coincident ones, so a
+/// model whose points stand for unequal parts of the surface reconstructs it without leaning
+/// towards its denser places. Contour point models carry the contour length each point stands
+/// for over its radius, which is what a segment weighs per length (a segment of length l weighs
+/// as l / radius points; render/segment_splat.h). Absent: every point weighs 1 (the thesis).
+inline constexpr const char* kPointMassProperty = "mass";
+
+/// The model's point masses (pointProperties[kPointMassProperty]) when it has one per point,
+/// else null.
+inline const std::vector<float>* pointMasses(const HybridModel& model) {
+  auto it = model.pointProperties.find(kPointMassProperty);
+  return it != model.pointProperties.end() && it->second.size() == model.points.size() && !model.points.empty()
+             ? &it->second
+             : nullptr;
+}
 
 /// A triangle mesh (input of §3.3).
 struct TriangleMesh {

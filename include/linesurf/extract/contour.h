@@ -76,6 +76,14 @@ struct ContourOptions {
   /// endpoint normals are made perpendicular to the segment and points carry no shading normal
   /// (the model of "Issue 14 (i14)"). Measured in docs/decisions.md, "Issue 14 (i14shade)".
   bool shadingNormals = true;
+  /// Point masses (beyond the thesis, issue 14): every point made from a segment carries the
+  /// length of that segment it stands for over its radius as its mass (pointMasses; half a spacing
+  /// at either end, so the two points where neighbouring faces' segments meet add up to one), the
+  /// weight a segment of that length has. Without them the points weigh 1 each and their unequal
+  /// spacing along the contours (the faces' segments are cut at every mesh edge) shows as streaks
+  /// along the contours; measured in docs/decisions.md, "Issue 14 (lead, stop 29)". Only when
+  /// points are made (allPoints, pointsBelow).
+  bool pointMasses = true;
   /// Polyline merging (beyond the thesis, issue 13): consecutive segments of one contour polyline
   /// (one plane, chained through shared mesh edges; never across a break, a family or a plane)
   /// become one segment while every original vertex in between stays within

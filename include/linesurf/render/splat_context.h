@@ -65,6 +65,9 @@ struct FrameContext {
   /// Per-point shading normals (HybridModel::pointShadingNormals, by point index; null when the
   /// model has none): they light the points, whose own normals stay their planes (issue 14).
   const Vec3f* pointShadingNormals = nullptr;
+  /// Per-point masses (pointMasses(model), by point index; null: every point weighs 1): a
+  /// point's weight scale is multiplied by its mass (issue 14).
+  const float* pointMasses = nullptr;
 
   const Camera& cam() const { return *camera; }
 
