@@ -664,6 +664,30 @@ drops the per-primitive attributes of that kind.)doc")
             return l;
           },
           "Per segment, the input point indices it replaced (extraction with provenance=True); else [].")
+      .def_property(
+          "point_masses",
+          [](const HybridModel& h) -> py::object {
+            const std::vector<float>* m = pointMasses(h);
+            return m ? py::object(floatVector(*m)) : py::none();
+          },
+          [](HybridModel& h, py::object a) {
+            if (a.is_none()) {
+              h.pointProperties.erase(kPointMassProperty);
+              return;
+            }
+            FloatArray v = floatArray(a, "point_masses", {});
+            requireRows("point_masses", v.n, h.points.size(), "points");
+            std::vector<float> m(h.points.size());
+            for (size_t i = 0; i < m.size(); ++i) {
+              m[i] = float(v.at(i));
+              if (!(m[i] > 0 && m[i] <= 1e6f))
+                throw py::value_error("point_masses: point " + std::to_string(i) + " has mass " + std::to_string(v.at(i)) +
+                                      "; masses must be in (0, 1e6]");
+            }
+            h.pointProperties[kPointMassProperty] = std::move(m);
+          },
+          "Point masses (beyond the thesis): (N,) float32, each point weighing as that many unit splats "
+          "(the PLY property 'mass'), or None (every point weighs 1).")
       .def_property_readonly(
           "point_properties",
           [](const HybridModel& h) {
@@ -943,7 +967,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
       [](const TriangleMesh& mesh, float spacing, float spacing_scale, uint64_t seed, float radius_scale,
          float points_below, bool all_points, bool vertex_normals, float family_switch_sine, bool endpoint_normals,
          float merge_normal_deviation, float merge_tangent_deviation, float merge_angle, int merge_max_pieces,
-         float diagonal_divisions, float merge_strip_angle) {
+         float diagonal_divisions, float merge_strip_angle, bool point_masses) {
         ContourOptions o;
         o.spacing = spacing, o.spacingScale = spacing_scale, o.seed = seed, o.radiusScale = radius_scale;
         o.pointsBelow = points_below, o.allPoints = all_points, o.vertexNormals = vertex_normals;
@@ -953,6 +977,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         o.mergeAngle = merge_angle, o.mergeMaxPieces = merge_max_pieces;
         o.diagonalDivisions = diagonal_divisions;
         o.mergeStripAngle = merge_strip_angle;
+        o.pointMasses = point_masses;
         validate(o);
         if (mesh.faces.empty()) throwBadOption("mesh", "holds no faces: contour extraction needs a triangle mesh");
         ContourStats st;
@@ -979,13 +1004,15 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
       py::arg("merge_tangent_deviation") = ContourOptions{}.mergeTangentDeviation,
       py::arg("merge_angle") = ContourOptions{}.mergeAngle, py::arg("merge_max_pieces") = ContourOptions{}.mergeMaxPieces,
       py::arg("diagonal_divisions") = ContourOptions{}.diagonalDivisions,
-      py::arg("merge_strip_angle") = ContourOptions{}.mergeStripAngle,
+      py::arg("merge_strip_angle") = ContourOptions{}.mergeStripAngle, py::arg("point_masses") = true,
       R"doc(Contour-plane extraction from a triangle Mesh, thesis §3.3 (= `linesurf extract contour`).
 
 spacing: largest distance d between neighbouring segments (0: spacing_scale x min(mean edge length,
 bounding-box diagonal / diagonal_divisions); diagonal_divisions=0: the mean edge alone);
 endpoint_normals=False gives the thesis's one normal per segment (the CLI's --flat);
-merge_normal_deviation=0 keeps one segment per face and plane (no polyline merging).
+merge_normal_deviation=0 keeps one segment per face and plane (no polyline merging);
+point_masses=False leaves the points (all_points, points_below) the thesis's unit splats instead of
+weighing the contour length they stand for (Model.point_masses; the CLI's --no-point-masses).
 Returns a namespace with model and stats (dict: triangles, segments, points, spacing, radius, ...).)doc");
   m.def(
       "verify",

@@ -110,3 +110,30 @@ def test_outputs_are_copies():
     p = model.points
     p[:] = 0
     assert np.abs(model.points).sum() > 0
+
+
+def test_point_masses_set_read_back_and_weigh(tmp_path):
+    fields, model = random_model()
+    assert model.point_masses is None
+    n = len(fields["points"])
+    masses = np.linspace(0.5, 2.0, n)
+    model.point_masses = masses
+    np.testing.assert_array_equal(model.point_masses, masses.astype(np.float32))
+    assert model.point_properties.keys() == {"mass"}
+    linesurf.write(str(tmp_path / "m.ply"), model)
+    np.testing.assert_array_equal(linesurf.read(str(tmp_path / "m.ply")).point_masses, masses.astype(np.float32))
+    for bad in ([1.0] * (n - 1), [0.0] * n, [-1.0] * n, [np.nan] * n, [1e7] * n):
+        with pytest.raises(ValueError):
+            model.point_masses = bad
+    np.testing.assert_array_equal(model.point_masses, masses.astype(np.float32))  # unchanged by a refused set
+    model.point_masses = None
+    assert model.point_masses is None and "mass" not in model.point_properties
+
+
+def test_uniform_masses_cancel_in_the_normalised_blend(santa_path):
+    santa = linesurf.read(str(santa_path))
+    plain = linesurf.render(santa, size=(96, 96))
+    santa.point_masses = np.full(len(santa.points), 3.0)
+    np.testing.assert_array_equal(linesurf.render(santa, size=(96, 96)), plain)  # every weight x3: the same blend
+    santa.point_masses = np.where(np.arange(len(santa.points)) % 2 == 0, 0.2, 5.0)
+    assert np.abs(linesurf.render(santa, size=(96, 96)) - plain).max() > 0.01
