@@ -24,6 +24,7 @@ struct ExperimentArgs {
   float contourSpacing = 0;
   float contourDiagonalDivisions = ContourOptions{}.diagonalDivisions;
   bool contourVertexNormals = false;
+  bool contourPointMasses = ContourOptions{}.pointMasses;
   float contourMergeNormalDeviation = ContourOptions{}.mergeNormalDeviation;
   float contourMergeAngle = ContourOptions{}.mergeAngle;
   float contourMergeStripAngle = ContourOptions{}.mergeStripAngle;
@@ -68,6 +69,7 @@ void run(const ExperimentArgs& a) {
   o.contour.spacing = a.contourSpacing;
   o.contour.diagonalDivisions = a.contourDiagonalDivisions;
   o.contour.vertexNormals = a.contourVertexNormals;
+  o.contour.pointMasses = a.contourPointMasses;
   o.contour.mergeNormalDeviation = a.contourMergeNormalDeviation;
   o.contour.mergeAngle = a.contourMergeAngle;
   o.contour.mergeStripAngle = a.contourMergeStripAngle;
@@ -146,6 +148,9 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(0.0, 1e30));
   sub->add_flag("--contour-vertex-normals", a->contourVertexNormals,
                 "contour: normals interpolated from the mesh's vertex normals instead of the triangle's (smooth shading)");
+  sub->add_flag("--contour-point-masses,!--no-contour-point-masses", a->contourPointMasses,
+                "contour: the point model's points weigh the contour length they stand for (beyond the thesis; default on; "
+                "extract contour --no-point-masses)");
   sub->add_option("--contour-merge-normal-deviation", a->contourMergeNormalDeviation,
                   "contour: polyline merging, largest deviation along the normal x d (0: no merging; extract contour "
                   "--merge-normal-deviation)")

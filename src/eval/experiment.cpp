@@ -509,9 +509,10 @@ void runMesh(const ExperimentOptions& o, const fs::path& file, ModelResult& mode
   r.points = lines->points.size();
   r.segments = lines->segments.size();
   r.dataReduction = dataReduction(r.referencePoints, r.points, r.segments);
-  r.notes.push_back(fmt::format("plane spacing d = {:.4g} (mean edge {:.4g}), radius {:.4g}; {} degenerate faces",
+  r.notes.push_back(fmt::format("plane spacing d = {:.4g} (mean edge {:.4g}), radius {:.4g}; {} degenerate faces; points {}",
                                 lineStats.spacing, lineStats.meanEdgeLength, lineStats.radius,
-                                lineStats.degenerateTriangles));
+                                lineStats.degenerateTriangles,
+                                pointMasses(points) ? "weigh the contour length they stand for (masses)" : "are unit splats"));
   std::vector<Candidate> candidates;
   candidates.push_back({&r, std::move(lines), nullptr});
   renderAndCompare(o, model, points, candidates, o.meshViews, progress, 0.3, 0.98, o.groundTruth ? &mesh : nullptr);

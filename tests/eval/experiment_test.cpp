@@ -97,6 +97,10 @@ TEST(Experiment, SmokeRunOnBundledModels) {
       // strip planes followed the smooth line model's interpolated normals, issue 14)
       EXPECT_LE(mr.meanAbsDiff.mean, 3.0);
       EXPECT_GE(mr.ssim, 0.9);
+      if (m.isMesh) {  // the contour point model's points carry masses by default (issue 14)
+        ASSERT_FALSE(mr.notes.empty());
+        EXPECT_NE(mr.notes[0].find("(masses)"), std::string::npos) << mr.notes[0];
+      }
       EXPECT_TRUE(std::isfinite(mr.speedup));
       EXPECT_GT(mr.referenceRenderMedian, 0.0);
       if (mr.method == ExperimentMethod::ShapeGreedy || mr.method == ExperimentMethod::ShapeHierarchical) {
