@@ -680,7 +680,7 @@ drops the per-primitive attributes of that kind.)doc")
             std::vector<float> m(h.points.size());
             for (size_t i = 0; i < m.size(); ++i) {
               m[i] = float(v.at(i));
-              if (!(m[i] > 0 && m[i] <= 1e6f))
+              if (!validPointMass(m[i]))
                 throw py::value_error("point_masses: point " + std::to_string(i) + " has mass " + std::to_string(v.at(i)) +
                                       "; masses must be in (0, 1e6]");
             }

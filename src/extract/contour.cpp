@@ -503,7 +503,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
             p.radius = radius;
             if (masses) {  // the length it stands for / radius (a segment's weight per length)
               const double spacing = n > 1 ? l / double(n - 1) : 0.0, share = j == 0 || j + 1 == n ? 0.5 : 1.0;
-              masses[pi] = float(std::clamp(share * spacing / double(radius), kMinPointMass, 1e6));
+              masses[pi] = float(std::clamp(share * spacing / double(radius), kMinPointMass, double(kMaxPointMass)));
             }
             if (options.recordFaces) stats.pointFaces[pi] = uint32_t(f);
             ++pi;

@@ -101,7 +101,7 @@ void validateModel(const HybridModel& m, const std::string& name, Error::Kind ki
         c.fail(fmt::format("element vertex {}", i), fmt::format("property '{}' is {} (not finite)", prop, values[i]));
     if (prop == kPointMassProperty)
       for (size_t i = 0; i < values.size(); ++i)
-        if (!(values[i] > 0) || values[i] > 1e6f)
+        if (!validPointMass(values[i]))
           c.fail(fmt::format("element vertex {}", i),
                  fmt::format("property '{}' is {:g} (a point's mass must be in (0, 1e6])", prop, values[i]));
   }

@@ -113,7 +113,7 @@ Renderer::Renderer(const HybridModel& model, const RenderOptions& options)
   validate(options_);
   if (const std::vector<float>* m = pointMasses(model_))
     for (size_t i = 0; i < m->size(); ++i)
-      if (!((*m)[i] > 0 && (*m)[i] <= 1e6f))
+      if (!validPointMass((*m)[i]))
         throwBadParameter("pointProperties['mass']", fmt::format("point {} has mass {:g}; masses must be in (0, 1e6]", i, (*m)[i]));
   if (model_.attributes.colors) {
     for (const Point& p : model_.points) opaqueModel_ = opaqueModel_ && p.color.w() >= 1;

@@ -127,7 +127,7 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
         snrm.insert(snrm.end(), {snorm16(m.x()), snorm16(m.y()), snorm16(m.z())});
       }
       rad.push_back(p.radius * invR);
-      if (masses) mass.push_back((*masses)[i] > 0 && std::isfinite((*masses)[i]) ? (*masses)[i] : 1.0f);
+      if (masses) mass.push_back(validPointMass((*masses)[i]) ? (*masses)[i] : 1.0f);
       if (model.attributes.colors)
         col.insert(col.end(), {unorm8(p.color.x()), unorm8(p.color.y()), unorm8(p.color.z()), unorm8(p.color.w())});
       if (clusters) {

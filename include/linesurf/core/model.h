@@ -86,6 +86,12 @@ struct HybridModel {
 /// as l / radius points; render/segment_splat.h). Absent: every point weighs 1 (the thesis).
 inline constexpr const char* kPointMassProperty = "mass";
 
+/// The largest point mass a model may carry (a larger one is garbage or a unit error).
+inline constexpr float kMaxPointMass = 1e6f;
+
+/// Whether `m` is a valid point mass: in (0, kMaxPointMass] (so finite).
+inline bool validPointMass(float m) { return m > 0 && m <= kMaxPointMass; }
+
 /// The model's point masses (pointProperties[kPointMassProperty]) when it has one per point,
 /// else null.
 inline const std::vector<float>* pointMasses(const HybridModel& model) {
