@@ -1,14 +1,17 @@
-# Two entry points for a fresh Debian machine (see README):
-#   make demo   install, build (Release) and run the main job on the bundled model -> out/demo/
-#   make test   install, build and run the whole test suite (+ sanitizers, + a bounded fuzz run)
+# Entry points for a fresh Debian machine (see README). Each builds only what it runs.
+#   make demo      install packages, build the CLI (Release) and run the main job -> out/demo/
+#   make install   build the CLI, library and Python module and install them under PREFIX (~/.local)
+#   make test      install packages, build everything and run the whole test suite
+#                  (+ sanitizers, + a bounded fuzz run)
 BUILD ?= build
 JOBS ?= $(shell nproc)
+PREFIX ?= $(HOME)/.local
 # CI builds from scratch: a compiler cache only adds risk there.
 ifdef CI
 export CCACHE_DISABLE := 1
 endif
 
-.PHONY: all setup build demo test test-fast test-sanitize fuzz bench clean
+.PHONY: all setup configure build cli demo install test test-fast test-sanitize fuzz bench readme clean
 
 all: build
 
@@ -18,11 +21,26 @@ setup:
 $(BUILD)/build.ninja:
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
 
-build: setup $(BUILD)/build.ninja
+configure: setup $(BUILD)/build.ninja
+
+# Everything: library, CLI, tests, benchmarks, Python module.
+build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-demo: build
+# The CLI alone (and the library it links): all that the demo and the README's examples run.
+cli: configure
+	cmake --build $(BUILD) -j $(JOBS) --target linesurf
+
+demo: cli
 	bash scripts/demo.sh $(BUILD)/linesurf out/demo
+
+# What `cmake --install` copies: the CLI, the static library + headers + CMake package, and the
+# Python module where it is configured (its target exists only when pybind11 and numpy were found).
+install: configure
+	cmake --build $(BUILD) -j $(JOBS) --target linesurf \
+	  $$(ninja -C $(BUILD) -t targets all | grep -q '^linesurf_python:' && echo linesurf_python)
+	cmake --install $(BUILD) --prefix $(PREFIX)
+	@echo "installed under $(PREFIX); if $(PREFIX)/bin is not on PATH: export PATH=\"$(PREFIX)/bin:\$$PATH\""
 
 test-fast: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
@@ -40,6 +58,10 @@ test: test-fast test-sanitize fuzz
 
 bench: build
 	$(BUILD)/linesurf_bench
+
+# Regenerates the README's Examples block from what its commands print now.
+readme: cli
+	bash scripts/readme_examples.sh --update --cli $(BUILD)/linesurf
 
 clean:
 	rm -rf build build-asan build-fuzz out

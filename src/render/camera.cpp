@@ -14,30 +14,34 @@ float radians(float deg) { return float(deg * detail::kPi / 180.0); }
 }  // namespace
 
 BoundingSphere boundingSphere(const HybridModel& model) {
+  // The default camera frames where the surface is (positions and endpoints), not how wide its
+  // splats are drawn: a hybrid extracted from a cloud keeps the cloud's extent but not its radii
+  // (segments get their own, and one large kept point used to decide the frame), so a radius term
+  // framed a cloud and its hybrid differently and their pictures did not line up. The orbit camera
+  // leaves a 5% margin around the sphere for the splats at the silhouette.
   Bounds3f b;
-  float maxRadius = 0;
-  for (const Point& p : model.points) {
-    if (!p.position.allFinite()) continue;
-    b.extend(p.position);
-    if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius);
-  }
+  for (const Point& p : model.points)
+    if (p.position.allFinite()) b.extend(p.position);
   for (const Segment& s : model.segments) {
     if (!s.p0.allFinite() || !s.p1.allFinite()) continue;
     b.extend(s.p0);
     b.extend(s.p1);
-    if (std::isfinite(s.radius)) maxRadius = std::max(maxRadius, s.radius);
   }
   BoundingSphere sphere;
   if (b.empty()) return sphere;
   sphere.center = b.center();
-  float r2 = 0;
-  for (const Point& p : model.points)
-    if (p.position.allFinite()) r2 = std::max(r2, (p.position - sphere.center).squaredNorm());
+  float r2 = 0, maxRadius = 0;
+  for (const Point& p : model.points) {
+    if (!p.position.allFinite()) continue;
+    r2 = std::max(r2, (p.position - sphere.center).squaredNorm());
+    if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius);
+  }
   for (const Segment& s : model.segments)
     if (s.p0.allFinite() && s.p1.allFinite())
       r2 = std::max({r2, (s.p0 - sphere.center).squaredNorm(), (s.p1 - sphere.center).squaredNorm()});
-  sphere.radius = std::sqrt(r2) + maxRadius;
-  if (!(sphere.radius > 0)) sphere.radius = 1.0f;  // a single point: frame a unit sphere
+  sphere.radius = std::sqrt(r2);
+  // All points in one place: frame the splat itself, or a unit sphere when it has no radius.
+  if (!(sphere.radius > 0)) sphere.radius = maxRadius > 0 ? maxRadius : 1.0f;
   return sphere;
 }
 

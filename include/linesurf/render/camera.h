@@ -23,8 +23,8 @@ struct BoundingSphere {
   float radius = 0;
 };
 
-/// Bounding sphere of every point position and segment endpoint (centre of the bounding box,
-/// radius to the farthest primitive, plus the largest primitive radius). Empty model: radius 0.
+/// Bounding sphere of every point position and segment endpoint (box centre, radius to the farthest;
+/// splat radii do not count, so a hybrid and its cloud get one frame). Empty model: radius 0.
 BoundingSphere boundingSphere(const HybridModel& model);
 
 class Camera {
