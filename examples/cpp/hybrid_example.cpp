@@ -23,12 +23,13 @@ int main(int argc, char** argv) try {
 
   HybridModel cloud = readModel(argv[1]);
   PointGeometry geo = computePointGeometry(cloud, {.k = 12, .curvature = false});  // §6.1
+  applyGeometry(cloud, geo);  // normals + radii: the cloud renders, and the kept points keep its radii
   EpsDeltaStats stats;
   HybridModel hybrid = extractEpsDelta(cloud, geo, {.epsilonRelative = 0.05, .delta = 0.004}, &stats);
-  applyGeometry(cloud, geo);  // normals + radii for rendering the cloud itself
   std::printf("%zu points -> %zu points + %zu segments (%.1f%% data reduction)\n", cloud.points.size(),
               stats.keptPoints, stats.segments, 100 * stats.dataReduction());
 
+  // The default view; the hybrid's own default camera would be the same (it spans the cloud's extent).
   const Camera camera = viewCameras(boundingSphere(cloud), {.width = 512, .height = 512})[0];
   const Image points = renderImage(cloud, camera).color, lines = renderImage(hybrid, camera).color;
   writePng(out / "points.png", points, false);
