@@ -44,7 +44,9 @@ void runInfo(const InfoArgs& a) {
     if (s.textureWidth > 0) j["texture"] = {{"width", s.textureWidth}, {"height", s.textureHeight}};
     else j["texture"] = nullptr;
     j["comments"] = s.comments;
-    std::puts(j.dump(2).c_str());
+    // Paths and comments are bytes, not always UTF-8: bytes that are not become U+FFFD rather
+    // than failing the whole report.
+    std::puts(j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
     return;
   }
   std::string out = a.file + "\n";
