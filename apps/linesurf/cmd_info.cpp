@@ -19,6 +19,7 @@ struct InfoArgs {
 std::string vec(const Vec3f& v) { return fmt::format("{:.6g} {:.6g} {:.6g}", v.x(), v.y(), v.z()); }
 
 void runInfo(const InfoArgs& a) {
+  checkFiles({a.file}, {});  // reading it fits the budget
   const ModelSummary s = summarizeFile(a.file);
   const bool emptyBounds = s.bounds.empty();
   if (a.json) {

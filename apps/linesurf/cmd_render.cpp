@@ -100,6 +100,7 @@ void run(RenderArgs& a) {
   toFrame(model, frame);
   if (triMesh) toFrame(*triMesh, frame);
 
+  if (!model.attributes.radii && !model.points.empty()) checkGeometry(a.model, model.points.size(), a.prepare.k);
   const PrepareReport prep = prepareForRendering(model, a.prepare);
   endProgress();
   if (prep.segmentRadiiEstimated)
