@@ -63,8 +63,6 @@ std::string experimentFlag(const std::string& field) {
       {"mergeNormalDeviation", "--contour-merge-normal-deviation"},
       {"mergeAngle", "--contour-merge-angle"},
       {"mergeStripAngle", "--contour-merge-strip-angle"},
-      {"reconstructionScale", "--recon-scale"},
-      {"prefilterVariance", "--prefilter"},
   };
   auto it = flags.find(field);
   return it != flags.end() ? it->second : flagName(field);
