@@ -294,22 +294,20 @@ void OutputTransaction::commit() {
       // Swap the two folders in one step, then remove the earlier one (now under the temporary name).
       if (::renameat2(AT_FDCWD, f.tmp.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) != 0) {
         // A file system without the exchange: move the earlier folder aside, then the new one in.
+        // The folder aside is not in the cleanup registry: a signal between the two renames
+        // leaves it (hidden, whole) rather than losing both runs.
         std::string aside = absoluteString(f.target.parent_path() / ".ls-XXXXXX");
-        TempSlot* slot = claimSlot(aside, TempSlot::Folder);
-        if (!slot || !::mkdtemp(slot->path) || ::rename(target.c_str(), slot->path) != 0) {
+        if (!::mkdtemp(aside.data()) || ::rename(target.c_str(), aside.c_str()) != 0) {
           const int e = errno;
-          if (slot) ::rmdir(slot->path);
-          releaseSlot(slot);
+          ::rmdir(aside.c_str());
           fail(i, 0, target, e);
         }
         if (::rename(f.tmp.c_str(), target.c_str()) != 0) {
           const int e = errno;
-          ::rename(slot->path, target.c_str());  // put the earlier folder back
-          releaseSlot(slot);
+          ::rename(aside.c_str(), target.c_str());  // put the earlier folder back
           fail(i, 0, target, e);
         }
-        removeTree(slot->path);
-        releaseSlot(slot);
+        removeTree(aside);
         releaseSlot(f.slot);
         f.slot = nullptr;
         continue;
