@@ -168,7 +168,7 @@ const fs::path& templateDir() {
     fs::create_symlink("/dev/zero", d / "zero.ply");
     fs::create_symlink("pts.ply", d / "link.png");  // an output name that is the input
 
-    // Hostile inputs of the second round: every class of issue 34's findings.
+    // Hostile inputs of the second round: experiment runs, budgets, unbounded work, acceptance rules.
     {
       // Corrupt models beside no good one: an experiment has nothing to report.
       fs::create_directories(d / "baddata");
