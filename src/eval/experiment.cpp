@@ -88,10 +88,9 @@ void ExperimentOptions::validate() const {
 }
 
 double ExperimentOptions::workingBytes() const {
-  // The reference, up to three candidates and the structure picture rendered at once, and the
-  // mesh image at groundTruthSupersampling^2 samples a pixel with its depth and alpha.
-  const double ss = double(groundTruthSupersampling) * groundTruthSupersampling;
-  return 5.0 * renderViewBytes(size, size, render.layers) + double(size) * size * ss * 48.0;
+  // Two renders' buffers alive at once (the reference's result while a candidate renders) and
+  // the mesh image's colour, depth and alpha (its supersamples are per tile, not per image).
+  return 2.0 * renderViewBytes(size, size, render.layers) + double(size) * size * 48.0;
 }
 
 double ExperimentOptions::outputBytes(size_t models) const {

@@ -71,7 +71,7 @@ struct ExperimentOptions {
   /// Throws OptionError (core/options.h) naming the first absurd field, of this struct or of
   /// any stage's options (render, geometry, epsDelta, shapeApprox, contour).
   void validate() const;
-  /// Memory the run holds at once (image buffers of one view), bytes, for a Budget.
+  /// Memory the run holds at once (image buffers of one view), bytes, for a Budget (core/budget.h).
   double workingBytes() const;
   /// Bytes the run writes for `models` models (images and reports), for a Budget.
   double outputBytes(size_t models) const;
