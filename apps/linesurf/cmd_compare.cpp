@@ -34,7 +34,7 @@ void run(const CompareArgs& args) {
                         {"nccm", m.nccm}, {"ssim", m.ssim}, {"mean_abs_diff", m.meanAbsDiff},
                         {"std_abs_diff", m.stdAbsDiff}, {"max_abs_diff", m.maxAbsDiff},
                         {"differing_pixels", m.differingPixels}};
-    fmt::print("{}\n", j.dump(2));
+    fmt::print("{}\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace));  // names need not be UTF-8
     return;
   }
   say(fmt::format("{}x{} pixels", a.width, a.height));

@@ -30,6 +30,8 @@ void runConvert(const ConvertArgs& a) {
   const char* enc = outExt == ".ply" ? (a.ascii ? " (ascii PLY)" : " (binary PLY)") : "";
   if (fileHoldsMesh(a.in) && !a.points && outExt != ".xyz") {
     TriangleMesh m = readMesh(a.in);
+    checkSize("output", modelFileBytes(m.positions.size(), 0, a.ascii) + double(m.faces.size()) * (a.ascii ? 40.0 : 13.0),
+              fmt::format("writing a mesh of {} vertices and {} faces", m.positions.size(), m.faces.size()));
     writeMesh(a.out, m, wo);
     say(fmt::format("wrote {}: mesh, {} vertices, {} faces{}{}", a.out, m.positions.size(), m.faces.size(),
                     m.cornerUVs.empty() ? "" : ", texcoords", enc));
@@ -37,6 +39,8 @@ void runConvert(const ConvertArgs& a) {
   }
   if (outExt == ".obj") throwBadParameter(a.out, "points and segments are written as .ply or .xyz, not .obj");
   HybridModel m = readModel(a.in);
+  checkSize("output", modelFileBytes(m.points.size(), m.segments.size(), outExt == ".xyz" || a.ascii),
+            fmt::format("writing {} points and {} segments", m.points.size(), m.segments.size()));
   writeModel(a.out, m, wo);
   say(fmt::format("wrote {}: {} points, {} segments{}", a.out, m.points.size(), m.segments.size(), enc));
 }

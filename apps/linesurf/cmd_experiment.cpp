@@ -4,11 +4,14 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include "command.h"
 #include "options_bind.h"
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
+#include "linesurf/io/atomic_file.h"
 #include "linesurf/eval/experiment.h"
 
 namespace linesurf::cli {
@@ -49,6 +52,37 @@ std::vector<std::string> splitCommas(const std::vector<std::string>& in) {
   return out;
 }
 
+/// The experiment's flag for a field of the stage options it sets (validate() names fields).
+std::string experimentFlag(const std::string& field) {
+  static const std::map<std::string, std::string> flags = {
+      {"epsilonRelative", "--epsilon"},
+      {"deltaN", "--delta-n"},
+      {"spacingScale", "--contour-scale"},
+      {"spacing", "--contour-spacing"},
+      {"diagonalDivisions", "--contour-diagonal-divisions"},
+      {"mergeNormalDeviation", "--contour-merge-normal-deviation"},
+      {"mergeAngle", "--contour-merge-angle"},
+      {"mergeStripAngle", "--contour-merge-strip-angle"},
+  };
+  auto it = flags.find(field);
+  return it != flags.end() ? it->second : flagName(field);
+}
+
+/// A reason with its `backquoted` fields renamed to the experiment's flags.
+std::string renameFields(const std::string& r) {
+  std::string out;
+  for (size_t i = 0; i < r.size(); ++i) {
+    const size_t end = r[i] == '`' ? r.find('`', i + 1) : std::string::npos;
+    if (end == std::string::npos) {
+      out += r[i];
+      continue;
+    }
+    out += experimentFlag(r.substr(i + 1, end - i - 1));
+    i = end;
+  }
+  return out;
+}
+
 std::string pct(double x) { return std::isfinite(x) ? fmt::format("{:.1f}%", 100 * x) : "-"; }
 
 void run(const ExperimentArgs& a) {
@@ -81,11 +115,34 @@ void run(const ExperimentArgs& a) {
   o.render.tailLayers = a.tailLayers;
   o.render.coverageReach = a.coverageReach;
 
+  // Every parameter, the budget and the output folder are checked before any model is read.
+  try {
+    o.validate();
+  } catch (const OptionError& e) {
+    throw Error(Error::Kind::BadParameter, experimentFlag(e.field()), "", renameFields(e.reason()));
+  }
+  const std::filesystem::path out = a.outDir;
+  {
+    std::error_code ec;
+    if (std::filesystem::is_directory(out, ec)) checkFiles({}, {{"--output", (out / "results.json").string(), {}}});
+    else if (std::filesystem::exists(std::filesystem::symlink_status(out, ec))) throwIo(a.outDir, "exists and is not a folder");
+  }
+  const size_t models = experimentModelFiles(o).size();
+  checkSize("--size", o.workingBytes(), fmt::format("rendering {}x{} views", o.size, o.size));
+  checkSize(o.views >= o.meshViews ? "--views" : "--mesh-views", o.outputBytes(models),
+            fmt::format("the images and reports of {} models", models));
+
+  // The run is one transaction: the output folder (when new) or each model's folder and the
+  // three reports are built aside and put in place together at the end, so an earlier run's
+  // results stay whole until this one is complete.
+  makeOutputFolder(out);
   ExperimentResults res = runExperiment(o, progressBar());
   endProgress();
-
-  const std::filesystem::path out = a.outDir;
-  std::filesystem::create_directories(out);
+  const size_t failed = res.failedCount();
+  if (failed > 0 && failed == res.models.size())  // nothing to report: leave the folder as it was
+    throw Error(Error::Kind::BadInput, a.dataDir, "",
+                fmt::format("all {} models failed, nothing written; the first: {}", failed,
+                            res.models.empty() ? std::string("-") : res.models.front().error));
   writeExperimentJson(res, out / "results.json");
   writeExperimentMarkdown(res, out / "results.md");
   writeExperimentHtml(res, out / "index.html");
@@ -107,7 +164,6 @@ void run(const ExperimentArgs& a) {
                       r.nccm, r.meanAbsDiff.mean, r.stdAbsDiff.mean, 1000 * r.referenceRenderMedian,
                       1000 * r.candidateRenderMedian, pct(r.speedup), r.extractSeconds));
   }
-  const size_t failed = res.failedCount();
   say(fmt::format("{} models ({} failed) in {:.1f} s on {} threads; wrote {}, {}, {}", res.models.size(), failed,
                   res.totalSeconds, res.threads, (out / "results.json").string(), (out / "results.md").string(),
                   (out / "index.html").string()));

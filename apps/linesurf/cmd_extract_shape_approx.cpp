@@ -97,7 +97,8 @@ RegisterCommand reg(32, [](CLI::App& app) {
   bind(sub, "deltaN", o.clustering.deltaN,
        "Normal variation tolerance on ||n(C) - n_j||^2, in (0, 2) (0.008 ~ 5.1 deg, §7.2)");
   bind(sub, "seed", o.clustering.seed, "Seed of the hierarchical clustering's random seed points");
-  bind(sub, "maxIterations", o.clustering.maxIterations, "Hierarchical: reseeding iterations per split, >= 1");
+  cli::bind(sub, "maxIterations", o.clustering.maxIterations,  // qualified: a std::string help would pick std::bind
+            "Hierarchical: reseeding iterations per split, [1, " + std::to_string(kMaxClusteringIterations) + "]");
   sub->add_option("--clusters-out", a->clustersOut, "Also write the cloud coloured by cluster (.ply)");
   bind(sub, "radiusScale", o.radiusScale,
        "Clouds without point radii only: segment half-width as a multiple of the cluster's spacing across segments (with radii the width covers the replaced points' Voronoi cells)");

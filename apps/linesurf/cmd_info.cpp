@@ -19,6 +19,7 @@ struct InfoArgs {
 std::string vec(const Vec3f& v) { return fmt::format("{:.6g} {:.6g} {:.6g}", v.x(), v.y(), v.z()); }
 
 void runInfo(const InfoArgs& a) {
+  checkFiles({a.file}, {});  // reading it fits the budget
   const ModelSummary s = summarizeFile(a.file);
   const bool emptyBounds = s.bounds.empty();
   if (a.json) {
@@ -44,7 +45,9 @@ void runInfo(const InfoArgs& a) {
     if (s.textureWidth > 0) j["texture"] = {{"width", s.textureWidth}, {"height", s.textureHeight}};
     else j["texture"] = nullptr;
     j["comments"] = s.comments;
-    std::puts(j.dump(2).c_str());
+    // Paths and comments are bytes, not always UTF-8: bytes that are not become U+FFFD rather
+    // than failing the whole report.
+    std::puts(j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
     return;
   }
   std::string out = a.file + "\n";

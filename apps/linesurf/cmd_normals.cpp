@@ -29,6 +29,8 @@ void run(const NormalsArgs& args) {
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();
   if (model.points.empty()) throw Error(Error::Kind::BadInput, args.in, "", "holds no points");
+  checkGeometry(args.in, model.points.size(), args.geometry.k);
+  checkModelOutput("--output", args.out, model.points.size(), model.segments.size());
   GeometryOptions o = args.geometry;
   o.orientNormals = !args.noOrient;
   o.delaunayNeighbours = o.curvature;

@@ -63,7 +63,13 @@ void run(RenderArgs& a) {
   checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},
                          {"--alpha-out", a.alphaOut, {".png"}}, {"--normal-out", a.normalOut, {".png"}}});
   // Colour, depth, alpha, normal images (16 bytes a pixel each) and the Z3 fragment layers.
-  checkSize("--size", double(w) * h * (16.0 * 4 + 48.0 * std::max(o.layers, 1)), fmt::format("a {}x{} image", w, h));
+  checkSize("--size", renderViewBytes(w, h, o.layers), fmt::format("a {}x{} image", w, h));
+  {  // every image written, before the first one
+    const int images = 1 + !a.depthOut.empty() + !a.alphaOut.empty() + !a.normalOut.empty();
+    const int views = std::max(a.view.views, 1);
+    checkSize(a.view.views > 0 ? "--views" : "--size", double(views) * images * pngFileBytes(w, h),
+              fmt::format("writing {} image{} of {}x{}", views * images, views * images > 1 ? "s" : "", w, h));
+  }
   if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points")
     throwBadOption("primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
   const bool isMesh = fileHoldsMesh(a.model);
@@ -73,7 +79,12 @@ void run(RenderArgs& a) {
   HybridModel model;
   if (isMesh && a.primitive != "points") {
     triMesh = readMesh(a.model);
-    if (triMesh->faces.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the mesh has no faces");
+  }
+  if (triMesh && triMesh->faces.empty()) {  // a mesh file without faces: its vertices are what it holds
+    model = meshVerticesAsPoints(*triMesh);
+    triMesh.reset();
+    say(fmt::format("{}: no faces, rendering its {} vertices as points", a.model, model.points.size()));
+  } else if (triMesh) {
     say(fmt::format("{}: mesh, rasterising its {} triangles ({}x{} samples per pixel)", a.model, triMesh->faces.size(),
                     a.mesh.supersampling, a.mesh.supersampling));
   } else if (isMesh) {
@@ -89,6 +100,7 @@ void run(RenderArgs& a) {
   toFrame(model, frame);
   if (triMesh) toFrame(*triMesh, frame);
 
+  if (!model.attributes.radii && !model.points.empty()) checkGeometry(a.model, model.points.size(), a.prepare.k);
   const PrepareReport prep = prepareForRendering(model, a.prepare);
   endProgress();
   if (prep.segmentRadiiEstimated)

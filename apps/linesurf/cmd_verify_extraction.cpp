@@ -22,6 +22,7 @@ struct VerifyArgs {
 
 void run(VerifyArgs& a) {
   Timer t;
+  checkFiles({a.input, a.hybrid}, {});  // reading both fits the budget
   HybridModel input = readModel(a.input);
   HybridModel hybrid = readModel(a.hybrid);
   a.verify.progress = progressBar();

@@ -26,7 +26,8 @@ struct ViewArgs {
 void run(const ViewArgs& a) {
   Timer total;
   ViewerPageOptions o;
-  o.name = std::filesystem::path(a.model).filename().string();
+  // The page's title: printable UTF-8 whatever bytes the file name holds (oneLine escapes the rest).
+  o.name = oneLine(std::filesystem::path(a.model).filename().string());
   o.maxPrimitives = a.maxPrimitives;
   o.upAxis = parseUpAxis(a.upAxis);
   const std::string out =
@@ -42,6 +43,10 @@ void run(const ViewArgs& a) {
                 fmt::format("{} primitives exceed the viewer's budget of {} (--max-primitives)", primitives,
                             a.maxPrimitives));
 
+  // The page holds every primitive as base64 floats (about 60 bytes a point, twice for a segment).
+  checkSize("--output", 262144.0 + 60.0 * double(model.points.size()) + 120.0 * double(model.segments.size()),
+            fmt::format("a page of {} points and {} segments", model.points.size(), model.segments.size()));
+  checkGeometry(a.model, model.points.size(), a.k);
   completePointGeometry(model, a.k);
 
   ViewerPageStats st;

@@ -98,6 +98,13 @@ std::string lower(std::string s) {
 }  // namespace
 
 void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs) {
+  // Reading holds at least the file's bytes and what they decode to.
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (in.empty() || !std::filesystem::is_regular_file(in, ec)) continue;
+    const auto bytes = std::filesystem::file_size(in, ec);
+    if (!ec) checkSize(in, 2.0 * double(bytes), "reading it");
+  }
   std::vector<std::pair<std::filesystem::path, const OutputSpec*>> seen;
   for (const OutputSpec& o : outputs) {
     if (o.path.empty()) {
@@ -144,11 +151,19 @@ void commitOutputs() {
   if (currentTransaction) currentTransaction->commit();
 }
 
-void checkSize(const std::string& option, double bytes, const std::string& what) {
-  const double limit = globalOptions().maxMegabytes * 1024.0 * 1024.0;
-  if (!(bytes <= limit))
-    throwBadParameter(option, fmt::format("{} needs about {:.3g} MiB, more than --max-mb {:g} (raise --max-mb to allow it)",
-                                          what, bytes / (1024.0 * 1024.0), globalOptions().maxMegabytes));
+Budget budget() { return Budget(globalOptions().maxMegabytes, "--max-mb"); }
+
+void checkSize(const std::string& option, double bytes, const std::string& what) { budget().require(option, bytes, what); }
+
+void checkModelOutput(const std::string& option, const std::string& path, size_t points, size_t segments) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  checkSize(option, modelFileBytes(points, segments, ext == ".xyz"),
+            fmt::format("writing {} points and {} segments to '{}'", points, segments, path));
+}
+
+void checkGeometry(const std::string& input, size_t points, int k) {
+  checkSize(input, pointGeometryBytes(points, k), fmt::format("the geometry (§6.1) of {} points (k = {})", points, k));
 }
 
 }  // namespace linesurf::cli

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "linesurf/core/budget.h"
 #include "linesurf/core/progress.h"
 #include "linesurf/io/atomic_file.h"
 
@@ -37,7 +38,7 @@ ProgressFn progressBar();
 void endProgress();
 
 /// Checks a command's file arguments before any work (main.cpp's OutputTransaction checks the
-/// files actually written again). Throws Error:
+/// files actually written again), and that reading each input fits the budget. Throws Error:
 /// - BadParameter (exit 1): an output equal to an input (same file, or same path), two outputs
 ///   with one path, an output whose extension is not one of `extensions` (e.g. {".png"});
 /// - Io (exit 3): an output whose folder does not exist, or an output that is a folder.
@@ -50,8 +51,15 @@ struct OutputSpec {
 };
 void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs);
 
+/// The command's budget (--max-mb): every output and the working memory, estimated before the work.
+Budget budget();
 /// Refuses (BadParameter, exit 1) work whose estimated size exceeds --max-mb, naming `option`.
 void checkSize(const std::string& option, double bytes, const std::string& what);
+
+/// Refuses a model output (.ply binary, .xyz / ASCII text by extension) over the budget.
+void checkModelOutput(const std::string& option, const std::string& path, size_t points, size_t segments);
+/// Refuses the §6.1 geometry of `points` points over the budget, naming the input.
+void checkGeometry(const std::string& input, size_t points, int k);
 
 /// The command's output transaction (opened by main.cpp): setOutputTransaction registers it,
 /// commitOutputs() renames what was written so far into place before the command ends (for a

@@ -26,6 +26,7 @@ CloudWithGeometry readCloudWithGeometry(const std::string& path, GeometryOptions
     throwBadInput(path, "segments", fmt::format("already holds {} segments; extraction needs a point cloud",
                                                 r.cloud.segments.size()));
   if (r.cloud.points.empty()) throwBadInput(path, "vertex", "holds no points");
+  checkGeometry(path, r.cloud.points.size(), options.k);
   r.normalsFromFile = r.cloud.attributes.normals && !options.recomputeNormals;
   say(fmt::format("input        {} points ({}), normals {}", r.cloud.points.size(), path,
                   r.normalsFromFile ? "from file" : "computed (PCA, MST-oriented)"));

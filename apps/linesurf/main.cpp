@@ -2,6 +2,8 @@
 // codes: 0 ok, 1 usage or bad parameter, 2 bad input file, 3 failure to write and other failures.
 // Every error is one line on stderr ("PATH: WHERE: WHAT"). Every command runs inside one
 // OutputTransaction: its outputs are renamed into place only when the whole command succeeded.
+#include <signal.h>
+
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -23,6 +25,10 @@ void printError(const std::string& message) {
 
 int main(int argc, char** argv) {
   using namespace linesurf;
+  // An interrupted command removes its temporary outputs and dies by its signal; a file-size
+  // limit (ulimit -f) is a failed write (exit 3), not a killed process.
+  installCleanupOnSignals();
+  ::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"linesurf: surface modelling and rendering with line segments"};
   app.set_version_flag("--version", "linesurf 0.1.0");
   app.require_subcommand(1);
@@ -37,7 +43,10 @@ int main(int argc, char** argv) {
   for (auto& reg : cli::registeredCommands()) reg(app);
   // Thread limit must exist before any subcommand callback runs.
   std::unique_ptr<ThreadLimit> limit;
-  app.parse_complete_callback([&] { limit = std::make_unique<ThreadLimit>(g.threads); });
+  app.parse_complete_callback([&] {
+    cli::budget();  // refuses a --max-mb that is NaN (the range check lets NaN through)
+    limit = std::make_unique<ThreadLimit>(g.threads);
+  });
   try {
     OutputTransaction outputs;
     cli::setOutputTransaction(&outputs);

@@ -13,10 +13,13 @@
 
 #include <time.h>
 
+#include "linesurf/core/budget.h"
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/clustering.h"
+#include "linesurf/io/atomic_file.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/render/camera.h"
@@ -68,14 +71,35 @@ std::vector<ExperimentMethod> ExperimentOptions::effectiveMethods() const {
 }
 
 void ExperimentOptions::validate() const {
-  if (views < 1 || views > 100000) throwBadParameter("views", "must be in [1, 100000], got " + std::to_string(views));
+  // Every option of every stage, before any model is read: a bad value would otherwise surface
+  // only in the first model that reaches its stage, after minutes of work.
+  if (views < 1 || views > 100000) throwBadOption("views", "must be in [1, 100000], got " + std::to_string(views));
   if (meshViews < 1 || meshViews > 100000)
-    throwBadParameter("mesh-views", "must be in [1, 100000], got " + std::to_string(meshViews));
-  if (size < 16 || size > 8192) throwBadParameter("size", "must be in [16, 8192] pixels, got " + std::to_string(size));
-  if (imageViews < 0) throwBadParameter("image-views", "must be >= 0");
+    throwBadOption("meshViews", "must be in [1, 100000], got " + std::to_string(meshViews));
+  if (size < 16 || size > 8192) throwBadOption("size", "must be in [16, 8192] pixels, got " + std::to_string(size));
+  if (imageViews < 0) throwBadOption("imageViews", "must be >= 0, got " + std::to_string(imageViews));
   if (groundTruthSupersampling < 1 || groundTruthSupersampling > 16)
-    throwBadParameter("ground-truth supersampling", "must be in [1, 16]");
+    throwBadOption("groundTruthSupersampling", "must be in [1, 16]");
   linesurf::validate(render);
+  linesurf::validate(geometry);
+  linesurf::validate(epsDelta);
+  linesurf::validate(shapeApprox);
+  linesurf::validate(contour);
+}
+
+double ExperimentOptions::workingBytes() const {
+  // Two renders' buffers alive at once (the reference's result while a candidate renders) and
+  // the mesh image's colour, depth and alpha (its supersamples are per tile, not per image).
+  return 2.0 * renderViewBytes(size, size, render.layers) + double(size) * size * 48.0;
+}
+
+double ExperimentOptions::outputBytes(size_t models) const {
+  // Per model: the images of imageViews views (reference, mesh, and per method a candidate and a
+  // difference image) plus the structure and cluster pictures; the reports hold about 2 KiB a
+  // view and method.
+  const double images = double(std::min(imageViews, std::max(views, meshViews))) * 8.0 + 8.0;
+  const double report = double(std::max(views, meshViews)) * 4.0 * 2048.0;
+  return double(models) * ((outDir.empty() ? 0.0 : images * pngFileBytes(size, size)) + report) + 65536.0;
 }
 
 size_t ExperimentResults::failedCount() const {
@@ -289,8 +313,9 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
   const bool images = !o.outDir.empty();
   const fs::path modelDir = o.outDir / model.name;
   if (images && o.imageViews > 0) {
-    fs::create_directories(modelDir);
-    for (Candidate& c : candidates) fs::create_directories(modelDir / experimentMethodName(c.result->method));
+    // A fresh folder per model: in a transaction it replaces an earlier run's only at commit.
+    makeOutputFolder(modelDir, true);
+    for (Candidate& c : candidates) makeOutputFolder(modelDir / experimentMethodName(c.result->method));
   }
   for (int v = 0; v < int(cams.size()); ++v) {
     progress(fmt::format("rendering view {}/{}", v + 1, cams.size()), lo + (hi - lo) * double(v) / double(cams.size()));
@@ -472,7 +497,7 @@ void runPointCloud(const ExperimentOptions& o, const fs::path& file, ModelResult
     for (auto& [i, picture] : clusterPictures) {
       MethodResult& r = model.methods[i];
       const std::string rel = model.name + "/" + experimentMethodName(r.method) + "/clusters.png";
-      fs::create_directories((o.outDir / rel).parent_path());
+      makeOutputFolder((o.outDir / rel).parent_path());
       writePng(o.outDir / rel, renderImage(picture, cam, o.render).color, false);
       r.clustersImage = rel;
     }
@@ -520,6 +545,8 @@ void runMesh(const ExperimentOptions& o, const fs::path& file, ModelResult& mode
 
 }  // namespace
 
+std::vector<std::filesystem::path> experimentModelFiles(const ExperimentOptions& options) { return listModels(options); }
+
 ExperimentResults runExperiment(const ExperimentOptions& options, const ProgressFn& progress) {
   options.validate();
   Timer total;
@@ -533,7 +560,7 @@ ExperimentResults runExperiment(const ExperimentOptions& options, const Progress
   results.options.render.progress = {};
   results.threads = currentThreadCount();
   const std::vector<fs::path> files = listModels(options);
-  if (!options.outDir.empty()) fs::create_directories(options.outDir);
+  if (!options.outDir.empty()) makeOutputFolder(options.outDir);
 
   std::vector<ExperimentMethod> methods = options.effectiveMethods();
   const bool anyPointMethod = std::any_of(methods.begin(), methods.end(), isPointMethod);
@@ -553,7 +580,9 @@ ExperimentResults runExperiment(const ExperimentOptions& options, const Progress
       else
         runPointCloud(options, files[i], m, mp);
     } catch (const Error& e) {
-      if (e.kind() == Error::Kind::BadParameter) throw;  // an invalid option fails every model: refuse it
+      // An invalid option fails every model: refuse it. An output that cannot be written (a full
+      // disk) is no fault of the model and would fail the next one too: stop, writing nothing.
+      if (e.kind() == Error::Kind::BadParameter || e.kind() == Error::Kind::Io) throw;
       m.failed = true;
       m.error = e.what();
       m.methods.clear();

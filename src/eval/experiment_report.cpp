@@ -402,7 +402,8 @@ void writeExperimentJson(const ExperimentResults& results, const std::filesystem
                {"total_seconds", num(results.totalSeconds)},
                {"failed", results.failedCount()},
                {"models", models}};
-  writeFileAtomically(path, root.dump(2) + "\n");
+  // File names need not be UTF-8: such bytes become U+FFFD instead of failing the report.
+  writeFileAtomically(path, root.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 void writeExperimentMarkdown(const ExperimentResults& results, const std::filesystem::path& path) {

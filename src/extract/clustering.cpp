@@ -24,8 +24,11 @@ void validate(const ClusteringOptions& o) {
     throwBadOption("deltaN", "must lie in (0, 2) (got " + std::to_string(o.deltaN) +
                                      "): ||n(C) - n_j||^2 = 2 - 2 cos(angle), and at 2 a member normal may stand "
                                      "at 90 degrees to the cluster normal, folding the projection of §3.2.4.1");
-  if (o.maxIterations < 1)
-    throwBadOption("maxIterations", "must be >= 1 (got " + std::to_string(o.maxIterations) + ")");
+  // Bounded: each iteration of every split costs a pass over its cluster (10,000 take ~13 s on a
+  // small cloud); the splits converge in a few dozen.
+  if (o.maxIterations < 1 || o.maxIterations > kMaxClusteringIterations)
+    throwBadOption("maxIterations", "must be in [1, " + std::to_string(kMaxClusteringIterations) + "] (got " +
+                                        std::to_string(o.maxIterations) + ")");
 }
 
 namespace {

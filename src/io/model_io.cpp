@@ -77,6 +77,13 @@ TriangleMesh readMeshUnchecked(const std::filesystem::path& path);
 }  // namespace
 
 HybridModel readModel(const std::filesystem::path& path) {
+  // An OBJ is a mesh: its faces (texture coordinates included) pass the mesh checks first, so
+  // that every command refuses the same files.
+  if (kindOf(path) == Kind::Obj) {
+    HybridModel m = meshVerticesAsPoints(readMesh(path));
+    validateModel(m, path.string());
+    return m;
+  }
   HybridModel m = readModelUnchecked(path);
   validateModel(m, path.string());
   return m;
@@ -120,7 +127,7 @@ TriangleMesh readMeshUnchecked(const std::filesystem::path& path) {
 
 bool fileHoldsMesh(const std::filesystem::path& path) {
   switch (kindOf(path)) {
-    case Kind::Obj: detail::readFileBytes(path); return true;
+    case Kind::Obj: return detail::objHasFaces(detail::readFileBytes(path));
     case Kind::Xyz: detail::readFileBytes(path); return false;
     case Kind::Ply: break;
   }

@@ -62,8 +62,13 @@ void integer(std::string_view tok, std::string_view corner, const std::string& n
 /// The checks tinyobjloader does not make (it reads `v 5 abc 7` as 5 0 7, `v 0.5` as 0.5 0 0,
 /// `f 1 2` as nothing): coordinates count and syntax, finite values, face corners. Returns the
 /// first `mtllib` file name (or empty).
-std::string prescanObj(std::string_view text, const std::string& name) {
-  std::string mtllib;
+struct MtlLib {
+  std::string file;
+  int line = 0;
+};
+MtlLib prescanObj(std::string_view text, const std::string& name) {
+  MtlLib lib;
+  std::string& mtllib = lib.file;
   size_t pos = 0;
   int line = 0;
   while (pos < text.size()) {
@@ -106,12 +111,45 @@ std::string prescanObj(std::string_view text, const std::string& name) {
       mtllib = std::string(l.substr(l.find("mtllib") + 6));
       while (!mtllib.empty() && isSpace(mtllib.front())) mtllib.erase(mtllib.begin());
       while (!mtllib.empty() && isSpace(mtllib.back())) mtllib.pop_back();
+      lib.line = line;
     }
   }
-  return mtllib;
+  return lib;
+}
+
+/// The material library an OBJ names: a regular file beside the OBJ (or below its folder), as
+/// for a PLY's texture. A missing file, one outside the folder (absolute, or through '..') and
+/// anything but a regular file (a device, a pipe, a folder) are refused, not skipped: a mesh
+/// that silently lost its material would render differently from what its file says.
+std::string readMtlLib(const MtlLib& lib, const std::string& name, const std::filesystem::path& dir) {
+  const std::string where = "line " + std::to_string(lib.line);
+  const std::filesystem::path rel(lib.file);
+  if (rel.is_absolute()) throwBadInput(name, where, "mtllib '" + lib.file + "' is outside the OBJ's folder (an absolute path)");
+  for (const auto& part : rel)
+    if (part == "..") throwBadInput(name, where, "mtllib '" + lib.file + "' is outside the OBJ's folder ('..')");
+  const std::filesystem::path mtl = dir / rel;
+  std::error_code ec;
+  const auto st = std::filesystem::status(mtl, ec);
+  if (ec || !std::filesystem::exists(st)) throwBadInput(name, where, "mtllib '" + lib.file + "' not found beside the OBJ");
+  if (!std::filesystem::is_regular_file(st))
+    throwBadInput(name, where, "mtllib '" + lib.file + "' is not a regular file");
+  return readFileBytes(mtl);
 }
 
 }  // namespace
+
+bool objHasFaces(std::string_view text) {
+  size_t pos = 0;
+  while (pos < text.size()) {
+    size_t e = text.find('\n', pos);
+    if (e == std::string_view::npos) e = text.size();
+    size_t i = pos;
+    while (i < e && (text[i] == ' ' || text[i] == '\t')) ++i;
+    if (i + 1 < e && text[i] == 'f' && (text[i + 1] == ' ' || text[i + 1] == '\t')) return true;
+    pos = e + 1;
+  }
+  return false;
+}
 
 TriangleMesh readObj(const std::filesystem::path& path) {
   std::filesystem::path dir = path.parent_path();
@@ -120,13 +158,9 @@ TriangleMesh readObj(const std::filesystem::path& path) {
 
 TriangleMesh objToMesh(std::string_view bytes, const std::string& name, const std::filesystem::path* dir) {
   const std::string text(bytes);
-  const std::string mtllib = prescanObj(text, name);
+  const MtlLib mtllib = prescanObj(text, name);
   std::string mtlText;
-  if (dir && !mtllib.empty()) {
-    std::filesystem::path mtl = *dir / mtllib;
-    std::error_code ec;
-    if (std::filesystem::is_regular_file(mtl, ec)) mtlText = readFileBytes(mtl);
-  }
+  if (dir && !mtllib.file.empty()) mtlText = readMtlLib(mtllib, name, *dir);
   tinyobj::ObjReaderConfig cfg;
   cfg.triangulate = true;
   cfg.vertex_color = false;  // colours only when every vertex has them
@@ -197,7 +231,12 @@ TriangleMesh objToMesh(std::string_view bytes, const std::string& name, const st
   }
   for (const tinyobj::material_t& m : reader.GetMaterials()) {
     if (m.diffuse_texname.empty() || !dir) continue;
-    std::filesystem::path file = *dir / m.diffuse_texname;
+    const std::filesystem::path rel(m.diffuse_texname);
+    bool outside = rel.is_absolute();
+    for (const auto& part : rel) outside = outside || part == "..";
+    if (outside)
+      throwBadInput(name, "material " + m.name, "texture file '" + m.diffuse_texname + "' is outside the OBJ's folder");
+    std::filesystem::path file = *dir / rel;
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec))
       throwBadInput(name, "material " + m.name, "texture file '" + m.diffuse_texname + "' not found");

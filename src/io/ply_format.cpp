@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <unordered_set>
 
+#include "io/detail/readers.h"
 #include "linesurf/core/error.h"
 
 namespace linesurf::ply {
@@ -40,9 +42,24 @@ const char* typeName(Type t) {
 }
 
 int Element::find(std::string_view n) const {
-  for (size_t i = 0; i < properties.size(); ++i)
-    if (properties[i].name == n) return int(i);
-  return -1;
+  if (byName_.size() != properties.size()) {  // filled by hand (tests): look the slow way
+    for (size_t i = 0; i < properties.size(); ++i)
+      if (properties[i].name == n) return int(i);
+    return -1;
+  }
+  auto it = byName_.find(std::string(n));
+  return it == byName_.end() ? -1 : it->second;
+}
+
+bool Element::add(Property p) {
+  if (find(p.name) >= 0) return false;
+  if (byName_.size() != properties.size()) {
+    byName_.clear();
+    for (size_t i = 0; i < properties.size(); ++i) byName_.emplace(properties[i].name, int(i));
+  }
+  byName_.emplace(p.name, int(properties.size()));
+  properties.push_back(std::move(p));
+  return true;
 }
 
 int Header::find(std::string_view n) const {
@@ -118,6 +135,7 @@ Header parseHeader(std::string_view bytes, const std::string& path) {
   while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
   if (text != "ply") throwBadInput(path, "line 1", "not a PLY file (the first line must be 'ply', found " + quoted(text) + ")");
   bool haveFormat = false;
+  std::unordered_set<std::string_view> elementNames;  // views into `bytes`
   for (;;) {
     if (!nextLine()) throwBadInput(path, lineAt(line), "missing end_header (the header never ends)");
     auto w = splitWords(text);
@@ -148,7 +166,7 @@ Header parseHeader(std::string_view bytes, const std::string& path) {
     } else if (key == "element") {
       if (!haveFormat) throwBadInput(path, where, "element before the format line");
       if (w.size() != 3) throwBadInput(path, where, "element line must be 'element <name> <count>'");
-      if (h.find(w[1]) >= 0) throwBadInput(path, where, "element " + quoted(w[1]) + " declared twice");
+      if (!elementNames.emplace(w[1]).second) throwBadInput(path, where, "element " + quoted(w[1]) + " declared twice");
       Element e;
       e.name = std::string(w[1]);
       e.line = line;
@@ -178,9 +196,9 @@ Header parseHeader(std::string_view bytes, const std::string& path) {
         if (!parseType(w[1], p.type)) throwBadInput(path, where, "unsupported property type " + quoted(w[1]));
         p.name = std::string(w[2]);
       }
-      if (e.find(p.name) >= 0)
-        throwBadInput(path, where, "property " + quoted(p.name) + " declared twice in element " + quoted(e.name));
-      e.properties.push_back(std::move(p));
+      const std::string name = p.name;
+      if (!e.add(std::move(p)))
+        throwBadInput(path, where, "property " + quoted(std::string_view(name)) + " declared twice in element " + quoted(std::string_view(e.name)));
     } else if (std::isdigit((unsigned char)key[0]) || key[0] == '-' || key[0] == '+' || key[0] == '.') {
       throwBadInput(path, where, "missing end_header (body data " + quoted(text) + " found in the header)");
     } else {
@@ -442,10 +460,7 @@ class BodyDecoder {
       return double(v);
     }
     double v = 0;
-    auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (ec == std::errc::result_out_of_range) {
-      v = std::numeric_limits<double>::infinity();
-    } else if (ec != std::errc() || ptr != s.data() + s.size()) {
+    if (!detail::parseReal(s, v)) {
       throwBadInput(path_, where, "element " + e.name + " " + std::to_string(row) + ": " + quoted(tok) +
                                       " is not a number (property '" + p.name + "')");
     }

@@ -29,6 +29,21 @@ const std::set<std::string_view> kSegmentNames = {"x0", "y0", "z0", "x1", "y1", 
                                                   "nx0", "ny0", "nz0", "nx1", "ny1", "nz1"};
 constexpr std::string_view kTextureKey = "TextureFile";
 
+/// The names the writer accepts for extra vertex properties (and so the reader too).
+bool validExtraPropertyName(std::string_view name) {
+  if (name.empty()) return false;
+  for (char c : name)
+    if (!(std::isalnum((unsigned char)c) || c == '_' || c == '-' || c == '.')) return false;
+  return true;
+}
+
+/// A quoted name for a message (bytes outside printable ASCII as '?').
+std::string printable(std::string_view s) {
+  std::string out = "'";
+  for (size_t i = 0; i < s.size() && i < 40; ++i) out += (s[i] >= 32 && s[i] < 127) ? s[i] : '?';
+  return out + (s.size() > 40 ? "...'" : "'");
+}
+
 std::string lineAt(int line) { return "line " + std::to_string(line); }
 
 /// Requires all or none of `names` in element e; returns whether all are there (scalars).
@@ -177,16 +192,30 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
   // Faces are not part of the model, but a file with broken faces is broken for every command.
   const int fi = h.find("face");
   std::string faceIndexName;
-  if (fi >= 0) faceIndexName = checkFaceHeader(h.elements[size_t(fi)], path);
+  int ti = -1;
+  if (fi >= 0) {
+    const Element& fe = h.elements[size_t(fi)];
+    faceIndexName = checkFaceHeader(fe, path);
+    ti = fe.find("texcoord");
+    if (ti >= 0 && !fe.properties[size_t(ti)].isList)
+      throwBadInput(path, lineAt(fe.properties[size_t(ti)].line), "property 'texcoord' must be a list");
+  }
+  // An extra vertex property is kept and written back: its name must be one the writer accepts.
+  if (vi >= 0)
+    for (const Property& p : h.elements[size_t(vi)].properties)
+      if (!p.isList && !kPointNames.count(p.name) && !validExtraPropertyName(p.name))
+        throwBadInput(path, lineAt(p.line), "property name " + printable(p.name) +
+                                                " may hold only letters, digits, '_', '-' and '.'");
   auto keep = [&](const Element& e, const Property& p) {
-    if (fi >= 0 && &e == &h.elements[size_t(fi)]) return p.isList && p.name == faceIndexName;
+    if (fi >= 0 && &e == &h.elements[size_t(fi)]) return p.isList && (p.name == faceIndexName || p.name == "texcoord");
     if (e.name == "vertex") return !p.isList;  // every scalar: standard or extra property
     if (e.name == "segment") return (p.isList && p.name == "provenance") || (!p.isList && kSegmentNames.count(p.name));
     return false;
   };
   std::vector<ElementData> data = decodeBody(bytes, h, path, keep);
   if (fi >= 0 && h.elements[size_t(fi)].count > 0)
-    checkFaceRows(data[size_t(fi)], faceIndexName, vi >= 0 ? h.elements[size_t(vi)].count : 0, path, nullptr);
+    checkFaceRows(data[size_t(fi)], faceIndexName, vi >= 0 ? h.elements[size_t(vi)].count : 0, path,
+                  ti >= 0 ? data[size_t(fi)].list("texcoord") : nullptr);
 
   if (const ElementData* d = elementData(h, data, "vertex"); d && d->element->count > 0) {
     const Element& e = *d->element;
@@ -476,9 +505,8 @@ std::string headerStart(const WriteOptions& o, const std::vector<std::string>& c
 void checkPropertyName(const std::string& name) {
   if (name.empty() || kPointNames.count(name))
     throwBadParameter("pointProperties['" + name + "']", "name is empty or clashes with a standard vertex property");
-  for (char c : name)
-    if (!(std::isalnum((unsigned char)c) || c == '_' || c == '-' || c == '.'))
-      throwBadParameter("pointProperties['" + name + "']", "name may hold only letters, digits, '_', '-' and '.'");
+  if (!validExtraPropertyName(name))
+    throwBadParameter("pointProperties['" + name + "']", "name may hold only letters, digits, '_', '-' and '.'");
 }
 
 }  // namespace

@@ -1,12 +1,27 @@
 // XYZ text point clouds: one point per line, "x y z" or "x y z nx ny nz"; '#' starts a comment.
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <string>
 
 #include "io/detail/readers.h"
 #include "linesurf/core/error.h"
 #include "linesurf/io/atomic_file.h"
 
 namespace linesurf::detail {
+
+bool parseReal(std::string_view s, double& v) {
+  auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ptr != s.data() + s.size() || (ec != std::errc() && ec != std::errc::result_out_of_range)) return false;
+  if (ec == std::errc::result_out_of_range) {
+    // from_chars leaves v unset: strtod tells underflow (0 or a subnormal) from overflow (inf).
+    const std::string copy(s);
+    v = std::strtod(copy.c_str(), nullptr);
+    if (std::abs(v) == HUGE_VAL) v = std::copysign(std::numeric_limits<double>::infinity(), v);
+  }
+  return true;
+}
 
 HybridModel xyzToModel(std::string_view bytes, const std::string& name) {
   HybridModel m;
@@ -39,10 +54,10 @@ HybridModel xyzToModel(std::string_view bytes, const std::string& name) {
       if (n == 6) throwBadInput(name, where, "more than 6 numbers on the line (expected x y z [nx ny nz])");
       std::string_view s = tok;
       if (s.size() > 1 && s[0] == '+') s.remove_prefix(1);
-      auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v[n]);
-      if ((ec != std::errc() && ec != std::errc::result_out_of_range) || ptr != s.data() + s.size())
-        throwBadInput(name, where, "'" + std::string(tok.substr(0, 40)) + "' is not a number");
-      if (ec == std::errc::result_out_of_range || !std::isfinite(v[n]))
+      double d = 0;
+      if (!parseReal(s, d)) throwBadInput(name, where, "'" + std::string(tok.substr(0, 40)) + "' is not a number");
+      v[n] = float(d);  // a value below float's range reads as 0, as in an ASCII PLY
+      if (!std::isfinite(v[n]))
         throwBadInput(name, where, "non-finite or out-of-range value '" + std::string(tok.substr(0, 40)) + "'");
       ++n;
     }

@@ -99,3 +99,71 @@ TEST(ErrorMessages, OneLinePrintableAndBrief) {
   const Error e(Error::Kind::BadInput, "f\n.ply", "line 1", "bad\tthing");
   EXPECT_STREQ(e.what(), "f\\n.ply: line 1: bad\\tthing");
 }
+
+TEST(OutputTransaction, AStagedFolderReplacesTheEarlierOneWholeOnlyAtCommit) {
+  const fs::path d = test::scratchDir("txn_folder");
+  fs::create_directories(d / "run" / "model");
+  writeFileAtomically(d / "run" / "model" / "old.png", "old");
+  writeFileAtomically(d / "run" / "results.json", "old results");
+  {
+    OutputTransaction t;
+    makeOutputFolder(d / "run");                // exists: used as it is
+    makeOutputFolder(d / "run" / "model", true);  // replaced whole at commit
+    makeOutputFolder(d / "run" / "model" / "sub");
+    writeFileAtomically(d / "run" / "model" / "sub" / "new.png", "new");
+    writeFileAtomically(d / "run" / "results.json", "new results");
+    // Nothing visible yet: the earlier run is whole.
+    EXPECT_EQ(slurp(d / "run" / "model" / "old.png"), "old");
+    EXPECT_FALSE(fs::exists(d / "run" / "model" / "sub"));
+    EXPECT_EQ(slurp(d / "run" / "results.json"), "old results");
+    EXPECT_EQ(stagedLocation(d / "run" / "model" / "x").parent_path().parent_path(), d / "run");
+    t.commit();
+  }
+  EXPECT_FALSE(fs::exists(d / "run" / "model" / "old.png"));
+  EXPECT_EQ(slurp(d / "run" / "model" / "sub" / "new.png"), "new");
+  EXPECT_EQ(slurp(d / "run" / "results.json"), "new results");
+  EXPECT_EQ(entries(d), 1u);  // no temporary folder left beside it
+  EXPECT_EQ(entries(d / "run"), 2u);
+}
+
+TEST(OutputTransaction, AStagedFolderIsRemovedUnlessCommitted) {
+  const fs::path d = test::scratchDir("txn_folder_rollback");
+  fs::create_directories(d / "run" / "model");
+  writeFileAtomically(d / "run" / "model" / "old.png", "old");
+  {
+    OutputTransaction t;
+    makeOutputFolder(d / "new" / "deeper");  // neither exists: "new" is staged
+    writeFileAtomically(d / "new" / "deeper" / "a.txt", "a");
+    makeOutputFolder(d / "run" / "model", true);
+    writeFileAtomically(d / "run" / "model" / "b.png", "b");
+    EXPECT_FALSE(fs::exists(d / "new"));
+  }
+  EXPECT_FALSE(fs::exists(d / "new"));
+  EXPECT_EQ(entries(d), 1u);
+  EXPECT_EQ(entries(d / "run" / "model"), 1u);
+  EXPECT_EQ(slurp(d / "run" / "model" / "old.png"), "old");
+}
+
+TEST(OutputTransaction, TemporaryNamesAreShortSoAnyLegalNameIsWritable) {
+  const fs::path d = test::scratchDir("txn_long_name");
+  const std::string name(255, 'x');
+  OutputTransaction t;
+  writeFileAtomically(d / name, "long");
+  t.commit();
+  EXPECT_EQ(slurp(d / name), "long");
+  EXPECT_EQ(entries(d), 1u);
+}
+
+TEST(OutputTransaction, TheCleanupRegistryRemovesWhatIsStaged) {
+  // What a signal handler runs: every staged file and folder goes, the earlier outputs stay.
+  const fs::path d = test::scratchDir("txn_registry");
+  writeFileAtomically(d / "kept.txt", "kept");
+  OutputTransaction t;
+  writeFileAtomically(d / "a.txt", "a");
+  makeOutputFolder(d / "f");
+  writeFileAtomically(d / "f" / "b.txt", "b");
+  EXPECT_EQ(entries(d), 3u);  // kept.txt and two temporaries
+  removeTemporaryOutputs();
+  EXPECT_EQ(entries(d), 1u);
+  EXPECT_EQ(slurp(d / "kept.txt"), "kept");
+}

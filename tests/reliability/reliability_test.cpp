@@ -5,13 +5,18 @@
 //   - exactly one line of output (-q), naming the file or option at fault,
 //   - every file that existed before is unchanged byte for byte, and no file was added (no
 //     half-written output, no temporary left behind).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
+#include <functional>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -61,6 +66,21 @@ std::string pngDeclaring(uint32_t w, uint32_t h) {
   std::string idat = "IDAT" + std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8);
   return std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + ihdr + be32(crc32(ihdr)) + be32(8) + idat + be32(crc32(idat)) +
          be32(0) + "IEND" + be32(crc32("IEND"));
+}
+
+/// A 2 x 1 indexed PNG (8-bit) with a one-colour palette whose second pixel uses `index`; every
+/// chunk's CRC is right, so only the index is wrong when it is past 0.
+std::string palettePngWithIndex(unsigned char index) {
+  std::string ihdr = "IHDR" + be32(2) + be32(1) + std::string("\x08\x03\x00\x00\x00", 5);
+  std::string plte = "PLTE" + std::string("\xff\x00\x00", 3);
+  // zlib stream, one stored block: filter 0, indices 0 and `index`.
+  const std::string raw = std::string("\x00\x00", 2) + char(index);
+  uint32_t a = 1, b = 0;
+  for (unsigned char c : raw) a = (a + c) % 65521, b = (b + a) % 65521;
+  std::string z = std::string("\x78\x01\x01", 3) + char(raw.size()) + '\0' + char(~raw.size()) + '\xff' + raw + be32(b << 16 | a);
+  std::string idat = "IDAT" + z;
+  return std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + ihdr + be32(crc32(ihdr)) + be32(3) + plte + be32(crc32(plte)) +
+         be32(uint32_t(z.size())) + idat + be32(crc32(idat)) + be32(0) + "IEND" + be32(crc32("IEND"));
 }
 
 /// Good fixtures, hostile files and sentinels, written once; every case gets a copy.
@@ -148,9 +168,65 @@ const fs::path& templateDir() {
     fs::create_symlink("/dev/zero", d / "zero.ply");
     fs::create_symlink("pts.ply", d / "link.png");  // an output name that is the input
 
+    // Hostile inputs of the second round: experiment runs, budgets, unbounded work, acceptance rules.
+    {
+      // Corrupt models beside no good one: an experiment has nothing to report.
+      fs::create_directories(d / "baddata");
+      put(d / "baddata" / "a_bad.ply", plyHead("ascii", 2, "property float x\n") + "0\n1\n");
+      put(d / "baddata" / "b_bad.xyz", "0 0 zero\n");
+      // A mesh whose texture coordinates do not match its faces (4 values for 3 corners).
+      put(d / "tcmis.ply", plyHead("ascii", 3, kXYZ, 1,
+                                   "property list uchar int vertex_indices\nproperty list uchar float texcoord\n") +
+                               tri + "3 0 1 2 4 0 0 1 0\n");
+      // An extra vertex property whose name the writer cannot write back.
+      put(d / "badprop.ply", plyHead("ascii", 1, kXYZ + "property float we?ird\n") + "0 0 0 1\n");
+      // OBJ material libraries: missing, a device, outside the folder, absolute; a texture outside.
+      const std::string objTri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+      put(d / "mtl_missing.obj", "mtllib nothere.mtl\n" + objTri);
+      fs::create_symlink("/dev/zero", d / "zero.mtl");
+      put(d / "mtl_zero.obj", "mtllib zero.mtl\n" + objTri);
+      put(d / "mtl_outside.obj", "mtllib ../outside.mtl\n" + objTri);
+      put(d / "mtl_absolute.obj", "mtllib /etc/passwd\n" + objTri);
+      put(d / "tex_outside.mtl", "newmtl m\nmap_Kd ../texture.png\n");
+      put(d / "tex_outside.obj", "mtllib tex_outside.mtl\nusemtl m\n" + objTri);
+      put(d / "points_only.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n");
+      // PNGs: a flipped byte under a valid-looking chunk (bad CRC), a palette index past the
+      // palette's end, a file cut inside a chunk; and a textured OBJ whose texture is corrupt.
+      {
+        std::ifstream f(d / "a.png", std::ios::binary);
+        std::stringstream ss;
+        ss << f.rdbuf();
+        std::string png = ss.str();
+        png[png.size() - 20] ^= 0x01;  // inside IDAT's data
+        put(d / "badcrc.png", png);
+        put(d / "trunc.png", ss.str().substr(0, ss.str().size() - 30));
+        put(d / "crc_texture.mtl", "newmtl m\nmap_Kd badcrc.png\n");
+        put(d / "crc_texture.obj", "mtllib crc_texture.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                   "f 1/1 2/2 3/3\n");
+      }
+      put(d / "palette.png", palettePngWithIndex(5));
+      put(d / "palette_ok.png", palettePngWithIndex(0));
+      // Headers of 100,000 properties / elements ending in a duplicate: refused, in linear time.
+      {
+        std::string h = "ply\nformat ascii 1.0\nelement vertex 1\n" + kXYZ;
+        for (int i = 0; i < 100000; ++i) h += "property uchar p" + std::to_string(i) + "\n";
+        put(d / "manyprops_dup.ply", h + "property uchar p7\nend_header\n");
+        std::string e = "ply\nformat ascii 1.0\nelement vertex 0\n" + kXYZ;
+        for (int i = 0; i < 100000; ++i) e += "element e" + std::to_string(i) + " 0\n";
+        put(d / "manyelements_dup.ply", e + "element e5 0\nend_header\n");
+      }
+      // A file name that is not UTF-8, holding a broken model.
+      put(d / "bad\xff\xfename.ply", plyHead("ascii", 1, kXYZ) + "0 0\n");
+      // A cloud big enough for --max-mb 1 to refuse its geometry and outputs, small enough to read.
+      HybridModel big = test::randomSphere(40000, 1.0f, false, 11);
+      big.attributes = {};
+      writeModel(d / "big.ply", big);
+    }
+
     // Sentinels at every output path the cases name.
     for (const char* s : {"out.png", "d.png", "n.png", "al.png", "diff.png", "out.ply", "c.ply", "out.xyz", "out.obj",
-                          "out_000.png", "conv_texture.png", "conv2.mtl", "exp/results.json"}) {
+                          "out_000.png", "conv_texture.png", "conv2.mtl", "exp/results.json", "exp/pts/view_000_points.png",
+                          "out.html"}) {
       fs::create_directories((d / s).parent_path());
       put(d / s, std::string("sentinel ") + s + "\n");
     }
@@ -203,9 +279,10 @@ void copyTree(const fs::path& from, const fs::path& to) {
   }
 }
 
-test::CliResult runIn(const fs::path& dir, const std::string& args) {
+test::CliResult runIn(const fs::path& dir, const std::string& args, const std::string& limits = "") {
   test::CliResult r;
-  const std::string cmd = "cd '" + dir.string() + "' && timeout 60 " + std::string(LINESURF_CLI) + " " + args + " 2>&1";
+  const std::string cmd = "cd '" + dir.string() + "' && " + (limits.empty() ? "" : limits + "; ") + "timeout 60 " +
+                          std::string(LINESURF_CLI) + " " + args + " 2>&1";
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return r;
   std::array<char, 4096> buf;
@@ -220,6 +297,7 @@ struct Case {
   std::string name, args;
   int code;
   std::vector<std::string> needles;  ///< each appears in the one-line message
+  std::string limits;                ///< shell commands before the CLI (e.g. "ulimit -f 8")
 };
 
 std::ostream& operator<<(std::ostream& os, const Case& c) { return os << c.name; }
@@ -335,6 +413,64 @@ const std::vector<Case> kCases = {
   {"ExperimentMissingFolder", "experiment nodata -o exp", 2, {"nodata: no such folder"}},
   {"InfoControlBytesInName", "info new*line*.xyz", 2, {"new\\nline\\x01.xyz: line 2"}},
   {"VerifyWithoutTolerances", "verify-extraction pts.ply raw.ply", 1, {"epsilon"}},
+  // --- experiment: parameters refused before any work, naming the flag typed; corrupt models
+  //     and failed writes leave the earlier run (exp/) as it was --------------------------------
+  {"ExperimentEpsilonNan", "experiment expdata -o exp --epsilon nan", 1, {"--epsilon:", "nan"}},
+  {"ExperimentEpsilonNanNewFolder", "experiment expdata -o newexp --epsilon nan", 1, {"--epsilon:"}},
+  {"ExperimentDeltaNNegative", "experiment expdata -o exp --delta-n -1", 1, {"--delta-n:"}},
+  {"ExperimentDeltaTooLarge", "experiment expdata -o exp --delta 3", 1, {"--delta:"}},
+  {"ExperimentContourScaleNan", "experiment expdata -o exp --contour-scale nan", 1, {"--contour-scale:"}},
+  {"ExperimentMergeAngleNan", "experiment expdata -o exp --contour-merge-angle nan", 1, {"--contour-merge-angle:"}},
+  {"ExperimentKTooLarge", "experiment expdata -o exp --k 5000", 1, {"--k"}},
+  {"ExperimentAllModelsCorrupt", "experiment baddata -o exp --views 2", 2, {"baddata", "all 2 models failed", "a_bad.ply"}},
+  {"ExperimentOutputIsAFile", "experiment expdata -o out.png --views 2", 3, {"out.png", "not a folder"}},
+  {"ExperimentDiskFull", "experiment expdata -o exp --views 2 --image-views 1", 3, {"File too large"}, "ulimit -f 4"},
+  {"ExperimentDiskFullNewFolder", "experiment expdata -o newexp --views 2 --image-views 1", 3, {"File too large"}, "ulimit -f 4"},
+  // --- --max-mb bounds every output and the working memory, before the work -------------------
+  {"RenderViewsOutputOverBudget", "render pts.ply -o out.png --views 10000 --size 2048x2048", 1, {"--views", "--max-mb"}},
+  {"RenderViewsBuffersOverBudget", "render pts.ply -o out.png --views 1000 --size 1024x1024 --depth-out d.png", 1, {"--views", "2000 images"}},
+  {"RenderOneViewOverLoweredBudget", "render pts.ply -o out.png --size 400x400 --max-mb 1", 1, {"--size", "--max-mb 1"}},
+  {"ExperimentHugeViewsAndSize", "experiment expdata -o exp --views 100000 --size 8192", 1, {"--size", "--max-mb"}},
+  {"ExperimentViewsOverBudget", "experiment expdata -o exp --views 100000 --size 16 --max-mb 64", 1, {"--views", "--max-mb 64"}},
+  {"ExperimentMeshViewsOverBudget", "experiment expdata -o exp --mesh-views 100000 --size 16 --max-mb 64", 1, {"--mesh-views"}},
+  {"NormalsOverBudget", "normals big.ply -o out.ply --max-mb 1", 1, {"big.ply", "geometry", "--max-mb 1"}},
+  {"ViewOverBudget", "view big.ply -o out.html --max-mb 1", 1, {"--output", "page", "--max-mb 1"}},
+  {"ConvertXyzOverBudget", "convert big.ply out.xyz --max-mb 1", 1, {"output", "40000 points", "--max-mb 1"}},
+  {"EpsDeltaOverBudget", "extract eps-delta big.ply -o out.ply --max-mb 1", 1, {"big.ply", "--max-mb 1"}},
+  {"ShapeApproxOverBudget", "extract shape-approx big.ply -o out.ply --max-mb 1", 1, {"big.ply", "--max-mb 1"}},
+  {"RenderGeometryOverBudget", "render big.ply -o out.png --size 16x16 --max-mb 1", 1, {"big.ply", "geometry"}},
+  {"MaxMbNan", "normals raw.ply -o out.ply --max-mb nan", 1, {"--max-mb", "nan"}},
+  // --- One parameter cannot make unbounded work --------------------------------------------------
+  {"ShapeApproxMaxIterationsHuge", "extract shape-approx pts.ply -o out.ply --clustering hierarchical --max-iterations 2147483647", 1,
+   {"--max-iterations", "[1, 1000]"}},
+  {"ShapeApproxMaxIterationsOverBound", "extract shape-approx pts.ply -o out.ply --max-iterations 1001", 1, {"--max-iterations: must be in [1, 1000] (got 1001)"}},
+  {"HeaderOf100000PropertiesDuplicate", "info manyprops_dup.ply", 2, {"manyprops_dup.ply", "line 100007", "'p7' declared twice"}},
+  {"HeaderOf100000ElementsDuplicate", "info manyelements_dup.ply", 2, {"manyelements_dup.ply", "line 100007", "'e5' declared twice"}},
+  // --- One acceptance rule and one message for every command ---------------------------------------
+  {"InfoTexcoordMismatch", "info tcmis.ply", 2, {"tcmis.ply: line 14", "texcoord"}},
+  {"NormalsTexcoordMismatch", "normals tcmis.ply -o out.ply", 2, {"tcmis.ply: line 14", "texcoord"}},
+  {"EpsDeltaTexcoordMismatch", "extract eps-delta tcmis.ply -o out.ply", 2, {"tcmis.ply: line 14", "texcoord"}},
+  {"ShapeApproxTexcoordMismatch", "extract shape-approx tcmis.ply -o out.ply", 2, {"tcmis.ply: line 14", "texcoord"}},
+  {"ConvertXyzTexcoordMismatch", "convert tcmis.ply out.xyz", 2, {"tcmis.ply: line 14", "texcoord"}},
+  {"ViewTexcoordMismatch", "view tcmis.ply -o out.html", 2, {"tcmis.ply: line 14", "texcoord"}},
+  {"RenderPointsTexcoordMismatch", "render tcmis.ply -o out.png --primitive points", 2, {"tcmis.ply: line 14"}},
+  {"InfoObjMtlMissing", "info mtl_missing.obj", 2, {"mtl_missing.obj: line 1", "nothere.mtl", "not found"}},
+  {"NormalsObjMtlMissing", "normals mtl_missing.obj -o out.ply", 2, {"mtl_missing.obj: line 1", "not found"}},
+  {"RenderObjMtlDevZero", "render mtl_zero.obj -o out.png", 2, {"mtl_zero.obj: line 1", "not a regular file"}},
+  {"ConvertObjMtlOutsideFolder", "convert mtl_outside.obj out.ply", 2, {"mtl_outside.obj: line 1", "outside"}},
+  {"InfoObjMtlAbsolute", "info mtl_absolute.obj", 2, {"mtl_absolute.obj: line 1", "outside"}},
+  {"RenderObjTextureOutsideFolder", "render tex_outside.obj -o out.png", 2, {"tex_outside.obj", "outside"}},
+  {"RenderPointsOnlyObjAsMesh", "render points_only.obj -o out.png --primitive mesh", 1, {"--primitive", "holds none"}},
+  {"InfoJsonNonUtf8Name", "info --json bad*name.ply", 2, {"bad\\xFF\\xFEname.ply: line 8"}},
+  {"ViewNonUtf8Name", "view bad*name.ply -o out.html", 2, {"bad\\xFF\\xFEname.ply: line 8"}},
+  {"ConvertInvalidPropertyName", "convert badprop.ply out.ply", 2, {"badprop.ply: line 7", "property name 'we?ird'"}},
+  {"NormalsInvalidPropertyName", "normals badprop.ply -o out.ply", 2, {"badprop.ply: line 7"}},
+  {"CompareBadCrc", "compare badcrc.png a.png", 2, {"badcrc.png", "bad CRC"}},
+  {"CompareTruncatedPng", "compare trunc.png a.png", 2, {"trunc.png", "truncated"}},
+  {"ComparePaletteIndexPastEnd", "compare palette.png palette_ok.png", 2, {"palette.png", "palette"}},
+  {"RenderTextureBadCrc", "render crc_texture.obj -o out.png", 2, {"badcrc.png", "bad CRC"}},
+  {"RenderDiskFull", "render pts.ply -o out.png --size 256x256", 3, {"out.png", "File too large"}, "ulimit -f 2"},
+  {"ConvertDiskFull", "convert big.ply out.ply", 3, {"out.ply", "File too large"}, "ulimit -f 16"},
 };
 // clang-format on
 
@@ -346,7 +482,7 @@ TEST_P(Reliability, RefusedInOneLineLeavingEveryFileAsItWas) {
   fs::remove_all(dir);
   copyTree(templateDir(), dir);
   const auto before = snapshot(dir);
-  const test::CliResult r = runIn(dir, c.args + " -q");
+  const test::CliResult r = runIn(dir, c.args + " -q", c.limits);
   EXPECT_EQ(r.exitCode, c.code) << c.args << "\n" << r.out;
   ASSERT_FALSE(r.out.empty()) << c.args;
   EXPECT_EQ(r.out.back(), '\n') << r.out;
@@ -367,6 +503,159 @@ TEST_P(Reliability, RefusedInOneLineLeavingEveryFileAsItWas) {
 INSTANTIATE_TEST_SUITE_P(Cases, Reliability, ::testing::ValuesIn(kCases),
                          [](const ::testing::TestParamInfo<Case>& i) { return i.param.name; });
 
-TEST(Reliability, AtLeastSixtyCases) { EXPECT_GE(kCases.size(), 60u); }
+// --- Interrupted commands ---------------------------------------------------------------------
+
+/// Whether a temporary output (the short hidden ".ls-" names of io/atomic_file.h) lies under `dir`.
+bool hasTemporary(const fs::path& dir) {
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it)
+    if (it->path().filename().string().rfind(".ls-", 0) == 0) return true;
+  return false;
+}
+
+/// Runs the CLI in `dir` with the signals at their default actions (as from a terminal), sends
+/// `sig` once a temporary output exists (the command is mid-way), and returns the wait status.
+int interruptMidway(const fs::path& dir, const std::vector<std::string>& args, int sig) {
+  std::vector<std::string> all = {LINESURF_CLI};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string where = dir.string();
+  const pid_t pid = ::fork();
+  if (pid == 0) {  // only async-signal-safe calls until exec
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) ::signal(s, SIG_DFL);
+    sigset_t none;
+    sigemptyset(&none);
+    ::sigprocmask(SIG_SETMASK, &none, nullptr);
+    if (::chdir(where.c_str()) != 0) ::_exit(126);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (!hasTemporary(dir) && std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) return status;  // ended before it could be interrupted
+    ::usleep(2000);
+  }
+  ::kill(pid, sig);
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+struct Interruption {
+  std::string name;
+  std::vector<std::string> args;
+  int signal;
+};
+
+class Interrupted : public ::testing::TestWithParam<Interruption> {};
+
+TEST_P(Interrupted, LeavesTheFolderAsItWasAndDiesByTheSignal) {
+  const Interruption& c = GetParam();
+  const fs::path dir = fs::temp_directory_path() / ("linesurf_interrupted_" + c.name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  copyTree(templateDir(), dir);
+  const auto before = snapshot(dir);
+  const int status = interruptMidway(dir, c.args, c.signal);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "not interrupted: exit " << (WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+  EXPECT_EQ(WTERMSIG(status), c.signal);
+  EXPECT_FALSE(hasTemporary(dir));
+  const auto after = snapshot(dir);
+  for (const auto& [path, e] : before) {
+    auto it = after.find(path);
+    ASSERT_NE(it, after.end()) << path << " was removed";
+    EXPECT_TRUE(it->second.bytes == e.bytes) << path << " changed";
+  }
+  for (const auto& [path, e] : after) EXPECT_TRUE(before.count(path)) << path << " was added (" << e.type << ")";
+  fs::remove_all(dir);
+}
+
+const std::vector<std::string> kManyViews = {"render", "pts.ply", "-o", "v.png", "--views", "5000", "--size", "128x128"};
+const std::vector<std::string> kLongExperiment = {"experiment", "expdata", "-o", "exp", "--views", "3000", "--size", "64"};
+const std::vector<std::string> kLongExperimentNewFolder = {"experiment", "expdata", "-o", "new/run", "--views", "3000", "--size", "64"};
+
+INSTANTIATE_TEST_SUITE_P(Signals, Interrupted,
+                         ::testing::Values(Interruption{"RenderSigint", kManyViews, SIGINT},
+                                           Interruption{"RenderSigterm", kManyViews, SIGTERM},
+                                           Interruption{"RenderSighup", kManyViews, SIGHUP},
+                                           Interruption{"ExperimentSigint", kLongExperiment, SIGINT},
+                                           Interruption{"ExperimentSigterm", kLongExperiment, SIGTERM},
+                                           Interruption{"ExperimentNewFolderSigint", kLongExperimentNewFolder, SIGINT}),
+                         [](const ::testing::TestParamInfo<Interruption>& i) { return i.param.name; });
+
+// --- Commands that succeed where they used to fail or to be partial --------------------------------
+
+fs::path freshCopy(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("linesurf_reliability_ok_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  copyTree(templateDir(), dir);
+  return dir;
+}
+
+std::string readAll(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+TEST(Reliability, ExperimentWithCorruptModelsReplacesTheEarlierRunWhole) {
+  const fs::path dir = freshCopy("experiment_mixed");
+  fs::create_directories(dir / "mixed");
+  fs::copy_file(dir / "pts.ply", dir / "mixed" / "pts.ply");
+  fs::copy_file(dir / "baddata" / "a_bad.ply", dir / "mixed" / "a_bad.ply");
+  put(dir / "exp" / "pts" / "stale.png", "from an earlier run");
+  const std::string earlier = readAll(dir / "exp" / "results.json");
+  const test::CliResult r = runIn(dir, "experiment mixed -o exp --views 2 --image-views 1 -q");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_NE(r.out.find("mixed: 1 of 2 models failed"), std::string::npos) << r.out;
+  // The good model's results form a fresh run: new reports, and the model's folder replaced whole.
+  const std::string results = readAll(dir / "exp" / "results.json");
+  EXPECT_NE(results, earlier);
+  const nlohmann::json j = nlohmann::json::parse(results);
+  EXPECT_EQ(j.dump().find("a_bad.ply") != std::string::npos, true);
+  EXPECT_FALSE(fs::exists(dir / "exp" / "pts" / "stale.png"));
+  EXPECT_EQ(readImage(dir / "exp" / "pts" / "view_000_points.png").width, 512);
+  EXPECT_FALSE(hasTemporary(dir));
+  EXPECT_FALSE(fs::exists(dir / "exp" / "a_bad"));
+  fs::remove_all(dir);
+}
+
+TEST(Reliability, FacelessObjRendersAsPoints) {
+  const fs::path dir = freshCopy("faceless_obj");
+  const test::CliResult r = runIn(dir, "render points_only.obj -o p.png --size 32x32");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("points: 4 drawn"), std::string::npos) << r.out;  // a cloud of its vertices
+  EXPECT_EQ(readImage(dir / "p.png").width, 32);
+  fs::remove_all(dir);
+}
+
+TEST(Reliability, NonUtf8FileNameIsReportedAndViewed) {
+  const fs::path dir = freshCopy("non_utf8");
+  fs::copy_file(dir / "pts.ply", dir / "ok\xff\xfe.ply");
+  const test::CliResult info = runIn(dir, "info --json ok*.ply");
+  ASSERT_EQ(info.exitCode, 0) << info.out;
+  const nlohmann::json j = nlohmann::json::parse(info.out);  // valid JSON (UTF-8) whatever the name's bytes
+  EXPECT_EQ(j["points"], 300);
+  const test::CliResult view = runIn(dir, "view ok*.ply -o page.html -q");
+  EXPECT_EQ(view.exitCode, 0) << view.out;
+  EXPECT_TRUE(fs::exists(dir / "page.html"));
+  fs::remove_all(dir);
+}
+
+TEST(Reliability, LongestLegalOutputNameIsWritten) {
+  const fs::path dir = freshCopy("long_name");
+  const std::string name = std::string(251, 'n') + ".ply";  // 255 bytes: the longest name a folder holds
+  const test::CliResult r = runIn(dir, "convert pts.ply " + name + " -q");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_EQ(readModel(dir / name).points.size(), 300u);
+  EXPECT_FALSE(hasTemporary(dir));
+  fs::remove_all(dir);
+}
+
+TEST(Reliability, AtLeastOneHundredFiftyCases) { EXPECT_GE(kCases.size(), 150u); }
 
 }  // namespace

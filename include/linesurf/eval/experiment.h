@@ -68,8 +68,13 @@ struct ExperimentOptions {
   int groundTruthSupersampling = 4;  ///< samples per pixel side of the mesh image, [1, 16]
 
   std::vector<ExperimentMethod> effectiveMethods() const;
-  /// Throws linesurf::Error (BadParameter) naming the first absurd field.
+  /// Throws OptionError (core/options.h) naming the first absurd field, of this struct or of
+  /// any stage's options (render, geometry, epsDelta, shapeApprox, contour).
   void validate() const;
+  /// Memory the run holds at once (image buffers of one view), bytes, for a Budget (core/budget.h).
+  double workingBytes() const;
+  /// Bytes the run writes for `models` models (images and reports), for a Budget.
+  double outputBytes(size_t models) const;
 };
 
 /// Image comparison and timing of one view.
@@ -193,9 +198,14 @@ struct ExperimentResults {
 /// processed is recorded as failed with its error message and the run continues. Progress goes
 /// to `progress` as (stage "MODEL: step", fraction of the whole run). Images go under
 /// options.outDir when set. Deterministic except for the timings.
-/// Throws linesurf::Error: BadParameter for absurd options, Io when the data folder cannot be
-/// listed or holds no model file.
+/// Throws linesurf::Error: BadParameter for absurd options (before any model is read), Io when
+/// the data folder cannot be listed or holds no model file, or when an output cannot be written
+/// (a model whose output fails is not recorded as failed: the run stops). Folders are made with
+/// makeOutputFolder (io/atomic_file.h): inside an OutputTransaction each model's folder replaces
+/// an earlier run's only when the transaction commits.
 ExperimentResults runExperiment(const ExperimentOptions& options, const ProgressFn& progress = {});
+/// The model files runExperiment would run, in its order (Io errors as runExperiment's).
+std::vector<std::filesystem::path> experimentModelFiles(const ExperimentOptions& options);
 
 /// results.json: options, per model and method every count, metric, timing and per-view figure.
 void writeExperimentJson(const ExperimentResults& results, const std::filesystem::path& path);

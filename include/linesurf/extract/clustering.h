@@ -32,7 +32,7 @@ struct ClusteringOptions {
   /// may stand at 90 degrees to n(C) and the §3.2.4.1 projection folds (docs/decisions.md).
   float deltaN = 0.008f;
   /// Hierarchical only: cap on the reseeding iterations of one two-way split (§3.2.3.2), >= 1.
-  int maxIterations = 16;
+  int maxIterations = 16;  ///< [1, kMaxClusteringIterations]
   /// Hierarchical only: seed of the random initial seed pairs. Same seed, same clusters, for any
   /// thread count.
   uint64_t seed = 1;
@@ -67,6 +67,8 @@ struct Clustering {
   size_t clusterSize(size_t c) const { return offsets[c + 1] - offsets[c]; }
 };
 
+/// Largest ClusteringOptions::maxIterations: far beyond convergence, small enough to end in seconds.
+inline constexpr int kMaxClusteringIterations = 1000;
 /// Throws OptionError (core/options.h) naming the first bad field (deltaN, maxIterations).
 void validate(const ClusteringOptions& options);
 

@@ -1,12 +1,23 @@
 #pragma once
 /// Writing outputs so that no half-written file is ever left, and so that a command that fails
-/// leaves every existing file as it was.
+/// or is interrupted leaves every existing file as it was.
 ///
-/// writeFileAtomically() puts the bytes in a temporary file beside the destination. Outside an
-/// OutputTransaction that file is renamed into place at once. While a transaction is open (the
-/// CLI opens one per command), the temporary files are only staged: OutputTransaction::commit()
-/// renames them all into place once the whole command has succeeded; a transaction destroyed
-/// without commit removes them, so no existing file is touched and no temporary file is left.
+/// writeFileAtomically() puts the bytes in a temporary file beside the destination (a short
+/// hidden name, so that any legal file name stays legal). Outside an OutputTransaction that file
+/// is renamed into place at once. While a transaction is open (the CLI opens one per command),
+/// the temporary files are only staged: OutputTransaction::commit() renames them all into place
+/// once the whole command has succeeded; a transaction destroyed without commit removes them, so
+/// no existing file is touched and no temporary file is left.
+///
+/// makeOutputFolder() does the same for a folder of outputs (an experiment's run): the folder is
+/// built under a hidden temporary name and takes its place (replacing an earlier folder of that
+/// name whole) only at commit; files written under its path go into the temporary folder.
+///
+/// Every temporary file and folder is also recorded in a process-wide cleanup registry that
+/// removeTemporaryOutputs() empties with async-signal-safe calls only; installCleanupOnSignals()
+/// runs it on SIGINT, SIGTERM, SIGHUP and SIGQUIT before the signal takes its default effect, so
+/// an interrupted command leaves no temporary file behind and still dies by its signal.
+///
 /// Staging an output onto a file the command has read (see noteInput), or the same output twice,
 /// is refused (Error::Kind::BadParameter).
 #include <filesystem>
@@ -19,6 +30,18 @@ namespace linesurf {
 /// linesurf::Error (Kind::Io) when it cannot write.
 void writeFileAtomically(const std::filesystem::path& path, std::string_view bytes);
 
+/// Makes `path` a folder for outputs (its parents must exist or be output folders themselves).
+/// Outside a transaction it is created at once (nothing happens when it exists). Inside one, a
+/// folder that does not exist yet, or any folder when `replace` is true, is built under a hidden
+/// temporary name beside it and put in place by commit(): with `replace`, an existing folder of
+/// that name is swapped out whole (atomically) and removed. A folder inside a staged folder is
+/// created at once in the staged copy. Throws Error (Kind::Io) when it cannot be made.
+void makeOutputFolder(const std::filesystem::path& path, bool replace = false);
+
+/// Where a write to `path` lands now: inside a staged folder's temporary copy when `path` lies
+/// under a folder staged by makeOutputFolder, else `path` itself.
+std::filesystem::path stagedLocation(const std::filesystem::path& path);
+
 /// Records that the open transaction (if any) reads `path`: an output onto it is refused.
 /// Called by every reader of model_io.h and image_io.h.
 void noteInput(const std::filesystem::path& path);
@@ -27,13 +50,13 @@ void noteInput(const std::filesystem::path& path);
 class OutputTransaction {
  public:
   OutputTransaction();
-  ~OutputTransaction();  ///< removes every staged file unless committed
+  ~OutputTransaction();  ///< removes every staged file and folder unless committed
   OutputTransaction(const OutputTransaction&) = delete;
   OutputTransaction& operator=(const OutputTransaction&) = delete;
-  /// Renames every staged file into place (in staging order). Throws Error (Kind::Io) when a
-  /// rename fails; the files not yet renamed are removed.
+  /// Puts every staged folder, then every staged file (in staging order) in place. Throws Error
+  /// (Kind::Io) when a rename fails; what was not yet in place is removed.
   void commit();
-  /// Number of files staged so far.
+  /// Number of files and folders staged so far.
   size_t staged() const;
 
   struct State;
@@ -41,6 +64,14 @@ class OutputTransaction {
  private:
   std::unique_ptr<State> state_;
 };
+
+/// Removes every temporary file and folder the process has made for outputs and not yet put in
+/// place or removed. Only async-signal-safe calls: may run in a signal handler.
+void removeTemporaryOutputs() noexcept;
+/// Installs handlers for SIGINT, SIGTERM, SIGHUP and SIGQUIT that call removeTemporaryOutputs()
+/// and re-raise the signal with its default action (the exit status stays the signal's).
+/// For programs (the CLI); a library embedded elsewhere leaves the host's handlers alone.
+void installCleanupOnSignals();
 
 /// Identity of an existing file (device, inode), or {0, 0} when it does not exist.
 struct FileId {

@@ -23,7 +23,9 @@ struct WriteOptions {
 HybridModel readModel(const std::filesystem::path& path);
 /// Reads a triangle mesh (.ply with vertex + face, .obj with optional .mtl texture).
 TriangleMesh readMesh(const std::filesystem::path& path);
-/// True when the file holds faces (a mesh) rather than points/segments; reads only the header.
+/// True when the file holds faces (a mesh) rather than points/segments: a .ply that declares a
+/// face element (only its header is read), an .obj with a face line ('f'); an .obj without faces
+/// is a point cloud of its vertices.
 bool fileHoldsMesh(const std::filesystem::path& path);
 
 /// Writes points + segments as .ply (binary little-endian unless options say ascii) or .xyz

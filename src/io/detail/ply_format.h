@@ -12,6 +12,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 namespace linesurf::ply {
@@ -36,8 +37,14 @@ struct Element {
   uint64_t count = 0;
   std::vector<Property> properties;
   int line = 0;  ///< header line that declares it
-  /// Index of the property called `name`, or -1.
+  /// Index of the property called `name`, or -1 (constant time: a header of many properties
+  /// is read in linear time).
   int find(std::string_view name) const;
+  /// Appends `p` (false, nothing added, when a property of that name exists).
+  bool add(Property p);
+
+ private:
+  std::unordered_map<std::string, int> byName_;
 };
 
 struct Header {

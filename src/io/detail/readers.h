@@ -9,6 +9,11 @@
 
 namespace linesurf::detail {
 
+/// A decimal number of a text format (ASCII PLY, XYZ) as a double: false when `s` is not one.
+/// Underflow gives 0 (or a subnormal), overflow +-inf, so that every text reader agrees on tiny
+/// and huge values (callers refuse non-finite ones).
+bool parseReal(std::string_view s, double& v);
+
 /// The whole file (or its first maxBytes) as bytes; throws BadInput for a missing file, a
 /// directory or a read error.
 std::string readFileBytes(const std::filesystem::path& path, size_t maxBytes = size_t(-1));
@@ -22,6 +27,8 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& model, 
 void writePlyMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options);
 
 TriangleMesh readObj(const std::filesystem::path& path);
+/// Whether an OBJ has a face line ('f'); one without is a point cloud of its vertices.
+bool objHasFaces(std::string_view bytes);
 /// OBJ from bytes; `mtlDir` is where mtllib and textures are looked up (null: not loaded).
 TriangleMesh objToMesh(std::string_view bytes, const std::string& name, const std::filesystem::path* mtlDir);
 void writeObj(const std::filesystem::path& path, const TriangleMesh& mesh);
