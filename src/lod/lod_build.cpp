@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/lod/lod.h"
 #include "lod_format.h"
@@ -167,8 +168,8 @@ Bounds3f unite(Bounds3f a, const Bounds3f& b) {
 
 void validate(const BuildOptions& o) {
   if (o.leafSize < 16 || o.leafSize > (1 << 20))
-    throwBadParameter("leafSize", fmt::format("must be in [16, 1048576], got {}", o.leafSize));
-  if (o.grid < 2 || o.grid > 256) throwBadParameter("grid", fmt::format("must be in [2, 256], got {}", o.grid));
+    throwBadOption("leafSize", fmt::format("must be in [16, 1048576], got {}", o.leafSize));
+  if (o.grid < 2 || o.grid > 256) throwBadOption("grid", fmt::format("must be in [2, 256], got {}", o.grid));
 }
 
 uint64_t lodChecksum(const void* data, size_t bytes) {
