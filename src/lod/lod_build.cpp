@@ -245,68 +245,10 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   }
   const uint32_t count = uint32_t(nodes.size());
 
-  // Node contents, deepest level first; a level's nodes in parallel (each writes its own slot).
-  std::vector<NodeData> data(count);
-  std::vector<std::string> blocks(count);
   int depth = 0;
   for (const BNode& n : nodes) depth = std::max(depth, n.level);
-  std::vector<std::vector<uint32_t>> byLevel(depth + 1);
-  for (uint32_t i = 0; i < count; ++i) byLevel[nodes[i].level].push_back(i);
-  uint64_t reps = 0;
-  for (int level = depth; level >= 0; --level) {
-    const auto& ids = byLevel[level];
-    parallelFor(0, ids.size(), [&](size_t k) {
-      const uint32_t i = ids[k];
-      BNode& nd = nodes[i];
-      NodeData d;
-      if (nd.leaf) {
-        std::vector<uint32_t> idx;
-        idx.reserve(nd.end - nd.begin);
-        for (size_t j = nd.begin; j < nd.end; ++j) idx.push_back(keys[j].second);
-        std::sort(idx.begin(), idx.end());  // original order: a full render is today's render
-        for (uint32_t j : idx) {
-          if (j < P) {
-            d.points.push_back(model.points[j]);
-            d.masses.push_back(masses ? (*masses)[j] : 1.0f);
-            d.pointIndex.push_back(j);
-            if (shading) d.shadingNormals.push_back(model.pointShadingNormals[j]);
-          } else {
-            d.segments.push_back(model.segments[j - P]);
-            d.segmentIndex.push_back(uint32_t(j - P));
-          }
-        }
-        nd.bounds = contentBounds(d);
-      } else {
-        std::vector<const NodeData*> ch;
-        Bounds3f b;
-        for (uint32_t c = nd.firstChild; c < nd.firstChild + nd.childCount; ++c) {
-          ch.push_back(&data[c]);
-          b = unite(b, nodes[c].bounds);
-        }
-        d = mergeChildren(ch, nd.cubeMin, nd.side, options.grid, shading);
-        nd.bounds = unite(b, contentBounds(d));
-      }
-      blocks[i] = serializeBlock(d, i, shading);
-      data[i] = std::move(d);
-    }, 1);
-    for (uint32_t i : ids)
-      if (!nodes[i].leaf) {
-        reps += data[i].points.size() + data[i].segments.size();
-        for (uint32_t c = nodes[i].firstChild; c < nodes[i].firstChild + nodes[i].childCount; ++c) data[c] = {};
-      }
-  }
 
-  // The hierarchy's id: a hash of every block (id field still zero) and the build parameters.
-  std::vector<uint64_t> sums(count + 2);
-  parallelFor(0, count, [&](size_t i) { sums[i] = lodChecksum(blocks[i].data(), blocks[i].size()); }, 1);
-  sums[count] = uint64_t(options.leafSize);
-  sums[count + 1] = uint64_t(options.grid);
-  const uint64_t id = lodChecksum(sums.data(), sums.size() * 8) | 1;  // never 0
-  parallelFor(0, count, [&](size_t i) {
-    std::memcpy(blocks[i].data() + 8, &id, 8);
-    sums[i] = lodChecksum(blocks[i].data(), blocks[i].size());
-  }, 1);
-
+  // The header first: everything in it but the id is known before the blocks.
   const BoundingSphere sphere = boundingSphere(model);
   float maxRadius = 0;
   for (const Point& p : model.points)
@@ -314,10 +256,11 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   for (const Segment& s : model.segments)
     if (std::isfinite(s.radius)) maxRadius = std::max(maxRadius, s.radius);
   const Attributes& a = model.attributes;
+  const std::string idPlaceholder(16, '0');
   nlohmann::json j = {
       {"format", "linesurf-lod"},
       {"version", format::kVersion},
-      {"hierarchy", fmt::format("{:016x}", id)},
+      {"hierarchy", idPlaceholder},
       {"points", P},
       {"segments", S},
       {"nodes", count},
@@ -336,53 +279,151 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   };
   std::string js = j.dump();
   while ((format::kPreambleBytes + js.size()) % 8) js.push_back(' ');
+  const size_t idAt = format::kPreambleBytes + js.find(idPlaceholder);
   const uint64_t tableOffset = format::kPreambleBytes + js.size();
-  uint64_t offset = tableOffset + uint64_t(count) * format::kRecordBytes;
-  uint64_t total = offset;
-  for (const auto& b : blocks) total += b.size();
+  const uint64_t blocksOffset = tableOffset + uint64_t(count) * format::kRecordBytes;
 
+  // Leaf blocks first: their sizes follow from their counts, so each is written in place (in
+  // parallel, each into its own range); inner blocks follow as they are made, deepest level
+  // first. The output buffer is the only copy of the hierarchy (bounded memory: model + keys +
+  // output + the inner contents of two levels).
+  auto blockBytes = [](uint64_t pts, uint64_t segs) {
+    return format::kBlockHeaderBytes + format::kPointBytes * pts + format::kSegmentBytes * segs;
+  };
+  std::vector<uint64_t> offsets(count), sizes(count);
+  std::vector<uint32_t> nPoints(count), nSegments(count);
+  uint64_t leafEnd = blocksOffset, leafBytes = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    if (!nodes[i].leaf) continue;
+    uint64_t pts = 0;
+    for (size_t k = nodes[i].begin; k < nodes[i].end; ++k) pts += keys[k].second < P;
+    nPoints[i] = uint32_t(pts), nSegments[i] = uint32_t(nodes[i].end - nodes[i].begin - pts);
+    offsets[i] = leafEnd;
+    sizes[i] = blockBytes(nPoints[i], nSegments[i]);
+    leafEnd += sizes[i];
+    leafBytes += sizes[i];
+  }
   std::string out;
-  out.reserve(total);
-  format::put(out, format::kMagic, 8);
-  format::put(out, format::kVersion);
-  format::put(out, uint32_t(js.size()));
-  format::put(out, id);
-  format::put(out, uint64_t(count));
-  out += js;
+  out.reserve(leafEnd + leafBytes + (1 << 16));  // inner nodes: under the leaves' size in practice
+  out.resize(leafEnd);
+  auto leafData = [&](const BNode& nd) {
+    NodeData d;
+    std::vector<uint32_t> idx;
+    idx.reserve(nd.end - nd.begin);
+    for (size_t k = nd.begin; k < nd.end; ++k) idx.push_back(keys[k].second);
+    std::sort(idx.begin(), idx.end());  // model order: every leaf drawn is today's model
+    for (uint32_t k : idx) {
+      if (k < P) {
+        d.points.push_back(model.points[k]);
+        d.masses.push_back(masses ? (*masses)[k] : 1.0f);
+        d.pointIndex.push_back(k);
+        if (shading) d.shadingNormals.push_back(model.pointShadingNormals[k]);
+      } else {
+        d.segments.push_back(model.segments[k - P]);
+        d.segmentIndex.push_back(uint32_t(k - P));
+      }
+    }
+    return d;
+  };
+  std::vector<uint32_t> leafIds;
+  for (uint32_t i = 0; i < count; ++i)
+    if (nodes[i].leaf) leafIds.push_back(i);
+  parallelFor(0, leafIds.size(), [&](size_t k) {
+    const uint32_t i = leafIds[k];
+    const NodeData d = leafData(nodes[i]);
+    nodes[i].bounds = contentBounds(d);
+    const std::string b = serializeBlock(d, i, shading);
+    std::memcpy(out.data() + offsets[i], b.data(), b.size());
+  }, 1);
+
+  std::vector<NodeData> data(count);  // inner nodes' contents, until their parent is made
+  std::vector<std::string> blocks(count);
+  std::vector<std::vector<uint32_t>> byLevel(depth + 1);
+  for (uint32_t i = 0; i < count; ++i)
+    if (!nodes[i].leaf) byLevel[nodes[i].level].push_back(i);
+  uint64_t reps = 0;
+  for (int level = depth; level >= 0; --level) {
+    const auto& ids = byLevel[level];
+    parallelFor(0, ids.size(), [&](size_t k) {
+      const uint32_t i = ids[k];
+      BNode& nd = nodes[i];
+      std::vector<NodeData> leafChildren;
+      leafChildren.reserve(nd.childCount);
+      std::vector<const NodeData*> ch;
+      Bounds3f b;
+      for (uint32_t c = nd.firstChild; c < nd.firstChild + nd.childCount; ++c) {
+        if (nodes[c].leaf) {
+          leafChildren.push_back(leafData(nodes[c]));
+          ch.push_back(&leafChildren.back());
+        } else {
+          ch.push_back(&data[c]);
+        }
+        b = unite(b, nodes[c].bounds);
+      }
+      NodeData d = mergeChildren(ch, nd.cubeMin, nd.side, options.grid, shading);
+      nd.bounds = unite(b, contentBounds(d));
+      blocks[i] = serializeBlock(d, i, shading);
+      data[i] = std::move(d);
+    }, 1);
+    for (uint32_t i : ids) {
+      reps += data[i].points.size() + data[i].segments.size();
+      nPoints[i] = uint32_t(data[i].points.size()), nSegments[i] = uint32_t(data[i].segments.size());
+      offsets[i] = out.size();
+      sizes[i] = blocks[i].size();
+      out += blocks[i];
+      std::string().swap(blocks[i]);
+      for (uint32_t c = nodes[i].firstChild; c < nodes[i].firstChild + nodes[i].childCount; ++c) data[c] = {};
+    }
+  }
+
+  // The hierarchy's id: a hash of every block (id field still zero) and the build parameters.
+  std::vector<uint64_t> sums(count + 2);
+  parallelFor(0, count, [&](size_t i) { sums[i] = lodChecksum(out.data() + offsets[i], sizes[i]); }, 1);
+  sums[count] = uint64_t(options.leafSize);
+  sums[count + 1] = uint64_t(options.grid);
+  const uint64_t id = lodChecksum(sums.data(), sums.size() * 8) | 1;  // never 0
+  parallelFor(0, count, [&](size_t i) {
+    std::memcpy(out.data() + offsets[i] + 8, &id, 8);
+    sums[i] = lodChecksum(out.data() + offsets[i], sizes[i]);
+  }, 1);
+
+  std::string head;
+  format::put(head, format::kMagic, 8);
+  format::put(head, format::kVersion);
+  format::put(head, uint32_t(js.size()));
+  format::put(head, id);
+  format::put(head, uint64_t(count));
+  head += js;
+  const std::string hex = fmt::format("{:016x}", id);
+  std::memcpy(head.data() + idAt, hex.data(), 16);
   for (uint32_t i = 0; i < count; ++i) {
     const BNode& n = nodes[i];
     using format::put;
-    put(out, id);
-    put(out, offset);
-    put(out, uint64_t(blocks[i].size()));
-    put(out, sums[i]);
-    format::putVec(out, n.cubeMin);
-    put(out, n.side);
+    put(head, id);
+    put(head, offsets[i]);
+    put(head, sizes[i]);
+    put(head, sums[i]);
+    format::putVec(head, n.cubeMin);
+    put(head, n.side);
     Bounds3f b = n.bounds;
     if (b.empty()) b.extend(n.cubeMin);
-    format::putVec(out, b.min);
-    format::putVec(out, b.max);
-    const uint32_t pts = format::get<uint32_t>(blocks[i].data() + 20);
-    const uint32_t segs = format::get<uint32_t>(blocks[i].data() + 24);
-    put(out, pts);
-    put(out, segs);
-    put(out, n.firstChild);
-    put(out, n.childCount);
-    put(out, uint8_t(n.level));
-    put(out, uint8_t(n.leaf));
-    put(out, uint8_t(0));
-    offset += blocks[i].size();
+    format::putVec(head, b.min);
+    format::putVec(head, b.max);
+    put(head, nPoints[i]);
+    put(head, nSegments[i]);
+    put(head, n.firstChild);
+    put(head, n.childCount);
+    put(head, uint8_t(n.level));
+    put(head, uint8_t(n.leaf));
+    put(head, uint8_t(0));
   }
-  for (auto& b : blocks) {
-    out += b;
-    std::string().swap(b);  // keep the peak near the output's size
-  }
+  if (head.size() != blocksOffset) throw std::logic_error("lod: header size");
+  std::memcpy(out.data(), head.data(), head.size());
   if (report) {
     report->primitives = N;
     report->representatives = reps;
     report->nodes = count;
-    report->leaves = 0;
-    for (const BNode& n : nodes) report->leaves += n.leaf;
+    report->leaves = uint32_t(leafIds.size());
     report->depth = uint32_t(depth);
     report->bytes = out.size();
     report->hierarchyId = id;
