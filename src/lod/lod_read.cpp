@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <queue>
 
 #include "linesurf/core/error.h"
@@ -140,16 +141,16 @@ LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
                                                 header_.points + header_.segments));
 }
 
-NodeData LodFile::readNode(uint32_t i) const {
+void LodFile::readBlock(uint32_t i, std::vector<char>& buf) const {
   const std::string ps = path_.string(), where = fmt::format("node {}", i);
   if (i >= nodes_.size()) throwBadInput(ps, where, "no such node");
   const NodeInfo& n = nodes_[i];
   if (n.offset + n.size > fileSize_)
     throwBadInput(ps, where, fmt::format("missing or truncated: its block [{}, {}) lies past the file's end ({} bytes)",
                                          n.offset, n.offset + n.size, fileSize_));
-  std::string buf(n.size, '\0');
+  if (buf.size() < n.size) buf.resize(n.size);
   Fd f(path_);
-  if (f.fd < 0 || f.read(n.offset, buf.data(), buf.size()) != buf.size())
+  if (f.fd < 0 || f.read(n.offset, buf.data(), n.size) != n.size)
     throwBadInput(ps, where, "missing or truncated: its block cannot be read in full");
   const char* p = buf.data();
   if (std::memcmp(p, format::kBlockMagic, 8) != 0) throwBadInput(ps, where, "its block is not a node block");
@@ -159,28 +160,41 @@ NodeData LodFile::readNode(uint32_t i) const {
   if (format::get<uint32_t>(p + 16) != i || format::get<uint32_t>(p + 20) != n.points ||
       format::get<uint32_t>(p + 24) != n.segments)
     throwBadInput(ps, where, "its block holds another node");
-  if (lodChecksum(buf.data(), buf.size()) != n.checksum) throwBadInput(ps, where, "checksum mismatch (corrupt block)");
+  if (lodChecksum(p, n.size) != n.checksum) throwBadInput(ps, where, "checksum mismatch (corrupt block)");
+  // Indices in range (originals) or none (representatives), masses valid: checked before any
+  // index is used to place a primitive.
+  const char* q = p + format::kBlockHeaderBytes;
+  for (uint32_t k = 0; k < n.points; ++k, q += format::kPointBytes) {
+    const uint32_t idx = format::get<uint32_t>(q + 60);
+    if (!(n.leaf ? idx < header_.points : idx == kNoIndex) || !validPointMass(format::get<float>(q + 56)))
+      throwBadInput(ps, where, fmt::format("point {}: invalid index or mass", k));
+  }
+  for (uint32_t k = 0; k < n.segments; ++k, q += format::kSegmentBytes) {
+    const uint32_t idx = format::get<uint32_t>(q + 96);
+    if (!(n.leaf ? idx < header_.segments : idx == kNoIndex))
+      throwBadInput(ps, where, fmt::format("segment {}: invalid index", k));
+  }
+}
+
+NodeData LodFile::readNode(uint32_t i) const {
+  std::vector<char> buf;
+  readBlock(i, buf);
+  const NodeInfo& n = nodes_[i];
   NodeData d;
   const bool shading = header_.attributes.shadingNormals;
   d.points.resize(n.points);
   d.masses.resize(n.points);
   d.pointIndex.resize(n.points);
   if (shading) d.shadingNormals.resize(n.points);
-  p += format::kBlockHeaderBytes;
+  const char* p = buf.data() + format::kBlockHeaderBytes;
   for (uint32_t k = 0; k < n.points; ++k, p += format::kPointBytes) {
     Vec3f sn;
     format::getPoint(p, d.points[k], sn, d.masses[k], d.pointIndex[k]);
     if (shading) d.shadingNormals[k] = sn;
-    const bool ok = n.leaf ? d.pointIndex[k] < header_.points : d.pointIndex[k] == kNoIndex;
-    if (!ok || !validPointMass(d.masses[k])) throwBadInput(ps, where, fmt::format("point {}: invalid index or mass", k));
   }
   d.segments.resize(n.segments);
   d.segmentIndex.resize(n.segments);
-  for (uint32_t k = 0; k < n.segments; ++k, p += format::kSegmentBytes) {
-    format::getSegment(p, d.segments[k], d.segmentIndex[k]);
-    const bool ok = n.leaf ? d.segmentIndex[k] < header_.segments : d.segmentIndex[k] == kNoIndex;
-    if (!ok) throwBadInput(ps, where, fmt::format("segment {}: invalid index", k));
-  }
+  for (uint32_t k = 0; k < n.segments; ++k, p += format::kSegmentBytes) format::getSegment(p, d.segments[k], d.segmentIndex[k]);
   return d;
 }
 
@@ -244,69 +258,104 @@ Assembled assemble(const LodFile& file, const Selection& selection, float radius
   const LodHeader& h = file.header();
   const auto& nodes = file.nodes();
   const size_t n = selection.nodes.size();
-  std::vector<NodeData> data(n);
-  std::vector<std::string> failed(n);
-  parallelFor(0, n, [&](size_t k) {
-    try {
-      data[k] = file.readNode(selection.nodes[k]);
-    } catch (const Error& e) {
-      failed[k] = e.what();
-    }
-  }, 1);
-  Assembled out;
-  for (auto& f : failed)
-    if (!f.empty()) out.failures.push_back(f);
-  const bool shading = h.attributes.shadingNormals;
-  size_t np = 0, ns = 0;
+  // Where each node's primitives go, from the table's counts: originals first, then the
+  // representatives in node order. When every leaf is drawn the originals are placed by their
+  // model index, so the model drawn is today's model; otherwise they keep node order
+  // (deterministic, and no sort in the frame). Blocks are decoded straight into place.
+  uint64_t leafPoints = 0, leafSegments = 0, np = 0, ns = 0;
   bool reps = false;
-  for (size_t k = 0; k < n; ++k) {
-    np += data[k].points.size(), ns += data[k].segments.size();
-    if (!nodes[selection.nodes[k]].leaf && failed[k].empty()) reps = true, ++out.representativeNodes;
+  for (uint32_t i : selection.nodes) {
+    np += nodes[i].points, ns += nodes[i].segments;
+    if (nodes[i].leaf) leafPoints += nodes[i].points, leafSegments += nodes[i].segments;
+    else reps = true;
   }
+  const bool byIndex = leafPoints == h.points && leafSegments == h.segments;
+  std::vector<uint64_t> pointAt(n), segmentAt(n);
+  uint64_t pl = 0, sl = 0, pr = leafPoints, sr = leafSegments;
+  for (size_t k = 0; k < n; ++k) {
+    const NodeInfo& nd = nodes[selection.nodes[k]];
+    if (nd.leaf) pointAt[k] = pl, segmentAt[k] = sl, pl += nd.points, sl += nd.segments;
+    else pointAt[k] = pr, segmentAt[k] = sr, pr += nd.points, sr += nd.segments;
+  }
+  Assembled out;
   HybridModel& m = out.model;
   m.attributes = h.attributes;
   if (reps) m.attributes.normals = m.attributes.radii = true;
-  const bool withMasses = h.pointMasses || reps;
-  m.points.reserve(np);
-  m.segments.reserve(ns);
-  std::vector<float> masses;
-  if (withMasses) masses.reserve(np);
-  if (shading) m.pointShadingNormals.reserve(np);
-  // Originals first, merged by their index (each leaf's are sorted), so that every leaf gives
-  // the original model in its order; then the representatives in node order.
-  auto mergeLeaves = [&](auto indexOf, auto emit, auto sizeOf) {
-    using Item = std::pair<uint32_t, std::pair<size_t, size_t>>;  // index, (node slot, position)
-    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
-    for (size_t k = 0; k < n; ++k)
-      if (nodes[selection.nodes[k]].leaf && sizeOf(data[k]) > 0) q.push({indexOf(data[k], 0), {k, 0}});
-    while (!q.empty()) {
-      auto [idx, at] = q.top();
-      q.pop();
-      emit(data[at.first], at.second);
-      if (at.second + 1 < sizeOf(data[at.first]))
-        q.push({indexOf(data[at.first], at.second + 1), {at.first, at.second + 1}});
+  const bool withMasses = h.pointMasses || reps, shading = h.attributes.shadingNormals;
+  m.points.resize(np);
+  m.segments.resize(ns);
+  std::vector<float> masses(withMasses ? np : 0);
+  if (shading) m.pointShadingNormals.resize(np);
+  std::vector<std::string> failed(n);
+  parallelFor(0, n, [&](size_t k) {
+    thread_local std::vector<char> buf;
+    const uint32_t i = selection.nodes[k];
+    const NodeInfo& nd = nodes[i];
+    try {
+      file.readBlock(i, buf);
+    } catch (const Error& e) {
+      failed[k] = e.what();
+      return;
     }
-  };
-  auto emitPoint = [&](const NodeData& d, size_t i) {
-    m.points.push_back(d.points[i]);
-    if (withMasses) masses.push_back(d.masses[i]);
-    if (shading) m.pointShadingNormals.push_back(d.shadingNormals[i]);
-  };
-  mergeLeaves([](const NodeData& d, size_t i) { return d.pointIndex[i]; }, emitPoint,
-              [](const NodeData& d) { return d.points.size(); });
-  mergeLeaves([](const NodeData& d, size_t i) { return d.segmentIndex[i]; },
-              [&](const NodeData& d, size_t i) { m.segments.push_back(d.segments[i]); },
-              [](const NodeData& d) { return d.segments.size(); });
-  for (size_t k = 0; k < n; ++k) {
-    if (nodes[selection.nodes[k]].leaf) continue;
-    for (size_t i = 0; i < data[k].points.size(); ++i) emitPoint(data[k], i);
-    m.segments.insert(m.segments.end(), data[k].segments.begin(), data[k].segments.end());
+    const bool place = nd.leaf && byIndex;
+    const char* p = buf.data() + format::kBlockHeaderBytes;
+    for (uint32_t j = 0; j < nd.points; ++j, p += format::kPointBytes) {
+      Point pt;
+      Vec3f sn;
+      float mass;
+      uint32_t idx;
+      format::getPoint(p, pt, sn, mass, idx);
+      const uint64_t at = place ? idx : pointAt[k] + j;
+      pt.radius *= radiusScale;
+      m.points[at] = pt;
+      if (withMasses) masses[at] = mass;
+      if (shading) m.pointShadingNormals[at] = sn;
+    }
+    for (uint32_t j = 0; j < nd.segments; ++j, p += format::kSegmentBytes) {
+      Segment s;
+      uint32_t idx;
+      format::getSegment(p, s, idx);
+      s.radius *= radiusScale;
+      m.segments[place ? idx : segmentAt[k] + j] = s;
+    }
+  }, 1);
+  // Failed nodes leave their places empty: drop them (a failed leaf read by index left the
+  // places of its own primitives, known only from its intact neighbours: every place not written).
+  bool anyFailed = false;
+  for (size_t k = 0; k < n; ++k)
+    if (!failed[k].empty()) out.failures.push_back(failed[k]), anyFailed = true;
+    else if (!nodes[selection.nodes[k]].leaf) ++out.representativeNodes;
+  if (anyFailed) {
+    std::vector<char> keepP(np, 0), keepS(ns, 0);
+    for (size_t k = 0; k < n; ++k) {
+      if (!failed[k].empty()) continue;
+      const NodeInfo& nd = nodes[selection.nodes[k]];
+      if (nd.leaf && byIndex) {
+        const NodeData d = file.readNode(selection.nodes[k]);  // rare path: the indices again
+        for (uint32_t idx : d.pointIndex) keepP[idx] = 1;
+        for (uint32_t idx : d.segmentIndex) keepS[idx] = 1;
+      } else {
+        std::fill_n(keepP.begin() + pointAt[k], nd.points, 1);
+        std::fill_n(keepS.begin() + segmentAt[k], nd.segments, 1);
+      }
+    }
+    size_t w = 0;
+    for (size_t r = 0; r < np; ++r)
+      if (keepP[r]) {
+        m.points[w] = m.points[r];
+        if (withMasses) masses[w] = masses[r];
+        if (shading) m.pointShadingNormals[w] = m.pointShadingNormals[r];
+        ++w;
+      }
+    m.points.resize(w);
+    if (withMasses) masses.resize(w);
+    if (shading) m.pointShadingNormals.resize(w);
+    w = 0;
+    for (size_t r = 0; r < ns; ++r)
+      if (keepS[r]) m.segments[w++] = m.segments[r];
+    m.segments.resize(w);
   }
   if (withMasses && !m.points.empty()) m.pointProperties[kPointMassProperty] = std::move(masses);
-  if (radiusScale != 1) {
-    for (Point& p : m.points) p.radius *= radiusScale;
-    for (Segment& s : m.segments) s.radius *= radiusScale;
-  }
   return out;
 }
 

@@ -94,6 +94,9 @@ class LodFile {
   /// Reads node `i`'s block. Throws Error (BadInput, WHERE = "node i") when it is missing or
   /// truncated, belongs to another hierarchy, or does not match its checksum.
   NodeData readNode(uint32_t i) const;
+  /// Reads node `i`'s block into `buf` (grown as needed) and checks it as readNode does, indices
+  /// and masses included.
+  void readBlock(uint32_t i, std::vector<char>& buf) const;
 
  private:
   std::filesystem::path path_;
@@ -148,7 +151,7 @@ class LodRenderer {
   float radiusScale_;
 };
 
-/// The 64-bit checksum of node blocks (FNV-1a over little-endian 64-bit words, then the tail).
+/// The 64-bit checksum of node blocks (four FNV-1a-like lanes over little-endian 64-bit words).
 uint64_t lodChecksum(const void* data, size_t bytes);
 
 }  // namespace linesurf::lod
