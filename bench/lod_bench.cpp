@@ -11,6 +11,8 @@
 #include <memory>
 #include <numbers>
 
+#include <unistd.h>
+
 #include "linesurf/lod/lod.h"
 #include "linesurf/render/renderer.h"
 
@@ -78,14 +80,25 @@ void BM_LodBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_LodBuild)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
 
+// The hierarchy in a temporary file (removed at exit), read by byte range as `render` reads it.
 const lod::LodFile& hierarchy() {
-  static std::unique_ptr<lod::LodFile> f = [] {
-    const auto path = std::filesystem::temp_directory_path() / ("linesurf_lod_bench_" + std::to_string(benchSize()) + ".lod");
+  struct Held {
+    std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                 ("linesurf_lod_bench_" + std::to_string(::getpid()) + ".lod");
+    std::unique_ptr<lod::LodFile> file;
+    ~Held() {
+      file.reset();
+      std::error_code ec;
+      std::filesystem::remove(path, ec);
+    }
+  };
+  static Held held;
+  if (!held.file) {
     const std::string bytes = lod::buildLod(model(), ModelFrame{});
-    std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
-    return std::make_unique<lod::LodFile>(path);
-  }();
-  return *f;
+    std::ofstream(held.path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    held.file = std::make_unique<lod::LodFile>(held.path);
+  }
+  return *held.file;
 }
 
 // One frame at 1024² with a budget: node selection, reading the nodes, rendering.
