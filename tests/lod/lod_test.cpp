@@ -297,5 +297,39 @@ TEST(Lod, CliRendersAHierarchyWithABudget) {
   EXPECT_FALSE(std::filesystem::exists(dir / "d.png"));
 }
 
+// A model far from unit size is drawn in its normalising frame: the hierarchy keeps that frame.
+TEST(Lod, CliFarFromUnitSizeIsTodaysRender) {
+  const auto dir = test::scratchDir("lod_cli_far");
+  HybridModel m = sphereHybrid(6000);
+  for (Point& p : m.points) p.position = 1e7f * p.position + Vec3f(3e8f, 0, 0), p.radius *= 1e7f;
+  for (Segment& s : m.segments)
+    s.p0 = 1e7f * s.p0 + Vec3f(3e8f, 0, 0), s.p1 = 1e7f * s.p1 + Vec3f(3e8f, 0, 0), s.radius *= 1e7f;
+  writeModel(dir / "far.ply", m);
+  const std::string q = "'" + dir.string() + "/";
+  ASSERT_EQ(test::runCli("-q lod build " + q + "far.ply' -o " + q + "far.lod'").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q render " + q + "far.ply' -o " + q + "a.png' --size 96x96 --azimuth 70").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q render " + q + "far.lod' -o " + q + "b.png' --size 96x96 --azimuth 70").exitCode, 0);
+  EXPECT_EQ(test::maxAbsDiff(readImage(dir / "a.png"), readImage(dir / "b.png")), 0.0f);
+}
+
+// The bundled igea scan made a hybrid as users make one (normals, then eps-delta): every leaf gives
+// today's picture, half the budget SSIM >= 0.97.
+TEST(Lod, CliIgeaHybridFullAndHalfBudget) {
+  const auto dir = test::scratchDir("lod_cli_igea");
+  const std::string q = "'" + dir.string() + "/";
+  const std::string in = "'" + (test::bundledData() / "igea_points.ply").string() + "'";
+  ASSERT_EQ(test::runCli("-q normals " + in + " -o " + q + "n.ply'").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q extract eps-delta " + q + "n.ply' -o " + q + "h.ply'").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q lod build " + q + "h.ply' -o " + q + "h.lod'").exitCode, 0);
+  const HybridModel h = readModel(dir / "h.ply");
+  const size_t total = h.points.size() + h.segments.size();
+  ASSERT_EQ(test::runCli("-q render " + q + "h.ply' -o " + q + "a.png'").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q render " + q + "h.lod' -o " + q + "b.png' --budget " + std::to_string(total)).exitCode, 0);
+  ASSERT_EQ(test::runCli("-q render " + q + "h.lod' -o " + q + "c.png' --budget " + std::to_string(total / 2)).exitCode, 0);
+  const Image a = readImage(dir / "a.png");
+  EXPECT_EQ(test::maxAbsDiff(a, readImage(dir / "b.png")), 0.0f);
+  EXPECT_GE(compareImages(a, readImage(dir / "c.png")).ssim, 0.97);
+}
+
 }  // namespace
 }  // namespace linesurf
