@@ -120,8 +120,9 @@ struct Selection {
 };
 Selection selectNodes(const LodFile& file, const Camera& camera, uint64_t budget);
 
-/// One frame of a hierarchy: the selected nodes' primitives as one model (originals in their
-/// original order first, then representatives in node order), and the nodes that failed to load.
+/// One frame of a hierarchy: the selected nodes' primitives as one model (originals first, in
+/// model order when every leaf is selected, else in node order; then representatives in node
+/// order), and the nodes that failed to load (their primitives left out).
 struct Assembled {
   HybridModel model;
   std::vector<std::string> failures;  ///< one "PATH: node N: WHAT" line per failed node
