@@ -14,6 +14,7 @@
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
@@ -31,6 +32,7 @@ struct RenderArgs {
   MeshRenderOptions mesh;
   std::string primitive = "auto";
   bool zThresholdGiven = false, worldLight = false, noCull = false;
+  uint64_t budget = 0;  ///< splats a view from a .lod hierarchy (0 = every leaf)
 };
 
 std::filesystem::path viewPath(const std::filesystem::path& out, int i) {
@@ -72,7 +74,13 @@ void run(RenderArgs& a) {
   }
   if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points")
     throwBadOption("primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
-  const bool isMesh = fileHoldsMesh(a.model);
+  // A level-of-detail hierarchy (.lod) is already in its frame and prepared: each view draws the
+  // nodes chosen for it within --budget.
+  std::optional<lod::LodFile> lodFile;
+  if (lod::isLodFile(a.model)) lodFile.emplace(a.model);
+  else if (a.budget > 0) throwBadOption("budget", "needs a level-of-detail hierarchy (linesurf lod build), got " + a.model);
+  if (lodFile && a.primitive != "auto") throwBadOption("primitive", "does not apply to a .lod hierarchy");
+  const bool isMesh = !lodFile && fileHoldsMesh(a.model);
   if (a.primitive == "mesh" && !isMesh)
     throwBadOption("primitive", "mesh needs a file with faces; " + a.model + " holds none");
   std::optional<TriangleMesh> triMesh;
@@ -90,18 +98,20 @@ void run(RenderArgs& a) {
   } else if (isMesh) {
     model = meshVerticesAsPoints(readMesh(a.model));
     say(fmt::format("{}: mesh, rendering its {} vertices as points", a.model, model.points.size()));
-  } else {
+  } else if (!lodFile) {
     model = readModel(a.model);
   }
-  if (!triMesh && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
+  if (!triMesh && !lodFile && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
   // Scale-free (model_frame.h): a model far from unit size is rendered in a normalised frame;
   // camera positions and distances given in object units are mapped into it.
-  const ModelFrame frame = normalizingFrame(triMesh ? triMesh->bounds() : model.bounds());
+  const ModelFrame frame =
+      lodFile ? lodFile->header().frame : normalizingFrame(triMesh ? triMesh->bounds() : model.bounds());
   toFrame(model, frame);
   if (triMesh) toFrame(*triMesh, frame);
 
-  if (!model.attributes.radii && !model.points.empty()) checkGeometry(a.model, model.points.size(), a.prepare.k);
-  const PrepareReport prep = prepareForRendering(model, a.prepare);
+  if (!lodFile && !model.attributes.radii && !model.points.empty())
+    checkGeometry(a.model, model.points.size(), a.prepare.k);
+  const PrepareReport prep = lodFile ? PrepareReport{} : prepareForRendering(model, a.prepare);
   endProgress();
   if (prep.segmentRadiiEstimated)
     say(fmt::format("{} segments without a radius: estimated from the spacing of their neighbours",
@@ -113,9 +123,12 @@ void run(RenderArgs& a) {
 
   std::optional<Renderer> renderer;
   std::optional<MeshRenderer> meshRenderer;
+  std::optional<lod::LodRenderer> lodRenderer;
   if (triMesh) meshRenderer.emplace(*triMesh, o, a.mesh);
+  else if (lodFile) lodRenderer.emplace(*lodFile, o, a.budget > 0 ? a.budget : UINT64_MAX, a.prepare.radiusScale);
   else renderer.emplace(model, o);
-  const BoundingSphere& sphere = triMesh ? meshRenderer->sphere() : renderer->sphere();
+  const BoundingSphere sphere =
+      triMesh ? meshRenderer->sphere() : lodRenderer ? lodRenderer->sphere() : renderer->sphere();
   const std::vector<Camera> cams = viewCameras(sphere, a.view, frame);
   const int views = a.view.views;
 
@@ -137,6 +150,13 @@ void run(RenderArgs& a) {
       trianglesThisView = m.stats.trianglesDrawn;
       tris[0] += m.stats.trianglesDrawn; tris[1] += m.stats.trianglesClipped; tris[2] += m.stats.trianglesCulled;
       tris[3] += m.stats.trianglesOutside; tris[4] += m.stats.trianglesDegenerate;
+    } else if (lodRenderer) {
+      lod::LodFrameResult f = lodRenderer->render(cams[i]);
+      r = std::move(f.render);
+      // A node that failed leaves its part of the picture empty; the rest is drawn (exit 0).
+      for (const std::string& e : f.failures) std::fprintf(stderr, "warning: %s (not drawn)\n", e.c_str());
+      say(fmt::format("{}: {} nodes, {} splats within the budget; select {:.1f} ms, load {:.1f} ms", a.model,
+                      f.selection.nodes.size(), f.selection.primitives, 1000 * f.selectSeconds, 1000 * f.loadSeconds));
     } else {
       r = renderer->render(cams[i]);
     }
@@ -160,10 +180,10 @@ void run(RenderArgs& a) {
     sum.totalSeconds += s.totalSeconds;
   }
   const std::string per = cams.size() > 1 ? fmt::format(" (over {} views)", cams.size()) : "";
-  if (!model.points.empty())
+  if (!model.points.empty() || lodFile)
     say(fmt::format("points{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate", per,
                     sum.pointsDrawn, sum.pointsClipped, sum.pointsCulled, sum.pointsOutside, sum.pointsDegenerate));
-  if (!model.segments.empty())
+  if (!model.segments.empty() || (lodFile && lodFile->header().segments > 0))
     say(fmt::format("segments{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate, "
                     "{} approx fallbacks to screen-space, {} drawn as point splats (--segment-lod)", per,
                     sum.segmentsDrawn, sum.segmentsClipped, sum.segmentsCulled, sum.segmentsOutside,
@@ -264,6 +284,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bind(sub, "segmentLod", o.segmentLod,
        "Draw screen segments at most this many kernel sigmas long as one moment-matched point splat, [0, 4] "
        "(0 = every segment exact)");
+  sub->add_option("--budget", a->budget,
+                  "With a .lod hierarchy: draw at most N splats a view, nodes chosen coarse to fine by their projected "
+                  "size (default: every leaf, the full model)");
   sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)");
   sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG");
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB");
