@@ -25,8 +25,8 @@ struct ViewOptions {
   float azimuth = 30;    ///< orbit azimuth about the up axis (0 = from the front axis)
   float elevation = 20;  ///< orbit elevation towards the up axis, [-90, 90]
   float distance = 0;    ///< orbit distance from the centre; 0 frames the bounding sphere; >= 0
-  float zoom = 1;        ///< divides the framed distance, > 0
-  float fov = 30;        ///< vertical field of view, [1, 170]
+  float zoom = 1;        ///< divides the framed distance, [1e-3, 1e3]
+  float fov = Camera::kDefaultFovY;  ///< vertical field of view, [1, 170]
   int views = 0;         ///< > 0: this many views spread over the sphere, [0, 10000]
   Vec3f upAxis = Vec3f(0, 1, 0);  ///< world up of the orbit: a coordinate axis (+-x, +-y, +-z)
   /// Look-at camera when eye or target is set: eye defaults to 3 radii in front (+z) of the
