@@ -11,6 +11,7 @@
 #include <cstring>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 
 #if defined(__linux__)
@@ -33,6 +34,7 @@
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/pipeline/verify_job.h"
 #include "linesurf/render/renderer.h"
+#include "options.h"
 
 namespace py = pybind11;
 using namespace linesurf;
@@ -459,6 +461,10 @@ bool needsPreparation(const HybridModel& m, float radiusScale) {
   return false;
 }
 
+// The §6.1 fields the point extractions take as keywords (as the CLI's extract commands).
+const std::set<std::string> kExtractGeometry = {"k", "recomputeNormals", "orientationPenalty"};
+const std::set<std::string> kShapeGeometry = {"k", "recomputeNormals", "orientationPenalty", "curvature"};
+
 std::unique_ptr<ThreadLimit>& threadLimit() {
   static std::unique_ptr<ThreadLimit> limit;
   return limit;
@@ -830,8 +836,8 @@ per-corner texture coordinates or None. A texture image read with the mesh is ke
         }
         return namespaceOf(geometryDict(g));
       },
-      py::arg("model"), py::kw_only(), py::arg("k") = 12, py::arg("recompute_normals") = false,
-      py::arg("orient_normals") = true, py::arg("orientation_penalty") = 0.5f, py::arg("delaunay_neighbours") = false,
+      py::arg("model"), py::kw_only(), py::arg("k") = GeometryOptions{}.k, py::arg("recompute_normals") = GeometryOptions{}.recomputeNormals,
+      py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty, py::arg("delaunay_neighbours") = false,
       py::arg("curvature") = false, py::arg("curvature_fit") = "taubin",
       R"doc(The §6.1 geometry of a point cloud (a Model or an (N, 3) array), computed once:
 
@@ -854,38 +860,53 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
         }
         return vec3Array(g.size(), [&](size_t i) { return g.normals[i]; });
       },
-      py::arg("points"), py::kw_only(), py::arg("k") = 12, py::arg("recompute_normals") = false,
-      py::arg("orient_normals") = true, py::arg("orientation_penalty") = 0.5f,
+      py::arg("points"), py::kw_only(), py::arg("k") = GeometryOptions{}.k, py::arg("recompute_normals") = GeometryOptions{}.recomputeNormals,
+      py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty,
       "Unit normals (N, 3) float32 of a point cloud (Model or (N, 3) array) by PCA over the k nearest\n"
       "neighbours (Hoppe 1992), consistently oriented by a minimum spanning tree (thesis §6.1).");
+  m.def("_prepare_options", [] {
+    py::list l;
+    python::optionSpecs(l, PrepareOptions{});
+    return l;
+  }, "The keywords of prepare() from the option tables.");
   m.def(
-      "prepare",
-      [](py::object model, int k, float radius_scale) {
+      "_prepare",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
+        PrepareOptions o;
+        python::applyOptions(kw, o);
+        python::rejectUnknown(kw);
+        validate(o);
         ModelArg a = modelArg(model);
         HybridModel out = *a.model;
-        PrepareOptions o;
-        o.k = k;
-        o.radiusScale = radius_scale;
         py::gil_scoped_release release;
         prepareForRendering(out, o);
         return out;
       },
-      py::arg("model"), py::kw_only(), py::arg("k") = 12, py::arg("radius_scale") = 1.0f,
+      py::arg("model"), py::arg("options") = py::dict(),
       "A copy of the model ready to render: normals and radii of raw scans from the §6.1 geometry\n"
       "(kept when present), radii times radius_scale; what render() does on every call otherwise.");
 
   // --- extraction (§3) ------------------------------------------------------------------------
+  m.def("_extract_eps_delta_options", [] {
+    py::list l;
+    python::optionSpecs(l, EpsDeltaOptions{});
+    python::optionSpecs(l, GeometryOptions{}, kExtractGeometry);
+    return l;
+  });
   m.def(
-      "extract_eps_delta",
-      [](py::object model, double epsilon, double epsilon_relative, double delta, int min_replaced, int max_replaced,
-         bool provenance, int k, bool recompute_normals, float orientation_penalty) {
-        ModelArg a = modelArg(model);
+      "_extract_eps_delta",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
         EpsDeltaOptions o;
-        o.epsilon = epsilon, o.epsilonRelative = epsilon_relative, o.delta = delta;
-        o.minReplaced = min_replaced, o.maxReplaced = max_replaced, o.provenance = provenance;
+        GeometryOptions go;
+        python::applyOptions(kw, o);
+        python::applyOptions(kw, go, kExtractGeometry);
+        python::rejectUnknown(kw);
+        go.curvature = false;  // §3.1 needs normals, Delaunay neighbours and spacing only
         validate(o);
-        GeometryOptions go = geometryOptions(k, recompute_normals, true, orientation_penalty);
-        go.curvature = false;
+        validate(go);
+        ModelArg a = modelArg(model, "cloud");
         if (!a.model->segments.empty()) throwBadOption("model", "already holds segments; extraction needs a point cloud");
         EpsDeltaStats st;
         HybridModel out;
@@ -895,7 +916,7 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
           out = extractEpsDelta(*a.model, geo, o, &st);
         }
         out.comments.push_back(std::string("eps-delta: normals=") +
-                               (a.model->attributes.normals && !recompute_normals ? "file" : "computed"));
+                               (a.model->attributes.normals && !go.recomputeNormals ? "file" : "computed"));
         py::dict stats;
         stats["input_points"] = st.inputPoints, stats["kept_points"] = st.keptPoints, stats["segments"] = st.segments;
         stats["replaced_points"] = st.replacedPoints, stats["epsilon"] = st.epsilon, stats["delta"] = st.delta;
@@ -906,30 +927,31 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
         r["stats"] = stats;
         return namespaceOf(r);
       },
-      py::arg("cloud"), py::kw_only(), py::arg("epsilon") = 0.0, py::arg("epsilon_relative") = 0.05,
-      py::arg("delta") = 0.004, py::arg("min_replaced") = 4, py::arg("max_replaced") = 0, py::arg("provenance") = false,
-      py::arg("k") = 12, py::arg("recompute_normals") = false, py::arg("orientation_penalty") = 0.5f,
+      py::arg("cloud"), py::arg("options") = py::dict(),
       R"doc((epsilon, delta) error-bounded line segment extraction, thesis §3.1 (= `linesurf extract eps-delta`).
 
 epsilon: distance tolerance (0: epsilon_relative x average spacing); delta: bound on 1 - n_i.n_j.
 Returns a namespace with model (the hybrid Model) and stats (dict: input_points, kept_points,
 segments, replaced_points, epsilon, delta, data_reduction, ...). provenance=True records the
 replaced points (needed by verify()).)doc");
+  m.def("_extract_shape_approx_options", [] {
+    py::list l;
+    python::optionSpecs(l, ShapeApproxOptions{});
+    python::optionSpecs(l, GeometryOptions{}, kShapeGeometry);
+    return l;
+  });
   m.def(
-      "extract_shape_approx",
-      [](py::object model, const std::string& method, float delta_n, uint64_t seed, int max_iterations,
-         float radius_scale, int min_cluster_size, int min_run_points, bool provenance, bool curvature, int k,
-         bool recompute_normals, float orientation_penalty) {
-        ModelArg a = modelArg(model);
+      "_extract_shape_approx",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
         ShapeApproxOptions o;
-        o.method = enumFrom<ClusteringMethod>(method, "method",
-                                              {{"greedy", ClusteringMethod::Greedy}, {"hierarchical", ClusteringMethod::Hierarchical}});
-        o.clustering.deltaN = delta_n, o.clustering.seed = seed, o.clustering.maxIterations = max_iterations;
-        o.radiusScale = radius_scale, o.minClusterSize = min_cluster_size, o.minRunPoints = min_run_points;
-        o.provenance = provenance;
+        GeometryOptions go;
+        python::applyOptions(kw, o);
+        python::applyOptions(kw, go, kShapeGeometry);
+        python::rejectUnknown(kw);
         validate(o);
-        GeometryOptions go = geometryOptions(k, recompute_normals, true, orientation_penalty);
-        go.curvature = curvature;
+        validate(go);
+        ModelArg a = modelArg(model, "cloud");
         if (!a.model->segments.empty()) throwBadOption("model", "already holds segments; extraction needs a point cloud");
         if (a.model->points.empty()) throwBadOption("model", "holds no points");
         ShapeApproxStats st;
@@ -953,31 +975,24 @@ replaced points (needed by verify()).)doc");
         r["labels"] = labels;
         return namespaceOf(r);
       },
-      py::arg("cloud"), py::kw_only(), py::arg("method") = "greedy", py::arg("delta_n") = 0.008f, py::arg("seed") = 1,
-      py::arg("max_iterations") = 16, py::arg("radius_scale") = 1.0f, py::arg("min_cluster_size") = 4,
-      py::arg("min_run_points") = 4, py::arg("provenance") = false, py::arg("curvature") = true, py::arg("k") = 12,
-      py::arg("recompute_normals") = false, py::arg("orientation_penalty") = 0.5f,
+      py::arg("cloud"), py::arg("options") = py::dict(),
       R"doc(Shape-approximation extraction, thesis §3.2 (= `linesurf extract shape-approx`).
 
 method: "greedy" (§3.2.3.1) or "hierarchical" (§3.2.3.2) normal-variation clustering with
 tolerance delta_n on ||n(C) - n_j||^2. Returns a namespace with model, stats (dict: clusters,
 segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)doc");
+  m.def("_extract_contour_options", [] {
+    py::list l;
+    python::optionSpecs(l, ContourOptions{});
+    return l;
+  });
   m.def(
-      "extract_contour",
-      [](const TriangleMesh& mesh, float spacing, float spacing_scale, uint64_t seed, float radius_scale,
-         float points_below, bool all_points, bool vertex_normals, float family_switch_sine, bool endpoint_normals,
-         float merge_normal_deviation, float merge_tangent_deviation, float merge_angle, int merge_max_pieces,
-         float diagonal_divisions, float merge_strip_angle, bool point_masses) {
+      "_extract_contour",
+      [](const TriangleMesh& mesh, py::dict options) {
+        py::dict kw(options);
         ContourOptions o;
-        o.spacing = spacing, o.spacingScale = spacing_scale, o.seed = seed, o.radiusScale = radius_scale;
-        o.pointsBelow = points_below, o.allPoints = all_points, o.vertexNormals = vertex_normals;
-        o.familySwitchSine = family_switch_sine;
-        o.endpointNormals = endpoint_normals;
-        o.mergeNormalDeviation = merge_normal_deviation, o.mergeTangentDeviation = merge_tangent_deviation;
-        o.mergeAngle = merge_angle, o.mergeMaxPieces = merge_max_pieces;
-        o.diagonalDivisions = diagonal_divisions;
-        o.mergeStripAngle = merge_strip_angle;
-        o.pointMasses = point_masses;
+        python::applyOptions(kw, o);
+        python::rejectUnknown(kw);
         validate(o);
         if (mesh.faces.empty()) throwBadOption("mesh", "holds no faces: contour extraction needs a triangle mesh");
         ContourStats st;
@@ -997,14 +1012,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         r["stats"] = stats;
         return namespaceOf(r);
       },
-      py::arg("mesh"), py::kw_only(), py::arg("spacing") = 0.0f, py::arg("spacing_scale") = 1.0f, py::arg("seed") = 1,
-      py::arg("radius_scale") = ContourOptions{}.radiusScale, py::arg("points_below") = 0.0f, py::arg("all_points") = false,
-      py::arg("vertex_normals") = false, py::arg("family_switch_sine") = 1.0f, py::arg("endpoint_normals") = true,
-      py::arg("merge_normal_deviation") = ContourOptions{}.mergeNormalDeviation,
-      py::arg("merge_tangent_deviation") = ContourOptions{}.mergeTangentDeviation,
-      py::arg("merge_angle") = ContourOptions{}.mergeAngle, py::arg("merge_max_pieces") = ContourOptions{}.mergeMaxPieces,
-      py::arg("diagonal_divisions") = ContourOptions{}.diagonalDivisions,
-      py::arg("merge_strip_angle") = ContourOptions{}.mergeStripAngle, py::arg("point_masses") = true,
+      py::arg("mesh"), py::arg("options") = py::dict(),
       R"doc(Contour-plane extraction from a triangle Mesh, thesis §3.3 (= `linesurf extract contour`).
 
 spacing: largest distance d between neighbouring segments (0: spacing_scale x min(mean edge length,
@@ -1043,52 +1051,29 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
       "kept or replaced once. Tolerances default to those the hybrid records. Returns a dict with 'ok'.");
 
   // --- rendering (§4-§6.2) --------------------------------------------------------------------
+  m.def("_render_options", [] {
+    py::list l;
+    python::optionSpecs(l, ViewOptions{});
+    python::optionSpecs(l, RenderOptions{});
+    python::optionSpecs(l, PrepareOptions{});
+    return l;
+  }, "The keywords of render() from the option tables: [{keyword, field, default, help}].");
   m.def(
-      "render",
-      [](py::object model, std::pair<int, int> size, float azimuth, float elevation, float distance, float zoom,
-         float fov, const std::string& up_axis, std::optional<std::vector<double>> eye,
-         std::optional<std::vector<double>> target, std::optional<std::vector<double>> up, float prefilter_variance,
-         float cutoff_radius, float reconstruction_scale, float radius_scale, int layers,
-         const std::string& z_threshold_mode, std::optional<float> z_threshold, float alpha_override,
-         bool backface_culling, float ambient, float diffuse, float specular, float shininess,
-         std::optional<std::vector<double>> light, bool world_light, std::optional<std::vector<double>> default_color,
-         bool per_pixel_lighting, py::object background, const std::string& segment_method, float segment_lod, float coverage_gain, int coverage_reach, float tail_coverage, int k,
-         int tile_size, bool depth, bool alpha, bool normal) -> py::object {
-        RenderOptions o;
-        o.prefilterVariance = prefilter_variance, o.cutoffRadius = cutoff_radius;
-        o.reconstructionScale = reconstruction_scale, o.layers = layers;
-        o.zThresholdMode = enumFrom<ZThresholdMode>(z_threshold_mode, "zThresholdMode",
-                                                    {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}});
-        o.zThreshold = z_threshold ? *z_threshold : defaultZThreshold(o.zThresholdMode);
-        o.alphaOverride = alpha_override, o.backfaceCulling = backface_culling;
-        o.material = {ambient, diffuse, specular, shininess};
-        if (auto l = optionalVec3(light, "light")) o.light.direction = *l;
-        o.light.headlight = !world_light;
-        if (auto c = optionalVec3(default_color, "defaultColor")) o.defaultColor = Color(c->x(), c->y(), c->z(), 1);
-        o.perPixelLighting = per_pixel_lighting;
-        if (py::isinstance<py::str>(background)) {
-          o.background = parseBackground(background.cast<std::string>());
-        } else {
-          auto v = background.cast<std::vector<double>>();
-          if (v.size() == 3) v.push_back(1);
-          if (v.size() != 4) throwBadOption("background", "expected a name or 3 or 4 numbers in [0, 1]");
-          o.background = Color(float(v[0]), float(v[1]), float(v[2]), float(v[3]));
-        }
-        o.segmentMethod = enumFrom<SegmentMethod>(segment_method, "segmentMethod",
-                                                  {{"approx", SegmentMethod::Approx}, {"screen", SegmentMethod::ScreenSpace},
-                                                   {"reference", SegmentMethod::Reference}});
-        o.segmentLod = segment_lod, o.coverageGain = coverage_gain, o.coverageReach = coverage_reach;
-        o.tailCoverage = tail_coverage;
-        o.tileSize = tile_size, o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
-        validate(o);
+      "_render",
+      [](py::object model, py::dict options, bool depth, bool alpha, bool normal) -> py::object {
+        py::dict kw = options;  // the tables take their keywords out of a copy
+        kw = py::dict(kw);
         ViewOptions v;
-        v.width = size.first, v.height = size.second;
-        v.azimuth = azimuth, v.elevation = elevation, v.distance = distance, v.zoom = zoom, v.fov = fov;
-        v.upAxis = parseUpAxis(up_axis);
-        v.eye = optionalVec3(eye, "eye"), v.target = optionalVec3(target, "target"), v.up = optionalVec3(up, "up");
-        validate(v);
+        RenderOptions o;
         PrepareOptions p;
-        p.k = k, p.radiusScale = radius_scale;
+        python::applyOptions(kw, v);
+        const std::set<std::string> given = python::applyOptions(kw, o);
+        python::applyOptions(kw, p);
+        python::rejectUnknown(kw);
+        if (!given.count("zThreshold")) o.zThreshold = defaultZThreshold(o.zThresholdMode);
+        o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
+        validate(o);
+        validate(v);
         validate(p);
 
         ModelArg a = modelArg(model);
@@ -1099,7 +1084,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
           // What `linesurf render` does to a model before drawing it; a copy only when it changes it.
           const ModelFrame frame = normalizingFrame(a.model->bounds());
           if (!frame.identity()) toFrame(a.mutableCopy(), frame);
-          if (needsPreparation(*a.model, radius_scale)) prepareForRendering(a.mutableCopy(), p);
+          if (needsPreparation(*a.model, p.radiusScale)) prepareForRendering(a.mutableCopy(), p);
           Renderer renderer(*a.model, o);
           r = renderer.render(viewCameras(renderer.sphere(), v, frame).front());
         }
@@ -1117,28 +1102,17 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         if (r.normal) d["normal"] = channels(*r.normal, 0, 3);
         return d;
       },
-      py::arg("model"), py::kw_only(), py::arg("size") = std::pair<int, int>(512, 512), py::arg("azimuth") = 30.0f,
-      py::arg("elevation") = 20.0f, py::arg("distance") = 0.0f, py::arg("zoom") = 1.0f, py::arg("fov") = 30.0f,
-      py::arg("up_axis") = "y", py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(),
-      py::arg("prefilter_variance") = RenderOptions{}.prefilterVariance, py::arg("cutoff_radius") = 2.0f, py::arg("reconstruction_scale") = 0.5f,
-      py::arg("radius_scale") = 1.0f, py::arg("layers") = 4, py::arg("z_threshold_mode") = "primitive",
-      py::arg("z_threshold") = py::none(), py::arg("alpha_override") = -1.0f, py::arg("backface_culling") = true,
-      py::arg("ambient") = 0.25f, py::arg("diffuse") = 0.75f, py::arg("specular") = 0.2f, py::arg("shininess") = 24.0f,
-      py::arg("light") = py::none(), py::arg("world_light") = false, py::arg("default_color") = py::none(),
-      py::arg("per_pixel_lighting") = false, py::arg("background") = "white", py::arg("segment_method") = "screen",
-      py::arg("segment_lod") = RenderOptions{}.segmentLod,
-      py::arg("coverage_gain") = RenderOptions{}.coverageGain,
-      py::arg("coverage_reach") = RenderOptions{}.coverageReach, py::arg("tail_coverage") = RenderOptions{}.tailCoverage,
-      py::arg("k") = 12, py::arg("tile_size") = 64, py::arg("depth") = false, py::arg("alpha") = false,
+      py::arg("model"), py::arg("options") = py::dict(), py::arg("depth") = false, py::arg("alpha") = false,
       py::arg("normal") = false,
       R"doc(Renders a point or hybrid model by EWA splatting (thesis §4-§6.2) = `linesurf render`.
 
 Returns an (H, W, 4) uint8 RGBA array, or, when depth/alpha/normal is requested, a dict with
 'color' and the requested (H, W) float32 'depth' (linear depth, 0 where empty), (H, W) 'alpha',
-(H, W, 3) 'normal' ((n+1)/2). size = (width, height). Camera: an orbit view (azimuth, elevation,
-distance, zoom, fov, up_axis) auto-framed on the bounding sphere, or look-at (eye, target, up).
-Raw scans get normals and radii from the §6.1 geometry (k) on every call; prepare() once for
-repeated renders. The other keywords are the fields of RenderOptions. The GIL is released.)doc");
+(H, W, 3) 'normal' ((n+1)/2). Camera: an orbit view (azimuth, elevation, distance, zoom, fov,
+up_axis) auto-framed on the bounding sphere, or look-at (eye, target, up). Raw scans get normals
+and radii from the §6.1 geometry (k) on every call; prepare() once for repeated renders. The
+keywords are the fields of ViewOptions, RenderOptions and PrepareOptions (the option tables,
+pipeline/option_tables.h); size = (width, height). The GIL is released.)doc");
 
   // --- images (§7) ----------------------------------------------------------------------------
   m.def(
