@@ -29,6 +29,7 @@ void run(EpsDeltaArgs& a) {
   Timer total;
   EpsDeltaOptions& o = a.extract;
   validate(o);  // before the (long) geometry stage
+  validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}});
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const PointGeometry& geo = in.geometry;

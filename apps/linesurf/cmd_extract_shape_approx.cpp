@@ -29,6 +29,7 @@ void run(ShapeApproxArgs& a) {
   Timer total;
   ShapeApproxOptions& o = a.extract;
   validate(o);  // before the (long) geometry stage
+  validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}, {"--clusters-out", a.clustersOut, {".ply", ".xyz"}}});
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const HybridModel& cloud = in.cloud;

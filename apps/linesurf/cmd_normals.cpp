@@ -24,6 +24,7 @@ struct NormalsArgs {
 
 void run(const NormalsArgs& args) {
   Timer total;
+  validate(args.geometry);  // before reading the cloud
   checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();

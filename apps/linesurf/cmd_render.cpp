@@ -57,6 +57,7 @@ void run(RenderArgs& a) {
   validate(o);
   validate(a.view);
   validate(a.prepare);
+  validate(a.mesh);
 
   const int w = a.view.width, h = a.view.height;
   checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},

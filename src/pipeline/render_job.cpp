@@ -116,6 +116,8 @@ void validate(const PrepareOptions& o) {
   requireRange("radiusScale", o.radiusScale, 1e-3, 1e3);
 }
 
+void validate(const MeshRenderOptions& o) { requireRange("supersampling", o.supersampling, 1, 16, "samples per pixel side"); }
+
 void estimateMissingPointGeometry(HybridModel& model, int k, PrepareReport& report, const ProgressFn& progress) {
   const bool pointWithoutRadius =
       std::any_of(model.points.begin(), model.points.end(), [](const Point& p) { return p.radius == 0.0f; });

@@ -15,6 +15,7 @@
 #include "linesurf/core/progress.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/render/camera.h"
+#include "linesurf/render/mesh_render.h"
 #include "linesurf/render/render_options.h"
 
 namespace linesurf {
@@ -60,6 +61,10 @@ struct PrepareOptions {
   ProgressFn progress;
 };
 void validate(const PrepareOptions& options);
+
+/// Throws OptionError for a supersampling outside [1, 16] (as MeshRenderer does), so that a front
+/// end refuses it before reading the mesh.
+void validate(const MeshRenderOptions& options);
 
 /// What the preparation did (for the CLI summary).
 struct PrepareReport {
