@@ -22,7 +22,8 @@ AXES = {"x": [1, 0, 0], "y": [0, 1, 0], "z": [0, 0, 1], "-x": [-1, 0, 0], "-y": 
 
 
 def help_options(cli, command):
-    """{primary flag: (default text or None, section)} of the option lines of `command --help`."""
+    """{flag: (default text or None, section, whether the flag is the option's own spelling)} of the
+    option lines of `command --help`."""
     r = cli(*command.split(), "--help")
     assert r.returncode == 0, r.stderr
     out, section = {}, ""
@@ -31,9 +32,15 @@ def help_options(cli, command):
         if g:
             section = g.group(1)
             continue
-        m = re.match(r"\s*(--[a-z0-9-]+)((?:,-[^ ]+)*)(?: ([^=\n]*?)(?:=(.*))?)?(?:\s{2,}|$)", line)
-        if m:
-            out[m.group(1)] = (m.group(4), section)
+        m = re.match(r"\s*(-[^ ,\n]+(?:,-[^ ,\n]+)*)(?: ([^=\n]*?)(?:=(.*))?)?$", line)
+        if not m:
+            continue
+        default = None
+        if m.group(3) is not None:  # "TYPE=DEFAULT  help": three numbers for X Y Z, else one token
+            default = " ".join(m.group(3).split()[:3 if m.group(2) == "X Y Z" else 1])
+        spellings = [f for f in m.group(1).split(",") if f.startswith("--")]
+        for flag in spellings:  # the first long spelling is the option's own, the others aliases
+            out.setdefault(flag, (default, section, flag == spellings[0]))
     return out
 
 
@@ -65,7 +72,7 @@ def test_python_keywords_and_cli_flags_agree(cli, function, command, skip_sectio
     for kw, default in keywords.items():
         flag = "--" + kw.replace("_", "-")
         assert flag in cli_options, f"{command}: Python has {kw}, --help lacks {flag}"
-        text, _ = cli_options[flag]
+        text = cli_options[flag][0]
         if isinstance(default, bool):
             if default:
                 assert "--no-" + flag[2:] in cli_options, f"{command} {flag}: on by default, no way to turn it off"
@@ -75,8 +82,8 @@ def test_python_keywords_and_cli_flags_agree(cli, function, command, skip_sectio
         assert text is not None and same_default(default, text, flag), \
             f"{command} {flag}: CLI default {text!r}, Python {default!r}"
     # every table flag of the command is a keyword (the CLI's own flags live outside the groups)
-    for flag, (_, section) in cli_options.items():
-        if not section or section in skip_sections or flag in CLI_ONLY or flag.startswith("--no-"):
+    for flag, (_, section, own) in cli_options.items():
+        if not own or not section or section in skip_sections or flag in CLI_ONLY or flag.startswith("--no-"):
             continue
         assert flag[2:].replace("-", "_") in keywords, f"{command}: --help lists {flag}, Python lacks it"
 
