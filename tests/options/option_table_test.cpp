@@ -107,9 +107,20 @@ std::vector<Probe> probes(const NumericField& f) {
       p.push_back({"18446744073709551616", 18446744073709551616.0});
       break;
   }
-  for (double end : {f.spec.range.lo, f.spec.range.hi})
-    if (std::isfinite(end) && (f.kind == NumericField::Float || f.kind == NumericField::Double || end == std::floor(end)))
-      add(end);
+  // each finite end of the range and the nearest value of the field's type beyond it
+  for (const double end : {f.spec.range.lo, f.spec.range.hi}) {
+    if (!std::isfinite(end)) continue;
+    const double out = end == f.spec.range.lo ? -std::numeric_limits<double>::infinity()
+                                              : std::numeric_limits<double>::infinity();
+    switch (f.kind) {
+      case NumericField::Float: add(end), add(std::nextafter(float(end), float(out))); break;
+      case NumericField::Double: add(end), add(std::nextafter(end, out)); break;
+      case NumericField::Int:
+      case NumericField::Unsigned:
+        if (end == std::floor(end)) add(end), add(end + (out > 0 ? 1 : -1));
+        break;
+    }
+  }
   return p;
 }
 
@@ -351,6 +362,31 @@ std::string scriptText(const std::string& page, const std::string& id) {
   return page.substr(start, page.find("</script>", start) - start);
 }
 
+/// Checks each viewer field of a table against the page's defaults, collecting their names.
+struct ViewerDefaultCheck {
+  const json& d;
+  std::set<std::string>& want;
+  void group(const char*, const char*) {}
+  template <typename T>
+  void operator()(T&& v, const OptionSpec& s) {
+    using U = std::remove_cvref_t<T>;
+    if (!(s.use & kUseViewer)) return;
+    want.insert(s.name);
+    ASSERT_TRUE(d.contains(s.name)) << s.name;
+    const json& x = d[s.name];
+    if constexpr (std::is_arithmetic_v<U>) EXPECT_FLOAT_EQ(x.get<float>(), float(v)) << s.name;
+    else if constexpr (std::is_same_v<U, Vec3f>) {
+      for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v[i]) << s.name;
+    } else if constexpr (std::is_same_v<U, RgbRef> || std::is_same_v<U, BackgroundRef>) {
+      for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v.color[i]) << s.name;
+    } else if constexpr (std::is_same_v<U, AxisRef>) {
+      for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v.axis[i]) << s.name;
+    } else {
+      ADD_FAILURE() << s.name << ": a viewer field of a type the page cannot take";
+    }
+  }
+};
+
 TEST(ViewerOptions, ThePageTakesTheTablesViewerFieldsWithTheStructsDefaults) {
   HybridModel m;
   for (int i = 0; i < 8; ++i) {
@@ -366,32 +402,9 @@ TEST(ViewerOptions, ThePageTakesTheTablesViewerFieldsWithTheStructsDefaults) {
   ASSERT_TRUE(meta.contains("defaults"));
   const json& d = meta["defaults"];
   std::set<std::string> want;
-  struct Check {
-    const json& d;
-    std::set<std::string>& want;
-    void group(const char*, const char*) {}
-    template <typename T>
-    void operator()(T&& v, const OptionSpec& s) {
-      using U = std::remove_cvref_t<T>;
-      if (!(s.use & kUseViewer)) return;
-      want.insert(s.name);
-      ASSERT_TRUE(d.contains(s.name)) << s.name;
-      const json& x = d[s.name];
-      if constexpr (std::is_arithmetic_v<U>) EXPECT_FLOAT_EQ(x.get<float>(), float(v)) << s.name;
-      else if constexpr (std::is_same_v<U, Vec3f>) {
-        for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v[i]) << s.name;
-      } else if constexpr (std::is_same_v<U, RgbRef> || std::is_same_v<U, BackgroundRef>) {
-        for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v.color[i]) << s.name;
-      } else if constexpr (std::is_same_v<U, AxisRef>) {
-        for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v.axis[i]) << s.name;
-      } else {
-        ADD_FAILURE() << s.name << ": a viewer field of a type the page cannot take";
-      }
-    }
-  };
   ViewOptions view;
   RenderOptions render;
-  Check c{d, want};
+  ViewerDefaultCheck c{d, want};
   describeOptions(view, c);
   describeOptions(render, c);
   std::set<std::string> got;
