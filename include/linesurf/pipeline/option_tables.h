@@ -179,7 +179,7 @@ void describeOptions(ShapeApproxOptions& o, V&& v) {
   v(o.clustering.deltaN, {"deltaN", "Normal variation tolerance on ||n(C) - n_j||^2 (0.008 ~ 5.1 deg, §7.2)",
                           OptionRange{0, 2, true, true}});
   v(o.clustering.seed, {"seed", "Seed of the hierarchical clustering's random seed points", atLeast(0)});
-  v(o.clustering.maxIterations, {"maxIterations", "Hierarchical: reseeding iterations per split", closedRange(1, 10000)});
+  v(o.clustering.maxIterations, {"maxIterations", "Hierarchical: reseeding iterations per split", closedRange(1, 2147483647)});
   v(o.radiusScale, {"radiusScale",
                     "Clouds without point radii only: segment half-width as a multiple of the cluster's spacing across "
                     "segments (with radii the width covers the replaced points' Voronoi cells)",
