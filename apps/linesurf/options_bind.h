@@ -122,6 +122,15 @@ class TableBinder {
         }, "{" + choices + "}", def);
   }
 
+  /// A number whose default is resolved later (std::nullopt until given; defaultText says how).
+  template <typename T>
+    requires std::is_arithmetic_v<T>
+  void operator()(std::optional<T>& value, const OptionSpec& s) {
+    if (!wanted(s)) return;
+    add(s, [&value, s](const std::string& t) { value = parseNumber<T>(s, t); },
+        std::is_floating_point_v<T> ? "FLOAT" : "INT", s.defaultText ? std::string(s.defaultText) : "");
+  }
+
   void operator()(Vec3f& value, const OptionSpec& s) {
     if (!wanted(s)) return;
     add3(s, [&value](const Vec3f& v) { value = v; }, fmt::format("{} {} {}", value.x(), value.y(), value.z()));

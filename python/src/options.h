@@ -56,7 +56,8 @@ class SpecCollector {
         if (e == v) return py::str(n);
       return py::none();
     } else if constexpr (std::is_same_v<U, Vec3f>) return py::make_tuple(pyFloat(v.x()), pyFloat(v.y()), pyFloat(v.z()));
-    else if constexpr (std::is_same_v<U, std::optional<Vec3f>>) return v ? toPython(*v) : py::none();
+    else if constexpr (std::is_same_v<U, std::optional<Vec3f>> || std::is_same_v<U, std::optional<float>>)
+      return v ? toPython(*v) : py::none();
     else if constexpr (std::is_same_v<U, SizeRef>) return py::make_tuple(v.width, v.height);
     else if constexpr (std::is_same_v<U, AxisRef>) return py::str(axisName(v.axis));
     else if constexpr (std::is_same_v<U, BackgroundRef>) return py::str(backgroundName(v.color));
@@ -151,6 +152,12 @@ class OptionApplier {
     throwBadOption(s.name, "expected one of " + choices + ", got " + std::string(py::repr(v)));
   }
   static void set(Vec3f& f, const py::object& v, const OptionSpec& s) { f = vec3(v, s); }
+  static void set(std::optional<float>& f, const py::object& v, const OptionSpec& s) {
+    if (v.is_none()) return f.reset();
+    float x = 0;
+    set(x, v, s);
+    f = x;
+  }
   static void set(std::optional<Vec3f>& f, const py::object& v, const OptionSpec& s) {
     if (v.is_none()) f.reset();
     else f = vec3(v, s);

@@ -82,6 +82,7 @@ class ViewerDefaults {
     using U = std::remove_cvref_t<T>;
     if (!(s.use & kUseViewer)) return;
     if constexpr (std::is_arithmetic_v<U>) out[s.name] = value;
+    else if constexpr (std::is_same_v<U, std::optional<float>>) out[s.name] = value.value_or(defaultZThreshold(ZThresholdMode::PerPrimitive));
     else if constexpr (std::is_same_v<U, Vec3f>) out[s.name] = vec(value);
     else if constexpr (std::is_same_v<U, AxisRef>) out[s.name] = vec(value.axis.normalized());
     else if constexpr (std::is_same_v<U, RgbRef>) out[s.name] = rgb(value.color);

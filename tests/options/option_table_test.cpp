@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -48,7 +49,15 @@ struct NumericCollector {
   template <typename T>
   void operator()(T&& field, const OptionSpec& s) {
     using U = std::remove_cvref_t<T>;
-    if constexpr (std::is_arithmetic_v<U> && !std::is_same_v<U, bool>) {
+    if constexpr (std::is_same_v<U, std::optional<float>>) {  // a default resolved later: given as a float
+      const size_t offset = size_t(reinterpret_cast<const char*>(&field) - reinterpret_cast<const char*>(&defaults));
+      const S copyFrom = defaults;
+      out.push_back({s.name, s, NumericField::Float, [copyFrom, offset](double v) {
+                       S c = copyFrom;
+                       *reinterpret_cast<U*>(reinterpret_cast<char*>(&c) + offset) = float(v);
+                       validate(c);
+                     }});
+    } else if constexpr (std::is_arithmetic_v<U> && !std::is_same_v<U, bool>) {
       const size_t offset = size_t(reinterpret_cast<const char*>(&field) - reinterpret_cast<const char*>(&defaults));
       NumericField f{s.name, s,
                      std::is_same_v<U, float>    ? NumericField::Float
@@ -375,6 +384,8 @@ struct ViewerDefaultCheck {
     ASSERT_TRUE(d.contains(s.name)) << s.name;
     const json& x = d[s.name];
     if constexpr (std::is_arithmetic_v<U>) EXPECT_FLOAT_EQ(x.get<float>(), float(v)) << s.name;
+    else if constexpr (std::is_same_v<U, std::optional<float>>)
+      EXPECT_FLOAT_EQ(x.get<float>(), v.value_or(defaultZThreshold(ZThresholdMode::PerPrimitive))) << s.name;
     else if constexpr (std::is_same_v<U, Vec3f>) {
       for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(x[i].get<float>(), v[i]) << s.name;
     } else if constexpr (std::is_same_v<U, RgbRef> || std::is_same_v<U, BackgroundRef>) {
