@@ -30,7 +30,8 @@ endif()
 message(STATUS "linesurf: Python module for ${Python3_EXECUTABLE} (${Python3_VERSION}), pybind11 ${pybind11_VERSION}")
 
 set(LINESURF_PYTHON_DIR ${PROJECT_BINARY_DIR}/python/linesurf)
-pybind11_add_module(linesurf_python MODULE ${PROJECT_SOURCE_DIR}/python/src/module.cpp)
+file(GLOB LINESURF_PYTHON_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/python/src/*.cpp)
+pybind11_add_module(linesurf_python MODULE ${LINESURF_PYTHON_SOURCES})
 target_link_libraries(linesurf_python PRIVATE linesurf_lib Python3::NumPy)
 # pybind11 links the module with -flto; let GCC split the link-time work over the cores (make's
 # jobserver or all of them) instead of warning that it runs the 7 LTRANS jobs serially

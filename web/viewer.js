@@ -100,15 +100,16 @@ uniform vec3 uTrans;      // camera from world translation
 uniform vec2 uHalf;       // principal point (cx, cy) = half the viewport, pixels
 uniform float uFocal;     // focal length, pixels: (height / 2) / tan(fovY / 2)
 uniform float uNear, uFar;
-uniform float uCutoff;    // resampling filter cut-off, standard deviations (RenderOptions 2)
-uniform float uRecon;     // sigma_r / radius (0.5)
-uniform float uVh;        // screen prefilter variance, pixels^2 (1)
+uniform float uCutoff;    // resampling filter cut-off, standard deviations (RenderOptions::cutoffRadius)
+uniform float uRecon;     // sigma_r / radius (RenderOptions::reconstructionScale)
+uniform float uVh;        // screen prefilter variance, pixels^2 (RenderOptions::prefilterVariance)
 uniform float uRadScale;  // splat size scale
-uniform float uZThr;      // z threshold: multiple of the depth extent (PerPrimitive, 0.5)
+uniform float uZThr;      // z threshold: multiple of the depth extent (RenderOptions::zThreshold, PerPrimitive)
 uniform int uColorMode;   // 0 model colour, 1 primitive kind, 2 cluster
 uniform vec3 uKindColor;
-const float kMaxStretch = 24.0;  // as point_splat.cpp / segment_splat.cpp
-const float kMinFacing = 2e-3;
+// The limits the software splats share (src/render), written into the page by viewer_page.cpp.
+const float kMaxStretch = @MAX_STRETCH@;
+const float kMinFacing = @MIN_FACING@;
 vec4 clipFromCamera(vec3 p) {
   float A = -(uFar + uNear) / (uFar - uNear), B = -2.0 * uFar * uNear / (uFar - uNear);
   return vec4(uFocal / uHalf.x * p.x, uFocal / uHalf.y * p.y, A * p.z + B, -p.z);
@@ -427,7 +428,21 @@ void main() {
 }
 `;
 
+  // Shader constants that must equal the C++ renderer's (meta.constants, from viewer_page.cpp).
+  let shaderConstants = {};
+  function withConstants(src) {
+    return src.replace(/@MAX_STRETCH@/g, glslFloat(shaderConstants.maxStretch))
+              .replace(/@MIN_FACING@/g, glslFloat(shaderConstants.minFacing));
+  }
+  function glslFloat(x) {
+    if (!Number.isFinite(x)) throw new Error('the page lacks a shader constant');
+    const s = String(x);
+    return /[.eE]/.test(s) ? s : s + '.0';
+  }
+
   function compile(gl, vs, fs, name) {
+    vs = withConstants(vs);
+    fs = withConstants(fs);
     const prog = gl.createProgram();
     for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
       const sh = gl.createShader(type);
@@ -525,8 +540,9 @@ void main() {
     const model = loadModel();
     const meta = model.meta;
     const D = meta.defaults;
+    shaderConstants = meta.constants || {};
     const sphere = { center: meta.sphere.center, radius: meta.sphere.radius };
-    const upAxis = meta.upAxis || [0, 1, 0];
+    const upAxis = D.upAxis;
     const canvas = $('gl');
     const gl = canvas.getContext('webgl2', { antialias: false, alpha: false, depth: false, preserveDrawingBuffer: true,
                                              powerPreference: 'high-performance' });
@@ -573,7 +589,7 @@ void main() {
       gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, buf);
       gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
     }
-    const defaultColor = D.color;
+    const defaultColor = D.defaultColor;
     let pointVao = null, segVao = null;
     if (model.np) {
       const P = model.points;
@@ -721,13 +737,13 @@ void main() {
       gl.uniform1f(u.uFocal, 0.5 * h / Math.tan(0.5 * state.camera.fov * Math.PI / 180));
       gl.uniform1f(u.uNear, f.near / sphere.radius);
       gl.uniform1f(u.uFar, f.far / sphere.radius);
-      gl.uniform1f(u.uCutoff, D.cutoff);
-      gl.uniform1f(u.uRecon, D.reconScale);
-      gl.uniform1f(u.uVh, D.prefilter);
+      gl.uniform1f(u.uCutoff, D.cutoffRadius);
+      gl.uniform1f(u.uRecon, D.reconstructionScale);
+      gl.uniform1f(u.uVh, D.prefilterVariance);
       gl.uniform1f(u.uRadScale, state.radiusScale);
       gl.uniform1f(u.uZThr, D.zThreshold);
       gl.uniform1i(u.uColorMode, state.colorMode);
-      const sig = D.reconScale * meanRadius * state.radiusScale;
+      const sig = D.reconstructionScale * meanRadius * state.radiusScale;
       gl.uniform1f(u.uWeightNorm, sig * sig);
       gl.uniform1i(u.uLighting, state.lighting ? 1 : 0);
       gl.uniform3fv(u.uLight, light);
@@ -790,7 +806,7 @@ void main() {
       gl.activeTexture(gl.TEXTURE0);
       gl.bindTexture(gl.TEXTURE_2D, accumTex);
       gl.uniform1i(resolveProg.u.uAccum, 0);
-      gl.uniform3fv(resolveProg.u.uBackground, D.background);
+      gl.uniform3fv(resolveProg.u.uBackground, D.background.slice(0, 3));
       gl.bindVertexArray(emptyVao);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
       gl.bindVertexArray(null);

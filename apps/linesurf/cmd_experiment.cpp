@@ -34,7 +34,7 @@ struct ExperimentArgs {
   bool noImages = false;
   float segmentLod = RenderOptions{}.segmentLod;
   float coverageGain = RenderOptions{}.coverageGain;
-  float tailCoverage = RenderOptions{}.tailCoverage;
+  float tailCoverage = ExperimentOptions{}.render.tailCoverage;  // the thesis's 0, unlike render's
   float prefilterVariance = RenderOptions{}.prefilterVariance;
   float reconstructionScale = RenderOptions{}.reconstructionScale;
   bool tailLayers = RenderOptions{}.tailLayers;
@@ -226,7 +226,8 @@ RegisterCommand reg(70, [](CLI::App& app) {
        "Reconstruction sigma as a fraction of the primitive radius, (0, 4] (render --recon-scale)", "--recon-scale");
   sub->add_flag("--tail-layers,!--no-tail-layers", a->tailLayers, "Tail layers (beyond the thesis; render --tail-layers; default on)");
   sub->add_option("--tail-coverage", a->tailCoverage,
-                  "Tail coverage gain, [0, 100] (0 = off: the normalised alpha past silhouettes; render --tail-coverage)");
+                  "Tail coverage gain, [0, 100] (0 = off, the thesis's setting for Table 5, unlike render's default; render --tail-coverage)")
+      ->capture_default_str();
   sub->add_option("--coverage-gain", a->coverageGain,
                   "Coverage alpha gain, [0, 100] (0 = the thesis's normalised alpha; render --coverage-gain)")
       ->capture_default_str();

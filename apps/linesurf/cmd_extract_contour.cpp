@@ -17,13 +17,12 @@ namespace {
 struct ContourArgs {
   std::string mesh, output;
   ContourOptions extract;
-  bool ascii = false, flat = false;
+  bool ascii = false;
 };
 
 void run(ContourArgs& a) {
   Timer total, t;
   ContourOptions& o = a.extract;
-  o.endpointNormals = !a.flat;
   validate(o);  // before reading the mesh
   checkFiles({a.mesh}, {{"--output", a.output, o.allPoints ? std::vector<std::string>{".ply", ".xyz"} : std::vector<std::string>{".ply"}}});
   const TriangleMesh mesh = readMesh(a.mesh);
@@ -99,34 +98,7 @@ RegisterCommand reg(33, [](CLI::App& app) {
       "contour", "Cut a triangle mesh with two perpendicular families of contour planes (thesis §3.3)");
   sub->add_option("MESH", a->mesh, "Triangle mesh (.ply, or .obj with .mtl and texture image)")->required();
   sub->add_option("-o,--output", a->output, "Output model (.ply)")->required();
-  bind(sub, "spacing", o.spacing,
-       "Largest distance d between neighbouring segments, object units (0: --spacing-scale x min(mean edge, diagonal / --diagonal-divisions))");
-  bind(sub, "spacingScale", o.spacingScale,
-       "d as a multiple of min(mean edge length, diagonal / --diagonal-divisions), when --spacing is 0; > 0");
-  bind(sub, "diagonalDivisions", o.diagonalDivisions,
-       "Default d at most the bounding-box diagonal / N, so coarse meshes are cut finely enough (0 = mean edge only), [0, 1e6]");
-  bind(sub, "seed", o.seed, "Seed of the random plane orientation and offsets");
-  auto below = bind(sub, "pointsBelow", o.pointsBelow,
-                    "Turn segments shorter than LEN (object units) into points: hybrid model (0 = none)");
-  sub->add_flag(flagName("allPoints"), o.allPoints, "Turn every segment into ceil(l/d)+1 points: pure point model (Table 5)")
-      ->excludes(below);
-  bind(sub, "radiusScale", o.radiusScale, "Segment/point radius as a multiple of d (> 0.5 for a hole-free model)");
-  sub->add_flag(flagName("vertexNormals"), o.vertexNormals, "Interpolate the mesh's vertex normals instead of the face normal");
-  bind(sub, "familySwitchSine", o.familySwitchSine,
-       "Use P= unless its sin(theta) is below this and P|| cuts steeper, [0, 1] (1: steeper family always; 0: P= only)");
-  bind(sub, "mergeNormalDeviation", o.mergeNormalDeviation,
-       "Merge consecutive segments of a contour polyline while the original vertices stay within this x d of the merged "
-       "segment along the surface normal (0: no merging, one segment per face and plane)");
-  bind(sub, "mergeTangentDeviation", o.mergeTangentDeviation,
-       "Merging: largest deviation across the merged segment within the surface, x d");
-  bind(sub, "mergeAngle", o.mergeAngle, "Merging: largest angle between merged and original normals, degrees [0, 90)");
-  bind(sub, "mergeStripAngle", o.mergeStripAngle,
-       "Merging, smooth models: largest tilt of the merged strip's plane from the original ones, degrees [0, 90)");
-  bind(sub, "mergeMaxPieces", o.mergeMaxPieces, "Merging: most original segments in one merged segment (1: no merging)");
-  sub->add_flag("--point-masses,!--no-point-masses", o.pointMasses,
-                "Points weigh the contour length they stand for (beyond the thesis; default on; off: each weighs 1)");
-  sub->add_flag("--flat", a->flat,
-                "One normal per segment (the thesis) instead of interpolated vertex normals at both endpoints");
+  bindOptions(sub, o);  // --flat: the thesis's one normal per segment (--no-endpoint-normals)
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY instead of binary");
   sub->callback([a] { run(*a); });
 });

@@ -29,6 +29,7 @@ void run(EpsDeltaArgs& a) {
   Timer total;
   EpsDeltaOptions& o = a.extract;
   validate(o);  // before the (long) geometry stage
+  validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}});
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const PointGeometry& geo = in.geometry;
@@ -71,16 +72,9 @@ RegisterCommand reg(31, [](CLI::App& app) {
       "eps-delta", "(epsilon, delta) error-bounded line segment extraction from a point cloud (thesis §3.1)");
   sub->add_option("IN", a->input, "Input point cloud (.ply, .xyz; a mesh gives its vertices)")->required();
   sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->required();
-  auto* eps = bind(sub, "epsilon", o.epsilon, "Distance tolerance, object space (0 = use --epsilon-relative)");
-  auto* rel = bind(sub, "epsilonRelative", o.epsilonRelative,
-                   "Distance tolerance as a fraction of the average neighbour spacing (§7.2), > 0", "--epsilon-rel");
-  eps->excludes(rel);
-  bind(sub, "delta", o.delta, "Normal tolerance on 1 - n_i.n_j in [0, 2] (0.004 ~ 5.13 deg, §7.2)");
-  bind(sub, "minReplaced", o.minReplaced, "Smallest number of points a segment may replace, >= 2");
-  bind(sub, "maxReplaced", o.maxReplaced,
-       "Stop growing a segment at this many points (0 = no limit; bounds time on long regular rows)");
+  const TableBinder b = bindOptions(sub, o);
+  b.option("epsilon")->excludes(b.option("epsilonRelative"));
   bindGeometryOptions(sub, a->geometry);
-  sub->add_flag("--provenance", o.provenance, "Record the input points each segment replaced (for verify-extraction)");
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
   sub->callback([a] { run(*a); });
 });

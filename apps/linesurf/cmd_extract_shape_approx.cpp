@@ -22,15 +22,15 @@ struct ShapeApproxArgs {
   std::string input, output, clustersOut;
   GeometryOptions geometry;  // curvature on: §3.2.4.2 needs minimum-curvature directions
   ShapeApproxOptions extract;
-  bool noCurvature = false, ascii = false;
+  bool ascii = false;
 };
 
 void run(ShapeApproxArgs& a) {
   Timer total;
   ShapeApproxOptions& o = a.extract;
   validate(o);  // before the (long) geometry stage
+  validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}, {"--clusters-out", a.clustersOut, {".ply", ".xyz"}}});
-  a.geometry.curvature = !a.noCurvature;
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const HybridModel& cloud = in.cloud;
   const PointGeometry& geo = in.geometry;
@@ -92,21 +92,11 @@ RegisterCommand reg(32, [](CLI::App& app) {
       "shape-approx", "Shape-approximation extraction: normal-variation clusters, bunches of parallel segments (thesis §3.2)");
   sub->add_option("IN", a->input, "Input point cloud (.ply, .xyz)")->required();
   sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->required();
-  bindEnum(sub, "method", o.method, {{"greedy", ClusteringMethod::Greedy}, {"hierarchical", ClusteringMethod::Hierarchical}},
-           "Clustering algorithm: greedy (§3.2.3.1) or hierarchical (§3.2.3.2)", "--clustering");
-  bind(sub, "deltaN", o.clustering.deltaN,
-       "Normal variation tolerance on ||n(C) - n_j||^2, in (0, 2) (0.008 ~ 5.1 deg, §7.2)");
-  bind(sub, "seed", o.clustering.seed, "Seed of the hierarchical clustering's random seed points");
-  cli::bind(sub, "maxIterations", o.clustering.maxIterations,  // qualified: a std::string help would pick std::bind
-            "Hierarchical: reseeding iterations per split, [1, " + std::to_string(kMaxClusteringIterations) + "]");
   sub->add_option("--clusters-out", a->clustersOut, "Also write the cloud coloured by cluster (.ply)");
-  bind(sub, "radiusScale", o.radiusScale,
-       "Clouds without point radii only: segment half-width as a multiple of the cluster's spacing across segments (with radii the width covers the replaced points' Voronoi cells)");
-  bind(sub, "minClusterSize", o.minClusterSize, "Clusters with fewer points stay points (§3.2.4.1), >= 2");
-  bind(sub, "minRunPoints", o.minRunPoints, "Runs of influenced squares with fewer points stay points (§3.2.4.5), >= 2");
+  bindOptions(sub, o);
   bindGeometryOptions(sub, a->geometry);
-  sub->add_flag("--no-curvature", a->noCurvature, "Skip curvature: directions come from the rectangles only");
-  sub->add_flag("--provenance", o.provenance, "Record the input points each segment replaced");
+  // on here (§3.2.4.2 needs minimum-curvature directions); --no-curvature: from the rectangles only
+  bindOptions(sub, a->geometry, {"curvature"});
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
   sub->callback([a] { run(*a); });
 });

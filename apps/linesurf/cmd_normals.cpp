@@ -20,11 +20,11 @@ struct NormalsArgs {
     g.delaunayNeighbours = g.curvature = false;  // --curvature turns both on
     return g;
   }();
-  bool noOrient = false;
 };
 
 void run(const NormalsArgs& args) {
   Timer total;
+  validate(args.geometry);  // before reading the cloud
   checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();
@@ -32,7 +32,6 @@ void run(const NormalsArgs& args) {
   checkGeometry(args.in, model.points.size(), args.geometry.k);
   checkModelOutput("--output", args.out, model.points.size(), model.segments.size());
   GeometryOptions o = args.geometry;
-  o.orientNormals = !args.noOrient;
   o.delaunayNeighbours = o.curvature;
   o.progress = progressBar();
   const bool hadNormals = model.attributes.normals;
@@ -68,15 +67,8 @@ RegisterCommand reg(20, [](CLI::App& app) {
   sub->add_option("IN", args->in, "Input point cloud (.ply, .xyz)")->required();
   sub->add_option("-o,--output", args->out, "Output .ply with normals (and curvature properties)")->required();
   GeometryOptions& o = args->geometry;
-  bind(sub, "k", o.k, "Nearest neighbours per point, [3, 256]");
-  sub->add_flag(flags("recomputeNormals", "--recompute"), o.recomputeNormals, "Recompute normals even when the file has them");
-  bind(sub, "orientationPenalty", o.orientationPenalty,
-       "MST orientation: penalty on edges along the normals (0 = Hoppe's weight), >= 0");
-  sub->add_flag("--curvature", o.curvature,
-                "Also write curvature as vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z");
-  bindEnum(sub, "curvatureFit", o.curvatureFit, {{"taubin", CurvatureFit::Taubin}, {"quadric", CurvatureFit::Quadric}},
-           "taubin (thesis §6.1.2) or quadric (height-function fit)");
-  sub->add_flag("--no-orient", args->noOrient, "Skip the MST orientation of estimated normals");
+  // --curvature also writes vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z
+  bindOptions(sub, o, {"k", "recomputeNormals", "orientNormals", "orientationPenalty", "curvature", "curvatureFit"});
   sub->callback([args] { run(*args); });
 });
 

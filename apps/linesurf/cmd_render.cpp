@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "command.h"
 #include "drawable_model.h"
@@ -31,7 +32,7 @@ struct RenderArgs {
   PrepareOptions prepare;
   MeshRenderOptions mesh;
   std::string primitive = "auto";
-  bool zThresholdGiven = false, worldLight = false, noCull = false;
+  std::optional<TableBinder> renderFlags;  // asks whether --z-threshold was given
   uint64_t budget = 0;  ///< splats a view from a .lod hierarchy (0 = every leaf)
 };
 
@@ -48,9 +49,7 @@ std::filesystem::path bufferPath(const std::string& base, int view, int views) {
 void run(RenderArgs& a) {
   Timer total;
   RenderOptions& o = a.render;
-  if (!a.zThresholdGiven) o.zThreshold = defaultZThreshold(o.zThresholdMode);
-  o.light.headlight = !a.worldLight;
-  o.backfaceCulling = !a.noCull;
+  if (!a.renderFlags->given("zThreshold")) o.zThreshold = defaultZThreshold(o.zThresholdMode);
   o.depthBuffer = !a.depthOut.empty();
   o.alphaBuffer = !a.alphaOut.empty();
   o.normalBuffer = !a.normalOut.empty();
@@ -60,6 +59,7 @@ void run(RenderArgs& a) {
   validate(o);
   validate(a.view);
   validate(a.prepare);
+  validate(a.mesh);
 
   const int w = a.view.width, h = a.view.height;
   checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},
@@ -211,91 +211,21 @@ RegisterCommand reg(40, [](CLI::App& app) {
   sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")
       ->required();
   sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->capture_default_str();
-  sub->add_option_function<std::string>("--size", [&v](const std::string& s) {
-        int w = 0, h = 0;
-        char x = 0, extra = 0;
-        if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X'))
-          throwBadOption("size", "expected WIDTHxHEIGHT, got '" + s + "'");
-        v.width = w, v.height = h;
-      }, "Image size WIDTHxHEIGHT, 1..16384 pixels per side")->default_str("512x512");
-  auto* g = sub->add_option_group("camera", "Orbit view auto-framed on the bounding sphere, N views, or look-at");
-  bind(g, "azimuth", v.azimuth, "Orbit azimuth about the up axis, degrees (0 = from +z)");
-  bind(g, "elevation", v.elevation, "Orbit elevation, degrees in [-90, 90]");
-  bind(g, "distance", v.distance, "Orbit distance from the centre (0 = frame the model)");
-  bind(g, "zoom", v.zoom, "Divide the framed distance by this factor (> 0)");
-  bind(g, "fov", v.fov, "Vertical field of view, degrees in [1, 170]");
-  g->add_option_function<int>(flagName("views"), [&v](int n) {
-        if (n < 1) throwBadOption("views", "must be in [1, 10000] (leave it out for one view), got " + std::to_string(n));
-        v.views = n;
-      }, "Render N views spread over the sphere (deterministic), [1, 10000]");
-  g->add_option_function<std::string>(flagName("upAxis"), [&v](const std::string& s) { v.upAxis = parseUpAxis(s); },
-                                      "World up axis of the orbit: x, y, z, -x, -y, -z (santa, rockerarm: z)")
-      ->default_str("y");
-  bindVec3(g, "eye", v.eye, "Look-at camera position x y z");
-  bindVec3(g, "target", v.target, "Look-at target x y z (default: model centre)");
-  bindVec3(g, "up", v.up, "Look-at up vector (default 0 1 0)");
-  auto* f = sub->add_option_group("filtering", "EWA resampling filter (§4.2.2)");
-  bind(f, "prefilterVariance", o.prefilterVariance, "Screen prefilter variance, pixels^2 in [0, 100] (0 = none)", "--prefilter");
-  bind(f, "cutoffRadius", o.cutoffRadius, "Resampling filter cut-off radius, standard deviations [1, 5]", "--cutoff");
-  bind(f, "reconstructionScale", o.reconstructionScale, "Reconstruction sigma as a fraction of the point radius, (0, 4]",
-       "--recon-scale");
-  bind(f, "radiusScale", a->prepare.radiusScale, "Multiply every primitive radius, [1e-3, 1e3]");
-  bind(f, "coverageGain", o.coverageGain,
-       "Coverage alpha at silhouettes (beyond the thesis): alpha = gain x the kernel sum over the model's kernel "
-       "density, [0, 100] (0 = the thesis's normalised alpha; 1.25 for contour models at silhouettes, 1.5 with --coverage-reach 0)");
-  bind(f, "coverageReach", o.coverageReach,
-       "Coverage alpha only at silhouettes: pixels within this many pixels of the background or of a farther "
-       "layer, [0, 16] (0 = everywhere)");
-  auto* vis = sub->add_option_group("visibility", "Modified Z^3 buffer (§6.2.3)");
-  bind(vis, "layers", o.layers, "Fragment layers per pixel [1, 8]");
-  vis->add_flag(flagName("tailLayers") + ",!--no-tail-layers", o.tailLayers,
-                "Tail layers (beyond the thesis): a fragment outside 1.5x its primitive's own disc or strip (a prefilter "
-                "tail) occludes nothing and is composited only over the background (fewer fold speckles; point frames up to 3% slower; default on)");
-  bind(vis, "tailCoverage", o.tailCoverage,
-       "Tail coverage (beyond the thesis): a pixel past a silhouette reached only by tails takes alpha gain x its kernel "
-       "sum over the model's median kernel density, [0, 100] (0 = the normalised alpha 1)");
-  bindEnum(vis, "zThresholdMode", o.zThresholdMode,
-           {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}},
-           "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)", "--z-mode");
-  vis->add_option_function<float>(flagName("zThreshold"), [a](float z) { a->render.zThreshold = z, a->zThresholdGiven = true; },
-                                  "primitive: multiple of the depth extent (default 0.5); fixed: fraction of the "
-                                  "bounding radius (default 0.01)");
-  vis->add_option(flags("alphaOverride", "--alpha"), o.alphaOverride,
-                  "Alpha of every primitive in [0, 1] (order-independent transparency)");
-  vis->add_flag("--no-cull", a->noCull, "Keep back faces (two-sided lighting)");
-  auto* s = sub->add_option_group("shading", "Phong lighting (§6.2.2); defaults suit unit-free scans");
-  bind(s, "ambient", o.material.ambient, "Ambient coefficient [0, 1]");
-  bind(s, "diffuse", o.material.diffuse, "Diffuse coefficient [0, 1]");
-  bind(s, "specular", o.material.specular, "Specular coefficient [0, 1]");
-  bind(s, "shininess", o.material.shininess, "Phong exponent (0, 10000]");
-  bindVec3(s, "light", o.light.direction, "Direction towards the light x y z (camera space; world with --world-light)");
-  s->add_flag("--world-light", a->worldLight, "--light is in world space instead of a headlight");
-  s->add_option_function<std::vector<float>>(
-       flags("defaultColor", "--color"), [&o](const std::vector<float>& c) { o.defaultColor = Color(c[0], c[1], c[2], 1); },
-       "Albedo R G B in [0,1] for models without colours")
-      ->expected(3);
-  s->add_flag(flagName("perPixelLighting"), o.perPixelLighting, "Light every fragment instead of Gouraud at the quad vertices");
-  s->add_option_function<std::string>("--background", [&o](const std::string& b) { o.background = parseBackground(b); },
-                                      "white, black, transparent or R,G,B[,A]")
-      ->default_str("white");
-  bindEnum(sub, "segmentMethod", o.segmentMethod,
-           {{"approx", SegmentMethod::Approx}, {"screen", SegmentMethod::ScreenSpace}, {"reference", SegmentMethod::Reference}},
-           "Line-segment filter: approx (§5.2.3 quads), screen (erf), reference");
-  bind(sub, "segmentLod", o.segmentLod,
-       "Draw screen segments at most this many kernel sigmas long as one moment-matched point splat, [0, 4] "
-       "(0 = every segment exact)");
+  // Every flag of the camera, the preparation, the renderer and the mesh rasteriser comes from
+  // the option tables (pipeline/option_tables.h).
+  bindOptions(sub, v);
+  bindOptions(sub, a->prepare);
+  a->renderFlags.emplace(bindOptions(sub, o));
+  bindOptions(sub, a->mesh);
   sub->add_option("--budget", a->budget,
                   "With a .lod hierarchy: draw at most N splats a view, nodes chosen coarse to fine by their projected "
                   "size (default: every leaf, the full model)");
   sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)");
   sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG");
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB");
-  bind(sub, "k", a->prepare.k, "Neighbours for normals/radii of raw scans (§6.1), [3, 256]");
   sub->add_option("--primitive", a->primitive,
                   "What a mesh file is drawn as: mesh (anti-aliased triangles, the ground truth), points (its "
                   "vertices as splats) or auto (mesh when the file has faces)")->capture_default_str();
-  bind(sub, "supersampling", a->mesh.supersampling, "Mesh: samples per pixel side (S x S per pixel) [1, 16]");
-  bind(sub, "tileSize", o.tileSize, "Screen tile side in pixels, [8, 1024] (does not change the image)");
   sub->callback([a] { run(*a); });
 });
 

@@ -12,24 +12,27 @@
 #include "linesurf/io/model_io.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/view/viewer_page.h"
+#include "options_bind.h"
 
 namespace linesurf::cli {
 namespace {
 
 struct ViewArgs {
   std::string model, output;
-  std::string upAxis = "y";
-  int k = 12;
+  ViewerPageOptions page;  // its view and render fields bound from the option tables
+  PrepareOptions prepare;
   size_t maxPrimitives = ViewerPageOptions{}.maxPrimitives;
 };
 
 void run(const ViewArgs& a) {
   Timer total;
-  ViewerPageOptions o;
+  ViewerPageOptions o = a.page;
+  validate(o.view);
+  validate(o.render);
+  validate(a.prepare);
   // The page's title: printable UTF-8 whatever bytes the file name holds (oneLine escapes the rest).
   o.name = oneLine(std::filesystem::path(a.model).filename().string());
   o.maxPrimitives = a.maxPrimitives;
-  o.upAxis = parseUpAxis(a.upAxis);
   const std::string out =
       a.output.empty() ? std::filesystem::path(a.model).filename().replace_extension(".html").string() : a.output;
   checkFiles({a.model}, {{"--output", out, {".html", ".htm"}}});
@@ -46,8 +49,8 @@ void run(const ViewArgs& a) {
   // The page holds every primitive as base64 floats (about 60 bytes a point, twice for a segment).
   checkSize("--output", 262144.0 + 60.0 * double(model.points.size()) + 120.0 * double(model.segments.size()),
             fmt::format("a page of {} points and {} segments", model.points.size(), model.segments.size()));
-  checkGeometry(a.model, model.points.size(), a.k);
-  completePointGeometry(model, a.k);
+  checkGeometry(a.model, model.points.size(), a.prepare.k);
+  completePointGeometry(model, a.prepare.k);
 
   ViewerPageStats st;
   try {
@@ -72,10 +75,10 @@ RegisterCommand reg(45, [](CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
-  sub->add_option("--up-axis", a->upAxis, "World up axis of the orbit: x, y, z, -x, -y, -z")->capture_default_str();
-  sub->add_option("--k", a->k, "Neighbours for normals/radii of raw scans (§6.1)")
-      ->capture_default_str()
-      ->check(CLI::Range(3, 200));
+  // The page's defaults: the option tables' viewer fields (pipeline/option_tables.h).
+  bindOptions(sub, a->page.view, {}, kUseViewer);
+  bindOptions(sub, a->page.render, {}, kUseViewer);
+  bindOptions(sub, a->prepare, {"k"});
   sub->add_option("--max-primitives", a->maxPrimitives, "Refuse models with more points + segments than this")
       ->capture_default_str()
       ->check(CLI::Range(size_t(1), size_t(1) << 40));

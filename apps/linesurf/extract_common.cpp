@@ -10,10 +10,7 @@
 namespace linesurf::cli {
 
 void bindGeometryOptions(CLI::App* sub, GeometryOptions& o) {
-  bind(sub, "k", o.k, "Neighbours per point for normals and spacing (§6.1), [3, 256]", "-k,--neighbours");
-  sub->add_flag(flagName("recomputeNormals"), o.recomputeNormals, "Ignore normals in the input and compute them");
-  bind(sub, "orientationPenalty", o.orientationPenalty,
-       "MST orientation: penalty on edges along the normals (0 = Hoppe's weight), >= 0");
+  bindOptions(sub, o, {"k", "recomputeNormals", "orientationPenalty"});
 }
 
 CloudWithGeometry readCloudWithGeometry(const std::string& path, GeometryOptions options) {

@@ -10,7 +10,10 @@
 #include <memory>
 #include <new>
 
+#include <fmt/format.h>
+
 #include "command.h"
+#include "options_bind.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
@@ -35,11 +38,18 @@ int main(int argc, char** argv) {
   app.fallthrough();  // global options (-q, -j) may follow the subcommand too
   auto& g = cli::globalOptions();
   app.add_flag("-q,--quiet", g.quiet, "No progress and no summary")->configurable(false);
-  app.add_option("-j,--threads", g.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-  app.add_option("--max-mb", g.maxMegabytes,
-                 "Largest image buffer or output a command may make, estimated before the work, MiB")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1e9));
+  // Read as every table option is (options_bind.h): NaN or a non-number is refused naming the flag.
+  app.add_option_function<std::string>("-j,--threads", [&g](const std::string& t) {
+        const OptionSpec spec{"threads", "", closedRange(0, 1024)};
+        g.threads = cli::parseNumber<int>(spec, t);
+        requireRange(spec.name, g.threads, 0, 1024, "(0 = all cores)");
+      }, "Worker threads (0 = all cores), [0, 1024]");
+  app.add_option_function<std::string>("--max-mb", [&g](const std::string& t) {
+        const OptionSpec spec{"maxMb", "", closedRange(1, 1e9)};
+        g.maxMegabytes = cli::parseNumber<double>(spec, t);
+        requireRange(spec.name, g.maxMegabytes, 1, 1e9, "MiB");
+      }, "Largest image buffer or output a command may make, estimated before the work, MiB, [1, 1e9]")
+      ->default_str(fmt::format("{}", g.maxMegabytes));
   for (auto& reg : cli::registeredCommands()) reg(app);
   // Thread limit must exist before any subcommand callback runs.
   std::unique_ptr<ThreadLimit> limit;

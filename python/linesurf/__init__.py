@@ -12,28 +12,66 @@ release the GIL.
     image = linesurf.render(hybrid, size=(512, 512), azimuth=30, elevation=20)   # (512, 512, 4) uint8
     print(linesurf.compare(image, linesurf.render(cloud))["psnr"])
 """
+import inspect as _inspect
+
+from . import _linesurf
 from ._linesurf import (  # noqa: F401
     FileFormatError,
     Mesh,
     Model,
     compare,
     difference_heatmap,
-    extract_contour,
-    extract_eps_delta,
-    extract_shape_approx,
     geometry,
     normals,
-    prepare,
     read,
     read_image,
     read_mesh,
-    render,
     set_threads,
     thread_count,
     verify,
     write,
     write_png,
 )
+
+
+def _keyword_function(name, positional, extras=()):
+    """A Python function over the native ``_NAME(positional..., options, extras...)`` whose
+    keyword-only parameters are the option tables' fields (``_NAME_options()``: keyword, default
+    from the library's default instance, help), so that ``inspect.signature`` shows every option
+    with its default and an unknown keyword is a TypeError. Only the keywords given are passed on:
+    the library starts from its own defaults."""
+    native = getattr(_linesurf, "_" + name)
+    specs = getattr(_linesurf, "_" + name + "_options")()
+    P = _inspect.Parameter
+    params = [P(p, P.POSITIONAL_OR_KEYWORD) for p in positional]
+    params += [P(s["keyword"], P.KEYWORD_ONLY, default=s["default"]) for s in specs]
+    params += [P(k, P.KEYWORD_ONLY, default=v) for k, v in extras]
+    signature = _inspect.Signature(params)
+    option_names = {s["keyword"] for s in specs}
+
+    def function(*args, **kwargs):
+        given = signature.bind(*args, **kwargs).arguments
+        options = {k: v for k, v in given.items() if k in option_names}
+        rest = {k: v for k, v in given.items() if k not in option_names}
+        return native(options=options, **rest)
+
+    function.__name__ = function.__qualname__ = name
+    function.__module__ = __name__
+    function.__signature__ = signature
+    doc = (native.__doc__ or "").strip()
+    if doc.startswith("_" + name + "("):  # pybind11's own signature line
+        doc = doc.split("\n", 1)[-1].strip()
+    function.__doc__ = doc + "\n\nKeywords:\n" + "\n".join(
+        "    {} = {!r}: {}".format(s["keyword"], s["default"], s["help"]) for s in specs)
+    function.options = specs
+    return function
+
+
+render = _keyword_function("render", ["model"], [("depth", False), ("alpha", False), ("normal", False)])
+prepare = _keyword_function("prepare", ["model"])
+extract_eps_delta = _keyword_function("extract_eps_delta", ["cloud"])
+extract_shape_approx = _keyword_function("extract_shape_approx", ["cloud"])
+extract_contour = _keyword_function("extract_contour", ["mesh"])
 
 __version__ = "0.1.0"
 

@@ -1,4 +1,7 @@
-# Type stub of the linesurf Python module (editors complete the API from it).
+# Type stub of the linesurf Python module (editors complete the API from it). The keywords of
+# render, prepare and the extract_* functions are the option tables' fields; their defaults are
+# the library's (see inspect.signature) and written here as `...`, never restated;
+# tests/python/test_options.py checks that these lists match.
 from types import SimpleNamespace
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -76,38 +79,114 @@ def neighbours(points: PointsLike, k: int = 12) -> Tuple[npt.NDArray[np.int64], 
 def curvature(points: PointsLike, k: int = 12, curvature_fit: str = "taubin", **options: Any) -> Tuple[
     npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
 def spacing(points: PointsLike, k: int = 12) -> Tuple[npt.NDArray[np.float32], float]: ...
-def prepare(model: PointsLike, *, k: int = 12, radius_scale: float = 1.0) -> Model: ...
+def prepare(
+    model: PointsLike,
+    *,
+    k: int = ...,
+    radius_scale: float = ...,
+) -> Model: ...
 
-def extract_eps_delta(cloud: PointsLike, *, epsilon: float = 0.0, epsilon_relative: float = 0.05,
-                      delta: float = 0.004, min_replaced: int = 4, max_replaced: int = 0, provenance: bool = False,
-                      k: int = 12, recompute_normals: bool = False,
-                      orientation_penalty: float = 0.5) -> SimpleNamespace: ...
-def extract_shape_approx(cloud: PointsLike, *, method: str = "greedy", delta_n: float = 0.008, seed: int = 1,
-                         max_iterations: int = 16, radius_scale: float = 1.0, min_cluster_size: int = 4,
-                         min_run_points: int = 4, provenance: bool = False, curvature: bool = True, k: int = 12,
-                         recompute_normals: bool = False, orientation_penalty: float = 0.5) -> SimpleNamespace: ...
-def extract_contour(mesh: Mesh, *, spacing: float = 0.0, spacing_scale: float = 1.0, seed: int = 1,
-                    radius_scale: float = 0.55, points_below: float = 0.0, all_points: bool = False,
-                    vertex_normals: bool = False, family_switch_sine: float = 1.0,
-                    endpoint_normals: bool = True, merge_normal_deviation: float = 0.01,
-                    merge_tangent_deviation: float = 0.05, merge_angle: float = 2.0,
-                    merge_max_pieces: int = 32, diagonal_divisions: float = 200.0,
-                    merge_strip_angle: float = 4.0) -> SimpleNamespace: ...
+def extract_eps_delta(
+    cloud: PointsLike,
+    *,
+    epsilon: float = ...,
+    epsilon_relative: float = ...,
+    delta: float = ...,
+    min_replaced: int = ...,
+    max_replaced: int = ...,
+    provenance: bool = ...,
+    endpoint_normals: bool = ...,
+    k: int = ...,
+    recompute_normals: bool = ...,
+    orientation_penalty: float = ...,
+) -> SimpleNamespace: ...
+def extract_shape_approx(
+    cloud: PointsLike,
+    *,
+    method: str = ...,
+    delta_n: float = ...,
+    seed: int = ...,
+    max_iterations: int = ...,
+    radius_scale: float = ...,
+    min_cluster_size: int = ...,
+    min_run_points: int = ...,
+    curvature_switch_degrees: float = ...,
+    curvature_coherence: float = ...,
+    provenance: bool = ...,
+    endpoint_normals: bool = ...,
+    k: int = ...,
+    recompute_normals: bool = ...,
+    orientation_penalty: float = ...,
+    curvature: bool = ...,
+) -> SimpleNamespace: ...
+def extract_contour(
+    mesh: Mesh,
+    *,
+    spacing: float = ...,
+    spacing_scale: float = ...,
+    diagonal_divisions: float = ...,
+    seed: int = ...,
+    family_switch_sine: float = ...,
+    radius_scale: float = ...,
+    vertex_normals: bool = ...,
+    endpoint_normals: bool = ...,
+    shading_normals: bool = ...,
+    point_masses: bool = ...,
+    merge_normal_deviation: float = ...,
+    merge_tangent_deviation: float = ...,
+    merge_angle: float = ...,
+    merge_strip_angle: float = ...,
+    merge_max_pieces: int = ...,
+    points_below: float = ...,
+    all_points: bool = ...,
+) -> SimpleNamespace: ...
 def verify(cloud: PointsLike, hybrid: Model, *, epsilon: Optional[float] = None, delta: Optional[float] = None,
            k: Optional[int] = None) -> Dict[str, Any]: ...
 
-def render(model: PointsLike, *, size: Tuple[int, int] = (512, 512), azimuth: float = 30.0, elevation: float = 20.0,
-           distance: float = 0.0, zoom: float = 1.0, fov: float = 30.0, up_axis: str = "y",
-           eye: Optional[Sequence[float]] = None, target: Optional[Sequence[float]] = None,
-           up: Optional[Sequence[float]] = None, prefilter_variance: float = 0.25, cutoff_radius: float = 2.0,
-           reconstruction_scale: float = 0.5, radius_scale: float = 1.0, layers: int = 4,
-           z_threshold_mode: str = "primitive", z_threshold: Optional[float] = None, alpha_override: float = -1.0,
-           backface_culling: bool = True, ambient: float = 0.25, diffuse: float = 0.75, specular: float = 0.2,
-           shininess: float = 24.0, light: Optional[Sequence[float]] = None, world_light: bool = False,
-           default_color: Optional[Sequence[float]] = None, per_pixel_lighting: bool = False,
-           background: Union[str, Sequence[float]] = "white", segment_method: str = "screen",
-           segment_lod: float = 0.0, coverage_gain: float = 0.0, coverage_reach: int = 2, tail_coverage: float = 0.0, k: int = 12, tile_size: int = 64, depth: bool = False, alpha: bool = False,
-           normal: bool = False) -> Union[npt.NDArray[np.uint8], Dict[str, npt.NDArray[Any]]]: ...
+def render(
+    model: PointsLike,
+    *,
+    size: Tuple[int, int] = ...,
+    azimuth: float = ...,
+    elevation: float = ...,
+    distance: float = ...,
+    zoom: float = ...,
+    fov: float = ...,
+    up_axis: str = ...,
+    eye: Optional[Sequence[float]] = ...,
+    target: Optional[Sequence[float]] = ...,
+    up: Optional[Sequence[float]] = ...,
+    prefilter_variance: float = ...,
+    cutoff_radius: float = ...,
+    reconstruction_scale: float = ...,
+    coverage_gain: float = ...,
+    coverage_reach: int = ...,
+    layers: int = ...,
+    tail_layers: bool = ...,
+    tail_coverage: float = ...,
+    z_threshold_mode: str = ...,
+    z_threshold: Optional[float] = ...,
+    alpha_override: float = ...,
+    backface_culling: bool = ...,
+    ambient: float = ...,
+    diffuse: float = ...,
+    specular: float = ...,
+    shininess: float = ...,
+    light: Sequence[float] = ...,
+    light_color: Sequence[float] = ...,
+    headlight: bool = ...,
+    default_color: Sequence[float] = ...,
+    per_pixel_lighting: bool = ...,
+    background: Union[str, Sequence[float]] = ...,
+    segment_method: str = ...,
+    segment_lod: float = ...,
+    tile_size: int = ...,
+    k: int = ...,
+    radius_scale: float = ...,
+    depth: bool = ...,
+    alpha: bool = ...,
+    normal: bool = ...,
+) -> Union[npt.NDArray[np.uint8], Dict[str, npt.NDArray[Any]]]: ...
 
 def compare(a: ImageLike, b: ImageLike) -> Dict[str, float]: ...
 def difference_heatmap(a: ImageLike, b: ImageLike, *, saturate: float = 32.0) -> npt.NDArray[np.uint8]: ...

@@ -185,24 +185,25 @@ void weightsOf(const EdgePoint& e, double w[3]) {
 }
 
 void checkContourOptions(const ContourOptions& o) {
-  if (!std::isfinite(o.spacing) || o.spacing < 0)
-    throwBadOption("spacing", fmt::format("must be a finite length >= 0 (0 = from the mean edge length), got {}", o.spacing));
-  if (o.spacing == 0 && !(std::isfinite(o.spacingScale) && o.spacingScale > 0))
-    throwBadOption("spacingScale", fmt::format("must be > 0, got {}", o.spacingScale));
+  if (!(o.spacing >= 0 && o.spacing <= 1e30))
+    throwBadOption("spacing", fmt::format("must be a length in [0, 1e30] (0 = from the mean edge length), got {}", o.spacing));
+  if (o.spacing == 0 && !(o.spacingScale > 0 && o.spacingScale <= 1e6))
+    throwBadOption("spacingScale", fmt::format("must be in (0, 1e6], got {}", o.spacingScale));
   if (!(std::isfinite(o.diagonalDivisions) && o.diagonalDivisions >= 0 && o.diagonalDivisions <= 1e6))
     throwBadOption("diagonalDivisions", fmt::format("must be in [0, 1e6] (0 = no cap on d), got {}", o.diagonalDivisions));
-  if (!(std::isfinite(o.radiusScale) && o.radiusScale > 0))
-    throwBadOption("radiusScale", fmt::format("must be > 0 (> 0.5 for a hole-free model), got {}", o.radiusScale));
-  if (!std::isfinite(o.pointsBelow) || o.pointsBelow < 0)
-    throwBadOption("pointsBelow", fmt::format("must be a finite length >= 0, got {}", o.pointsBelow));
+  // Radii beyond 100 d overflow the model's bounds by orders of magnitude: refused here, before the work.
+  if (!(o.radiusScale > 0 && o.radiusScale <= 100))
+    throwBadOption("radiusScale", fmt::format("must be in (0, 100] (> 0.5 for a hole-free model), got {}", o.radiusScale));
+  if (!(o.pointsBelow >= 0 && o.pointsBelow <= 1e30))
+    throwBadOption("pointsBelow", fmt::format("must be a length in [0, 1e30], got {}", o.pointsBelow));
   if (o.allPoints && o.pointsBelow > 0)
     throwBadOption("pointsBelow", "conflicts with `allPoints`: choose one");
   if (!(o.familySwitchSine >= 0 && o.familySwitchSine <= 1))
     throwBadOption("familySwitchSine", fmt::format("must be in [0, 1], got {}", o.familySwitchSine));
-  if (!(std::isfinite(o.mergeNormalDeviation) && o.mergeNormalDeviation >= 0))
-    throwBadOption("mergeNormalDeviation", fmt::format("must be a finite multiple of d >= 0 (0 = no merging), got {}", o.mergeNormalDeviation));
-  if (!(std::isfinite(o.mergeTangentDeviation) && o.mergeTangentDeviation >= 0))
-    throwBadOption("mergeTangentDeviation", fmt::format("must be a finite multiple of d >= 0, got {}", o.mergeTangentDeviation));
+  if (!(o.mergeNormalDeviation >= 0 && o.mergeNormalDeviation <= 1e6))
+    throwBadOption("mergeNormalDeviation", fmt::format("must be a multiple of d in [0, 1e6] (0 = no merging), got {}", o.mergeNormalDeviation));
+  if (!(o.mergeTangentDeviation >= 0 && o.mergeTangentDeviation <= 1e6))
+    throwBadOption("mergeTangentDeviation", fmt::format("must be a multiple of d in [0, 1e6], got {}", o.mergeTangentDeviation));
   if (!(std::isfinite(o.mergeAngle) && o.mergeAngle >= 0 && o.mergeAngle < 90))
     throwBadOption("mergeAngle", fmt::format("must be in [0, 90) degrees, got {}", o.mergeAngle));
   if (!(std::isfinite(o.mergeStripAngle) && o.mergeStripAngle >= 0 && o.mergeStripAngle < 90))

@@ -201,13 +201,12 @@ Choice evaluate(const std::vector<uint32_t>& rec, const std::vector<uint8_t>& av
 }  // namespace
 
 void validate(const EpsDeltaOptions& o) {
-  if (!(o.epsilon >= 0) || !std::isfinite(o.epsilon))
-    throwBadOption("epsilon", "must be a finite distance > 0 (or 0 to use `epsilonRelative`), got " + std::to_string(o.epsilon));
-  if (o.epsilon == 0 && (!(o.epsilonRelative > 0) || !std::isfinite(o.epsilonRelative)))
-    throwBadOption("epsilonRelative", "must be a finite fraction of the average spacing > 0, got " +
-                                         std::to_string(o.epsilonRelative));
+  if (!(o.epsilon >= 0 && o.epsilon <= 1e30))
+    throwBadOption("epsilon", "must be a finite distance in [0, 1e30] (0 = use `epsilonRelative`), got " + numberText(o.epsilon));
+  if (o.epsilon == 0 && !(o.epsilonRelative > 0 && o.epsilonRelative <= 1e6))
+    throwBadOption("epsilonRelative", "must be a fraction of the average spacing in (0, 1e6], got " + numberText(o.epsilonRelative));
   if (!(o.delta >= 0 && o.delta <= 2))
-    throwBadOption("delta", "must lie in [0, 2] (it bounds 1 - n_i.n_j), got " + std::to_string(o.delta));
+    throwBadOption("delta", "must lie in [0, 2] (it bounds 1 - n_i.n_j), got " + numberText(o.delta));
   if (o.minReplaced < 2) throwBadOption("minReplaced", "must be >= 2, got " + std::to_string(o.minReplaced));
   if (o.maxReplaced != 0 && o.maxReplaced < o.minReplaced)
     throwBadOption("maxReplaced", "must be 0 (no limit) or >= `minReplaced` (" + std::to_string(o.minReplaced) +

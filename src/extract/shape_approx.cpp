@@ -22,12 +22,10 @@ void validate(const ShapeApproxOptions& o) {
     throwBadOption("minClusterSize", "must be >= 2 (got " + std::to_string(o.minClusterSize) + ")");
   if (o.minRunPoints < 2)
     throwBadOption("minRunPoints", "must be >= 2 (got " + std::to_string(o.minRunPoints) + ")");
-  if (!(o.curvatureSwitchDegrees >= 0 && o.curvatureSwitchDegrees <= 90))
-    throwBadOption("curvatureSwitchDegrees", "must lie in [0, 90] (got " + std::to_string(o.curvatureSwitchDegrees) + ")");
-  if (!(o.curvatureCoherence >= 0 && o.curvatureCoherence <= 1))
-    throwBadOption("curvatureCoherence", "must lie in [0, 1] (got " + std::to_string(o.curvatureCoherence) + ")");
-  if (!(o.radiusScale > 0 && std::isfinite(o.radiusScale)))
-    throwBadOption("radiusScale", "must be a positive number (got " + std::to_string(o.radiusScale) + ")");
+  requireRange("curvatureSwitchDegrees", o.curvatureSwitchDegrees, 0, 90, "degrees");
+  requireRange("curvatureCoherence", o.curvatureCoherence, 0, 1);
+  if (!(o.radiusScale > 0 && o.radiusScale <= 1e3))
+    throwBadOption("radiusScale", "must be in (0, 1000] (got " + numberText(o.radiusScale) + ")");
 }
 
 namespace {

@@ -522,8 +522,7 @@ size_t PointGeometry::countFlag(PointFlag f) const {
 void validate(const GeometryOptions& options) {
   if (options.k < 3) throwBadOption("k", "must be at least 3 (got " + std::to_string(options.k) + ")");
   if (options.k > 256) throwBadOption("k", "must be at most 256 (got " + std::to_string(options.k) + ")");
-  if (!(options.orientationPenalty >= 0) || !std::isfinite(options.orientationPenalty))
-    throwBadOption("orientationPenalty", "must be finite and >= 0");
+  requireRange("orientationPenalty", options.orientationPenalty, 0, 1e6);
 }
 
 PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {

@@ -28,7 +28,7 @@ void validate(const ViewOptions& o) {
   requireFinite("azimuth", o.azimuth);
   requireRange("elevation", o.elevation, -90, 90, "degrees");
   requireRange("distance", o.distance, 0, 1e30);
-  requirePositive("zoom", o.zoom);
+  requireRange("zoom", o.zoom, 1e-3, 1e3);  // beyond: the model shrinks to nothing or fills past the view
   requireRange("fov", o.fov, 1, 170, "degrees");
   requireRange("views", o.views, 0, 10000);
   if (!o.upAxis.allFinite() || o.upAxis.norm() == 0) throwBadOption("upAxis", "must be a finite non-zero axis");
@@ -115,6 +115,8 @@ void validate(const PrepareOptions& o) {
   requireRange("k", o.k, 3, 256);
   requireRange("radiusScale", o.radiusScale, 1e-3, 1e3);
 }
+
+void validate(const MeshRenderOptions& o) { requireRange("supersampling", o.supersampling, 1, 16, "samples per pixel side"); }
 
 void estimateMissingPointGeometry(HybridModel& model, int k, PrepareReport& report, const ProgressFn& progress) {
   const bool pointWithoutRadius =

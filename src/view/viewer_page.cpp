@@ -6,13 +6,16 @@
 #include <cstdint>
 #include <cstring>
 #include <string_view>
+#include <type_traits>
 
 #include <nlohmann/json.hpp>
 
 #include "linesurf/core/error.h"
 #include "linesurf/io/atomic_file.h"
+#include "linesurf/pipeline/option_tables.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/web_assets.h"
+#include "render/detail/splat_math.h"  // kMaxStretch, kMinFacing: the page's shaders must cut and cull alike
 
 namespace linesurf {
 
@@ -66,6 +69,38 @@ bool finite(const Vec3f& v) { return v.allFinite(); }
 
 json vec(const Vec3f& v) { return json::array({v.x(), v.y(), v.z()}); }
 json rgb(const Color& c) { return json::array({c.x(), c.y(), c.z()}); }
+json rgba(const Color& c) { return json::array({c.x(), c.y(), c.z(), c.w()}); }
+
+// The page's defaults: every field the option tables mark kUseViewer, by its C++ name, from the
+// options given (their defaults unless the caller changed them).
+class ViewerDefaults {
+ public:
+  json out = json::object();
+  void group(const char*, const char*) {}
+  template <typename T>
+  void operator()(T&& value, const OptionSpec& s) {
+    using U = std::remove_cvref_t<T>;
+    if (!(s.use & kUseViewer)) return;
+    if constexpr (std::is_arithmetic_v<U>) out[s.name] = value;
+    else if constexpr (std::is_same_v<U, std::optional<float>>) out[s.name] = value.value_or(defaultZThreshold(ZThresholdMode::PerPrimitive));
+    else if constexpr (std::is_same_v<U, Vec3f>) out[s.name] = vec(value);
+    else if constexpr (std::is_same_v<U, AxisRef>) out[s.name] = vec(value.axis.normalized());
+    else if constexpr (std::is_same_v<U, RgbRef>) out[s.name] = rgb(value.color);
+    else if constexpr (std::is_same_v<U, BackgroundRef>) out[s.name] = rgba(value.color);
+    else throw Error(Error::Kind::BadParameter, s.name, "", "the viewer page cannot take this option");
+  }
+};
+
+json viewerDefaults(const ViewerPageOptions& o) {
+  ViewerDefaults d;
+  ViewOptions view = o.view;
+  RenderOptions render = o.render;
+  // The page always blends by each primitive's own depth extent (PerPrimitive).
+  if (render.zThresholdMode != ZThresholdMode::PerPrimitive) render.zThreshold = defaultZThreshold(ZThresholdMode::PerPrimitive);
+  describeOptions(view, d);
+  describeOptions(render, d);
+  return d.out;
+}
 
 // Replaces the one occurrence of `marker` in `page` by `text`.
 void fill(std::string& page, const std::string& marker, const std::string& text) {
@@ -78,11 +113,8 @@ void fill(std::string& page, const std::string& marker, const std::string& text)
 
 std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, ViewerPageStats* statsOut) {
   validate(o.render);
+  validate(o.view);
   if (o.maxPrimitives < 1) throwBadParameter("maxPrimitives", "must be >= 1");
-  if (!o.upAxis.allFinite() || o.upAxis.norm() == 0) throwBadParameter("upAxis", "must be a finite non-zero vector");
-  if (!(o.fovY >= 1 && o.fovY <= 170)) throwBadParameter("fovY", "must be in [1, 170] degrees");
-  if (!(o.elevation >= -90 && o.elevation <= 90) || !std::isfinite(o.azimuth))
-    throwBadParameter("elevation", "must be in [-90, 90] degrees (azimuth finite)");
   const size_t total = model.points.size() + model.segments.size();
   if (total > o.maxPrimitives)
     throw Error(Error::Kind::BadInput, o.name, "view",
@@ -199,27 +231,12 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
     throw Error(Error::Kind::BadInput, o.name, "view",
                 "nothing to draw: no point or segment with finite coordinates and a positive radius");
 
-  const RenderOptions& r = o.render;
-  const float zThreshold = r.zThresholdMode == ZThresholdMode::PerPrimitive ? r.zThreshold : 0.5f;
   meta["bytes"] = blob.bytes().size();
   meta["sphere"] = {{"center", vec(centre)}, {"radius", sphere.radius}};
-  meta["upAxis"] = vec(o.upAxis.normalized());
   meta["renderArguments"] = o.renderArguments;
   meta["skipped"] = {{"points", st.skippedPoints}, {"segments", st.skippedSegments}};
-  meta["defaults"] = {{"azimuth", o.azimuth},
-                      {"elevation", o.elevation},
-                      {"fov", o.fovY},
-                      {"prefilter", r.prefilterVariance},
-                      {"cutoff", r.cutoffRadius},
-                      {"reconScale", r.reconstructionScale},
-                      {"zThreshold", zThreshold},
-                      {"ambient", r.material.ambient},
-                      {"diffuse", r.material.diffuse},
-                      {"specular", r.material.specular},
-                      {"shininess", r.material.shininess},
-                      {"light", vec(r.light.direction)},
-                      {"color", rgb(r.defaultColor)},
-                      {"background", rgb(r.background)}};
+  meta["defaults"] = viewerDefaults(o);
+  meta["constants"] = {{"maxStretch", detail::kMaxStretch}, {"minFacing", detail::kMinFacing}};
   std::string metaText = meta.dump();
   // JSON inside <script>: "</" would end the element early.
   for (size_t at = 0; (at = metaText.find("</", at)) != std::string::npos; at += 3) metaText.replace(at, 2, "<\\/");

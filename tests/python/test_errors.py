@@ -142,7 +142,7 @@ def test_empty_inputs_never_crash():
 def test_huge_sizes_raise():
     with pytest.raises(ValueError):
         linesurf.render(GOOD, size=(100000, 100000))
-    with pytest.raises((TypeError, OverflowError)):
+    with pytest.raises(ValueError, match="^size: "):  # a bad parameter, named, not an overflow
         linesurf.render(GOOD, size=(2 ** 40, 1))
     with pytest.raises(ValueError):
         linesurf.normals(GOOD, k=10 ** 9)

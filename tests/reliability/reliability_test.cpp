@@ -390,7 +390,7 @@ const std::vector<Case> kCases = {
   // --- Parameters: refused at once with 1, naming the option -----------------------------------
   {"RenderBadSize", "render pts.ply -o out.png --size 0x5", 1, {"--size"}},
   {"RenderSizeJunk", "render pts.ply -o out.png --size 64x64x", 1, {"--size"}},
-  {"RenderZeroViews", "render pts.ply -o out.png --views 0", 1, {"--views"}},
+  {"RenderNegativeViews", "render pts.ply -o out.png --views -1", 1, {"--views"}},  // 0: the one orbit view
   {"RenderFov", "render pts.ply -o out.png --fov 500", 1, {"--fov"}},
   {"RenderUpAxis", "render pts.ply -o out.png --up-axis w", 1, {"--up-axis"}},
   {"RenderSegmentMethod", "render pts.ply -o out.png --segment-method foo", 1, {"--segment-method"}},

@@ -225,6 +225,7 @@ TEST(EwaPoint, TailLayersKeepAGrazingSplatsTailFromHidingThePlaneBehind) {
   const Camera cam = Camera::lookAt(Vec3f(0, 0, 3), Vec3f(0, 0, 0), Vec3f(0, 1, 0), 20, 64, 64);
   RenderOptions off = unlit(), on = unlit();
   off.tailLayers = false, on.tailLayers = true;
+  off.tailCoverage = on.tailCoverage = 0;  // tail layers alone: tail coverage would fade the tails' alpha
   auto redRows = [](const Image& im) {  // the rows where the splat shows
     int n = 0;
     for (int y = 0; y < im.height; ++y) {

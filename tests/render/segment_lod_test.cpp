@@ -193,6 +193,9 @@ RenderOptions lodOptions(float lod) {
   RenderOptions o;
   o.segmentLod = lod;
   o.alphaBuffer = true;
+  // the kernels alone: tail coverage judges an LOD ellipse's tails by its own disc, an exact segment's by
+  // its strip, so the two fringes fade differently
+  o.tailCoverage = 0;
   return o;
 }
 

@@ -82,6 +82,9 @@ RenderOptions optionsFor(SegmentMethod m) {
   o.cutoffRadius = 2.5f;
   o.prefilterVariance = 1.0f;
   o.reconstructionScale = 0.5f;
+  // The thesis's silhouettes: tail coverage fades only the ScreenSpace method's (and the points')
+  // tails, which would make the methods differ at the plane's edge for a reason this file is not about.
+  o.tailCoverage = 0;
   return o;
 }
 

@@ -56,6 +56,7 @@ TEST(TailCoverage, FadesTheFringeTowardsTheBoxFilteredEdge) {
     const HybridModel m = strips ? squareStrips() : squarePoints();
     RenderOptions o;
     o.alphaBuffer = true;
+    o.tailCoverage = 0;
     const RenderResult off = renderImage(m, cam, o);
     o.tailCoverage = 1;
     const RenderResult on = renderImage(m, cam, o);

@@ -92,9 +92,9 @@ TEST(ViewerPage, EmbedsEveryPrimitiveRelativeToTheBoundingSphere) {
   float r;
   std::memcpy(&r, data.data() + meta["segments"]["radius"]["offset"].get<size_t>(), 4);
   EXPECT_NEAR(r, 0.25f / sphere.radius, 1e-7f);
-  // the defaults are the renderer's (one source of truth: RenderOptions)
+  // the defaults are the renderer's (one source of truth: RenderOptions; tests/options checks all)
   const RenderOptions ro;
-  EXPECT_FLOAT_EQ(meta["defaults"]["cutoff"].get<float>(), ro.cutoffRadius);
+  EXPECT_FLOAT_EQ(meta["defaults"]["cutoffRadius"].get<float>(), ro.cutoffRadius);
   EXPECT_FLOAT_EQ(meta["defaults"]["ambient"].get<float>(), ro.material.ambient);
   EXPECT_FLOAT_EQ(meta["defaults"]["zThreshold"].get<float>(), ro.zThreshold);
 }
@@ -129,7 +129,7 @@ TEST(ViewerPage, RefusesAModelOverTheBudgetOrWithNothingToDraw) {
   for (Point& p : none.points) p.radius = 0;
   none.segments.clear();
   EXPECT_THROW(viewerPage(none), Error);
-  EXPECT_THROW(viewerPage(m, {.fovY = 0}), Error);
+  EXPECT_THROW(viewerPage(m, {.view = {.fov = 0}}), Error);
 }
 
 TEST(ViewerPage, NameCannotCloseTheScriptElement) {

@@ -43,4 +43,14 @@ void requireRange(std::string_view field, double value, double lo, double hi, co
 /// value > 0 (and finite).
 void requirePositive(std::string_view field, double value);
 
+/// A number typed for a single-precision field, checked before it is narrowed: a value that
+/// float cannot hold (|v| > FLT_MAX, or a non-zero value that rounds to 0, such as 1e-300, which
+/// would otherwise read as the field's "automatic" 0) throws OptionError instead of silently
+/// becoming infinity or 0. NaN and infinities pass (validate() names them).
+float narrowToFloat(std::string_view field, double value);
+
+/// A number for messages: the shortest text that reads back as the same value (89.9999999 as a
+/// double prints so, not "90").
+std::string numberText(double value);
+
 }  // namespace linesurf

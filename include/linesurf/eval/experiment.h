@@ -61,7 +61,13 @@ struct ExperimentOptions {
   EpsDeltaOptions epsDelta;       ///< §7.2 defaults: epsilon = 5% of the average spacing, delta 0.004
   ShapeApproxOptions shapeApprox; ///< §7.2 defaults: delta_n = 0.008; method is set per run
   ContourOptions contour;         ///< §3.3 defaults (d = mean edge length, seed 1)
-  RenderOptions render;           ///< renderer defaults; the same for every image
+  /// Renderer defaults, the same for every image, except tail coverage: off (0), the thesis's
+  /// setting, since it moves Table 5's line-vs-point comparison (render_options.h).
+  RenderOptions render = [] {
+    RenderOptions r;
+    r.tailCoverage = 0;
+    return r;
+  }();
   /// Meshes: also render the mesh itself (render/mesh_render.h, the ground truth) from the same
   /// views and compare the line model and the point model with it (issue 14).
   bool groundTruth = true;

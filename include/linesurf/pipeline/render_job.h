@@ -15,6 +15,7 @@
 #include "linesurf/core/progress.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/render/camera.h"
+#include "linesurf/render/mesh_render.h"
 #include "linesurf/render/render_options.h"
 
 namespace linesurf {
@@ -25,8 +26,8 @@ struct ViewOptions {
   float azimuth = 30;    ///< orbit azimuth about the up axis (0 = from the front axis)
   float elevation = 20;  ///< orbit elevation towards the up axis, [-90, 90]
   float distance = 0;    ///< orbit distance from the centre; 0 frames the bounding sphere; >= 0
-  float zoom = 1;        ///< divides the framed distance, > 0
-  float fov = 30;        ///< vertical field of view, [1, 170]
+  float zoom = 1;        ///< divides the framed distance, [1e-3, 1e3]
+  float fov = Camera::kDefaultFovY;  ///< vertical field of view, [1, 170]
   int views = 0;         ///< > 0: this many views spread over the sphere, [0, 10000]
   Vec3f upAxis = Vec3f(0, 1, 0);  ///< world up of the orbit: a coordinate axis (+-x, +-y, +-z)
   /// Look-at camera when eye or target is set: eye defaults to 3 radii in front (+z) of the
@@ -60,6 +61,10 @@ struct PrepareOptions {
   ProgressFn progress;
 };
 void validate(const PrepareOptions& options);
+
+/// Throws OptionError for a supersampling outside [1, 16] (as MeshRenderer does), so that a front
+/// end refuses it before reading the mesh.
+void validate(const MeshRenderOptions& options);
 
 /// What the preparation did (for the CLI summary).
 struct PrepareReport {

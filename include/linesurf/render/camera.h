@@ -29,6 +29,9 @@ BoundingSphere boundingSphere(const HybridModel& model);
 
 class Camera {
  public:
+  /// Vertical field of view of a camera nobody chose one for, degrees (ViewOptions::fov, the
+  /// CLI, Python and the viewer page take their default from it).
+  static constexpr float kDefaultFovY = 30.0f;
   Camera() = default;
 
   /// A camera at `eye` looking at `target`, `up` roughly up (need not be orthogonal to the view
@@ -43,7 +46,7 @@ class Camera {
   /// frames the sphere: the camera backs off until the sphere fills the smaller field of view
   /// with a 5% margin. near/far hug the sphere (near = max(1e-4 d, d - 1.01 r), far = d + 1.01 r).
   static Camera orbit(const BoundingSphere& sphere, float azimuthDegrees, float elevationDegrees,
-                      float distance, int width, int height, float fovYDegrees = 30.0f,
+                      float distance, int width, int height, float fovYDegrees = kDefaultFovY,
                       const Vec3f& up = Vec3f(0, 1, 0));
   /// The direction azimuth 0 looks from, for a world up axis: +z for up = +-y, -y for up = +z,
   /// +y for up = -z, +z for up = +-x; for other axes a fixed perpendicular.
@@ -54,7 +57,7 @@ class Camera {
   static std::vector<Vec2f> spreadViewAngles(int n);
   /// `n` auto-framed orbit cameras of the sphere at spreadViewAngles(n).
   static std::vector<Camera> spreadViews(const BoundingSphere& sphere, int n, int width, int height,
-                                         float fovYDegrees = 30.0f, const Vec3f& up = Vec3f(0, 1, 0));
+                                         float fovYDegrees = kDefaultFovY, const Vec3f& up = Vec3f(0, 1, 0));
 
   /// Rigid transform world -> camera (rotation + translation, last row 0 0 0 1).
   const Mat4f& cameraFromWorld() const { return cameraFromWorld_; }
@@ -100,7 +103,7 @@ class Camera {
  private:
   void update();
   Vec3f eye_ = Vec3f(0, 0, 1), target_ = Vec3f::Zero(), up_ = Vec3f(0, 1, 0);
-  float fovY_ = 30.0f, near_ = 0.01f, far_ = 1000.0f;
+  float fovY_ = kDefaultFovY, near_ = 0.01f, far_ = 1000.0f;
   int width_ = 512, height_ = 512;
   float focal_ = 1, cx_ = 256, cy_ = 256;
   Mat3f rotation_ = Mat3f::Identity();

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "linesurf/core/model.h"
+#include "linesurf/pipeline/render_job.h"
 #include "linesurf/render/render_options.h"
 
 namespace linesurf {
@@ -27,15 +28,15 @@ struct ViewerPageOptions {
   /// Largest number of points + segments a page may hold, >= 1. Default 5 M: about 110 MB of
   /// base64 and 200 MB of GPU buffers; larger models are refused (Error BadInput).
   size_t maxPrimitives = 5'000'000;
-  /// World up axis of the default orbit view and of the turntable (as `render --up-axis`).
-  Vec3f upAxis = Vec3f(0, 1, 0);
   /// Appended to the `linesurf render` arguments the page shows (e.g. "--primitive points" for a
   /// mesh drawn as its vertices).
   std::string renderArguments;
-  /// Default orbit view (as `linesurf render`'s defaults): degrees.
-  float azimuth = 30, elevation = 20, fovY = 30;
+  /// The page's default orbit view: azimuth, elevation, fov and the world up axis (also the
+  /// turntable's); the page's own controls replace the rest.
+  ViewOptions view;
   /// Filtering, z threshold (PerPrimitive mode), material, light (headlight), default colour and
-  /// background of the page; the page always lights per pixel and culls back faces.
+  /// background of the page; the page always lights per pixel and culls back faces. Which fields
+  /// the page takes is the option table's (pipeline/option_tables.h, kUseViewer).
   RenderOptions render;
 };
 

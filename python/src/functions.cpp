@@ -1,0 +1,517 @@
+// The module's functions: files, the §6.1 geometry, the §3 extractions, rendering (§4-§6.2),
+// image metrics (§7) and threads. Keywords of the option structs come from the option tables
+// (options.h); the GIL is released during every long call.
+#include "functions.h"
+
+#include <memory>
+#include <set>
+
+#include "arrays.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/eval/image_metrics.h"
+#include "linesurf/extract/contour.h"
+#include "linesurf/extract/eps_delta.h"
+#include "linesurf/extract/shape_approx.h"
+#include "linesurf/extract/verify.h"
+#include "linesurf/geometry/point_geometry.h"
+#include "linesurf/io/model_frame.h"
+#include "linesurf/io/model_io.h"
+#include "linesurf/pipeline/render_job.h"
+#include "linesurf/pipeline/verify_job.h"
+#include "linesurf/render/renderer.h"
+#include "model.h"
+#include "options.h"
+
+namespace linesurf::python {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Options from keywords (names: keywordName of the fields).
+
+template <typename E>
+E enumFrom(const std::string& value, const char* field, std::initializer_list<std::pair<const char*, E>> names) {
+  std::string choices;
+  for (auto& [n, e] : names) {
+    if (value == n) return e;
+    if (!choices.empty()) choices += ", ";
+    choices += n;
+  }
+  throwBadOption(field, "expected one of " + choices + ", got '" + value + "'");
+}
+
+GeometryOptions geometryOptions(int k, bool recompute, bool orient, float penalty) {
+  GeometryOptions o;
+  o.k = k;
+  o.recomputeNormals = recompute;
+  o.orientNormals = orient;
+  o.orientationPenalty = penalty;
+  validate(o);
+  return o;
+}
+
+py::object namespaceOf(py::dict d) { return py::module_::import("types").attr("SimpleNamespace")(**d); }
+
+py::dict geometryDict(const PointGeometry& g) {
+  py::dict d;
+  const size_t n = g.size();
+  const int k = g.k;
+  auto nb = newArray<int64_t>({py::ssize_t(n), k});
+  auto nd = newArray<float>({py::ssize_t(n), k});
+  for (size_t i = 0; i < n * size_t(k); ++i) {
+    const uint32_t j = g.neighbours[i];
+    nb.mutable_data()[i] = j == PointGeometry::kNoNeighbour ? -1 : int64_t(j);
+    nd.mutable_data()[i] = g.neighbourDistances[i];
+  }
+  d["k"] = k;
+  d["neighbours"] = nb;
+  d["neighbour_distances"] = nd;
+  d["normals"] = vec3Array(n, [&](size_t i) { return g.normals[i]; });
+  d["eigenvalues"] = vec3Array(n, [&](size_t i) { return g.eigenvalues[i]; });
+  d["surface_variation"] = floatVector(g.surfaceVariation);
+  d["spacing"] = floatVector(g.spacing);
+  d["average_spacing"] = g.averageSpacing;
+  auto flags = newArray<uint8_t>({py::ssize_t(n)});
+  if (n) std::memcpy(flags.mutable_data(), g.flags.data(), n);
+  d["flags"] = flags;
+  d["orientation_flips"] = g.orientationFlips;
+  if (!g.delaunayOffsets.empty()) {
+    auto off = newArray<int64_t>({py::ssize_t(g.delaunayOffsets.size())});
+    for (size_t i = 0; i < g.delaunayOffsets.size(); ++i) off.mutable_data()[i] = g.delaunayOffsets[i];
+    auto idx = newArray<int64_t>({py::ssize_t(g.delaunayIndices.size())});
+    for (size_t i = 0; i < g.delaunayIndices.size(); ++i) idx.mutable_data()[i] = g.delaunayIndices[i];
+    d["delaunay_offsets"] = off;
+    d["delaunay_indices"] = idx;
+  }
+  if (g.kMin.size() == n && n) {
+    d["k_min"] = floatVector(g.kMin);
+    d["k_max"] = floatVector(g.kMax);
+    d["min_curvature_dir"] = vec3Array(n, [&](size_t i) { return g.minCurvatureDir[i]; });
+    d["max_curvature_dir"] = vec3Array(n, [&](size_t i) { return g.maxCurvatureDir[i]; });
+  }
+  return d;
+}
+
+/// Whether prepareForRendering would change the model (it is copied only then).
+bool needsPreparation(const HybridModel& m, float radiusScale) {
+  if (radiusScale != 1.0f) return true;
+  if (!m.points.empty() && (!m.attributes.normals || !m.attributes.radii)) return true;
+  for (const Point& p : m.points)
+    if (p.radius == 0.0f) return true;
+  for (const Segment& s : m.segments)
+    if (s.radius == 0.0f) return true;
+  return false;
+}
+
+// The §6.1 fields the point extractions take as keywords (as the CLI's extract commands).
+const std::set<std::string> kExtractGeometry = {"k", "recomputeNormals", "orientationPenalty"};
+const std::set<std::string> kShapeGeometry = {"k", "recomputeNormals", "orientationPenalty", "curvature"};
+
+std::unique_ptr<ThreadLimit>& threadLimit() {
+  static std::unique_ptr<ThreadLimit> limit;
+  return limit;
+}
+
+}  // namespace
+
+void bindFunctions(py::module_& m) {
+  // --- files ----------------------------------------------------------------------------------
+  m.def(
+      "read",
+      [](const std::string& path) {
+        py::gil_scoped_release release;
+        return readModel(path);
+      },
+      py::arg("path"),
+      "Reads a point cloud or hybrid model (.ply, .xyz; a mesh file gives its vertices) as a Model.\n"
+      "Raises FileFormatError (an OSError) with the CLI's one-line message on a bad file.");
+  m.def(
+      "read_mesh",
+      [](const std::string& path) {
+        py::gil_scoped_release release;
+        return readMesh(path);
+      },
+      py::arg("path"), "Reads a triangle mesh (.ply with faces, .obj with optional .mtl texture) as a Mesh.");
+  m.def(
+      "write",
+      [](const std::string& path, py::object obj, bool ascii) {
+        WriteOptions wo;
+        if (ascii) wo.encoding = PlyEncoding::Ascii;
+        if (py::isinstance<TriangleMesh>(obj)) {
+          const TriangleMesh& mesh = obj.cast<const TriangleMesh&>();
+          py::gil_scoped_release release;
+          writeMesh(path, mesh, wo);
+          return;
+        }
+        ModelArg a = modelArg(obj);
+        py::gil_scoped_release release;
+        writeModel(path, *a.model, wo);
+      },
+      py::arg("path"), py::arg("model"), py::kw_only(), py::arg("ascii") = false,
+      "Writes a Model (or an (N, 3) points array) as .ply / .xyz, or a Mesh as .ply / .obj. The file is\n"
+      "written to a temporary file and renamed into place.");
+
+  // --- geometry (§6.1) ------------------------------------------------------------------------
+  m.def(
+      "geometry",
+      [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty,
+         bool delaunay_neighbours, bool curvature, const std::string& curvature_fit) {
+        ModelArg a = modelArg(model);
+        GeometryOptions o = geometryOptions(k, recompute_normals, orient_normals, orientation_penalty);
+        o.delaunayNeighbours = delaunay_neighbours || curvature;
+        o.curvature = curvature;
+        o.curvatureFit = enumFrom<CurvatureFit>(curvature_fit, "curvatureFit",
+                                                {{"taubin", CurvatureFit::Taubin}, {"quadric", CurvatureFit::Quadric}});
+        PointGeometry g;
+        {
+          py::gil_scoped_release release;
+          g = computePointGeometry(*a.model, o);
+        }
+        return namespaceOf(geometryDict(g));
+      },
+      py::arg("model"), py::kw_only(), py::arg("k") = GeometryOptions{}.k, py::arg("recompute_normals") = GeometryOptions{}.recomputeNormals,
+      py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty, py::arg("delaunay_neighbours") = false,
+      py::arg("curvature") = false, py::arg("curvature_fit") = "taubin",
+      R"doc(The §6.1 geometry of a point cloud (a Model or an (N, 3) array), computed once:
+
+neighbours (N, k) int64 (exact kNN, nearest first, -1 padded), neighbour_distances (N, k),
+normals (N, 3) unit, MST-oriented (kept from the model unless recompute_normals), eigenvalues
+(N, 3), surface_variation (N,), spacing (N,) and average_spacing, flags (N,) uint8; with
+delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: k_min, k_max
+(N,), min_curvature_dir, max_curvature_dir (N, 3). Returned as a SimpleNamespace.)doc");
+  m.def(
+      "normals",
+      [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty) {
+        ModelArg a = modelArg(model);
+        GeometryOptions o = geometryOptions(k, recompute_normals, orient_normals, orientation_penalty);
+        o.delaunayNeighbours = false;
+        o.curvature = false;
+        PointGeometry g;
+        {
+          py::gil_scoped_release release;
+          g = computePointGeometry(*a.model, o);
+        }
+        return vec3Array(g.size(), [&](size_t i) { return g.normals[i]; });
+      },
+      py::arg("points"), py::kw_only(), py::arg("k") = GeometryOptions{}.k, py::arg("recompute_normals") = GeometryOptions{}.recomputeNormals,
+      py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty,
+      "Unit normals (N, 3) float32 of a point cloud (Model or (N, 3) array) by PCA over the k nearest\n"
+      "neighbours (Hoppe 1992), consistently oriented by a minimum spanning tree (thesis §6.1).");
+  m.def("_prepare_options", [] {
+    py::list l;
+    optionSpecs(l, PrepareOptions{});
+    return l;
+  }, "The keywords of prepare() from the option tables.");
+  m.def(
+      "_prepare",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
+        PrepareOptions o;
+        applyOptions(kw, o);
+        rejectUnknown(kw);
+        validate(o);
+        ModelArg a = modelArg(model);
+        HybridModel out = *a.model;
+        py::gil_scoped_release release;
+        prepareForRendering(out, o);
+        return out;
+      },
+      py::arg("model"), py::arg("options") = py::dict(),
+      "A copy of the model ready to render: normals and radii of raw scans from the §6.1 geometry\n"
+      "(kept when present), radii times radius_scale; what render() does on every call otherwise.");
+
+  // --- extraction (§3) ------------------------------------------------------------------------
+  m.def("_extract_eps_delta_options", [] {
+    py::list l;
+    optionSpecs(l, EpsDeltaOptions{});
+    optionSpecs(l, GeometryOptions{}, kExtractGeometry);
+    return l;
+  });
+  m.def(
+      "_extract_eps_delta",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
+        EpsDeltaOptions o;
+        GeometryOptions go;
+        applyOptions(kw, o);
+        applyOptions(kw, go, kExtractGeometry);
+        rejectUnknown(kw);
+        go.curvature = false;  // §3.1 needs normals, Delaunay neighbours and spacing only
+        validate(o);
+        validate(go);
+        ModelArg a = modelArg(model, "cloud");
+        if (!a.model->segments.empty()) throwBadOption("model", "already holds segments; extraction needs a point cloud");
+        EpsDeltaStats st;
+        HybridModel out;
+        {
+          py::gil_scoped_release release;
+          PointGeometry geo = computePointGeometry(*a.model, go);
+          out = extractEpsDelta(*a.model, geo, o, &st);
+        }
+        out.comments.push_back(std::string("eps-delta: normals=") +
+                               (a.model->attributes.normals && !go.recomputeNormals ? "file" : "computed"));
+        py::dict stats;
+        stats["input_points"] = st.inputPoints, stats["kept_points"] = st.keptPoints, stats["segments"] = st.segments;
+        stats["replaced_points"] = st.replacedPoints, stats["epsilon"] = st.epsilon, stats["delta"] = st.delta;
+        stats["data_reduction"] = st.dataReduction(), stats["seed_directions"] = st.seedDirections;
+        stats["candidate_directions"] = st.candidateDirections;
+        py::dict r;
+        r["model"] = out;
+        r["stats"] = stats;
+        return namespaceOf(r);
+      },
+      py::arg("cloud"), py::arg("options") = py::dict(),
+      R"doc((epsilon, delta) error-bounded line segment extraction, thesis §3.1 (= `linesurf extract eps-delta`).
+
+epsilon: distance tolerance (0: epsilon_relative x average spacing); delta: bound on 1 - n_i.n_j.
+Returns a namespace with model (the hybrid Model) and stats (dict: input_points, kept_points,
+segments, replaced_points, epsilon, delta, data_reduction, ...). provenance=True records the
+replaced points (needed by verify()).)doc");
+  m.def("_extract_shape_approx_options", [] {
+    py::list l;
+    optionSpecs(l, ShapeApproxOptions{});
+    optionSpecs(l, GeometryOptions{}, kShapeGeometry);
+    return l;
+  });
+  m.def(
+      "_extract_shape_approx",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
+        ShapeApproxOptions o;
+        GeometryOptions go;
+        applyOptions(kw, o);
+        applyOptions(kw, go, kShapeGeometry);
+        rejectUnknown(kw);
+        validate(o);
+        validate(go);
+        ModelArg a = modelArg(model, "cloud");
+        if (!a.model->segments.empty()) throwBadOption("model", "already holds segments; extraction needs a point cloud");
+        if (a.model->points.empty()) throwBadOption("model", "holds no points");
+        ShapeApproxStats st;
+        HybridModel out;
+        Clustering c;
+        {
+          py::gil_scoped_release release;
+          PointGeometry geo = computePointGeometry(*a.model, go);
+          c = clusterShapeApprox(geo, o);
+          out = extractShapeApprox(*a.model, geo, c, o, &st);
+        }
+        py::dict stats;
+        stats["input_points"] = st.inputPoints, stats["clusters"] = st.clusters, stats["segments"] = st.segments;
+        stats["points_kept"] = st.pointsKept, stats["points_replaced"] = st.pointsReplaced;
+        stats["clusters_with_segments"] = st.clustersWithSegments, stats["data_reduction"] = st.dataReduction();
+        auto labels = newArray<int64_t>({py::ssize_t(c.labels.size())});
+        for (size_t i = 0; i < c.labels.size(); ++i) labels.mutable_data()[i] = c.labels[i];
+        py::dict r;
+        r["model"] = out;
+        r["stats"] = stats;
+        r["labels"] = labels;
+        return namespaceOf(r);
+      },
+      py::arg("cloud"), py::arg("options") = py::dict(),
+      R"doc(Shape-approximation extraction, thesis §3.2 (= `linesurf extract shape-approx`).
+
+method: "greedy" (§3.2.3.1) or "hierarchical" (§3.2.3.2) normal-variation clustering with
+tolerance delta_n on ||n(C) - n_j||^2. Returns a namespace with model, stats (dict: clusters,
+segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)doc");
+  m.def("_extract_contour_options", [] {
+    py::list l;
+    optionSpecs(l, ContourOptions{});
+    return l;
+  });
+  m.def(
+      "_extract_contour",
+      [](const TriangleMesh& mesh, py::dict options) {
+        py::dict kw(options);
+        ContourOptions o;
+        applyOptions(kw, o);
+        rejectUnknown(kw);
+        validate(o);
+        if (mesh.faces.empty()) throwBadOption("mesh", "holds no faces: contour extraction needs a triangle mesh");
+        ContourStats st;
+        HybridModel out;
+        {
+          py::gil_scoped_release release;
+          out = extractContour(mesh, o, &st);
+        }
+        py::dict stats;
+        stats["triangles"] = st.triangles, stats["segments"] = st.segments, stats["points"] = st.points;
+        stats["spacing"] = st.spacing, stats["radius"] = st.radius, stats["degenerate_triangles"] = st.degenerateTriangles;
+        stats["mean_edge_length"] = st.meanEdgeLength, stats["spacing_from_diagonal"] = st.spacingFromDiagonal;
+        stats["converted_segments"] = st.convertedSegments;
+        stats["segments_before_merge"] = st.segmentsBeforeMerge, stats["polylines"] = st.polylines;
+        py::dict r;
+        r["model"] = out;
+        r["stats"] = stats;
+        return namespaceOf(r);
+      },
+      py::arg("mesh"), py::arg("options") = py::dict(),
+      R"doc(Contour-plane extraction from a triangle Mesh, thesis §3.3 (= `linesurf extract contour`).
+
+spacing: largest distance d between neighbouring segments (0: spacing_scale x min(mean edge length,
+bounding-box diagonal / diagonal_divisions); diagonal_divisions=0: the mean edge alone);
+endpoint_normals=False gives the thesis's one normal per segment (the CLI's --flat);
+merge_normal_deviation=0 keeps one segment per face and plane (no polyline merging);
+point_masses=False leaves the points (all_points, points_below) the thesis's unit splats instead of
+weighing the contour length they stand for (Model.point_masses; the CLI's --no-point-masses).
+Returns a namespace with model and stats (dict: triangles, segments, points, spacing, radius, ...).)doc");
+  m.def(
+      "verify",
+      [](py::object cloud, const HybridModel& hybrid, std::optional<double> epsilon, std::optional<double> delta,
+         std::optional<int> k) {
+        ModelArg a = modelArg(cloud, "cloud");
+        RecordedVerifyOptions o;
+        o.epsilon = epsilon, o.delta = delta, o.k = k;
+        RecordedVerifyResult r;
+        {
+          py::gil_scoped_release release;
+          r = verifyAsRecorded(*a.model, hybrid, "hybrid", o);
+        }
+        const VerifyReport& v = r.report;
+        py::dict d;
+        d["ok"] = v.ok(), d["segments"] = v.segments, d["replaced_points"] = v.replacedPoints;
+        d["kept_points"] = v.keptPoints, d["distance_violations"] = v.distanceViolations;
+        d["normal_violations"] = v.normalViolations, d["bad_segments"] = v.badSegments, d["bad_indices"] = v.badIndices;
+        d["replaced_twice"] = v.replacedTwice, d["missing"] = v.missing, d["unmatched_points"] = v.unmatchedPoints;
+        d["max_distance"] = v.maxDistance, d["max_normal_deviation"] = v.maxNormalDeviation;
+        d["epsilon"] = r.epsilon, d["delta"] = r.delta, d["k"] = r.k, d["messages"] = v.messages;
+        return d;
+      },
+      py::arg("cloud"), py::arg("hybrid"), py::kw_only(), py::arg("epsilon") = py::none(), py::arg("delta") = py::none(),
+      py::arg("k") = py::none(),
+      "The certificate check of an (epsilon, delta) extraction (= `linesurf verify-extraction`): every\n"
+      "replaced point within epsilon of its segment and delta of its anchor normal, every input point\n"
+      "kept or replaced once. Tolerances default to those the hybrid records. Returns a dict with 'ok'.");
+
+  // --- rendering (§4-§6.2) --------------------------------------------------------------------
+  m.def("_render_options", [] {
+    py::list l;
+    optionSpecs(l, ViewOptions{});
+    optionSpecs(l, RenderOptions{});
+    optionSpecs(l, PrepareOptions{});
+    return l;
+  }, "The keywords of render() from the option tables: [{keyword, field, default, help}].");
+  m.def(
+      "_render",
+      [](py::object model, py::dict options, bool depth, bool alpha, bool normal) -> py::object {
+        py::dict kw = options;  // the tables take their keywords out of a copy
+        kw = py::dict(kw);
+        ViewOptions v;
+        RenderOptions o;
+        PrepareOptions p;
+        applyOptions(kw, v);
+        const std::set<std::string> given = applyOptions(kw, o);
+        applyOptions(kw, p);
+        rejectUnknown(kw);
+        if (!given.count("zThreshold")) o.zThreshold = defaultZThreshold(o.zThresholdMode);
+        o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
+        validate(o);
+        validate(v);
+        validate(p);
+
+        ModelArg a = modelArg(model);
+        if (a.model->empty()) throwBadOption("model", "holds no points and no segments");
+        RenderResult r;
+        {
+          py::gil_scoped_release release;
+          // What `linesurf render` does to a model before drawing it; a copy only when it changes it.
+          const ModelFrame frame = normalizingFrame(a.model->bounds());
+          if (!frame.identity()) toFrame(a.mutableCopy(), frame);
+          if (needsPreparation(*a.model, p.radiusScale)) prepareForRendering(a.mutableCopy(), p);
+          Renderer renderer(*a.model, o);
+          r = renderer.render(viewCameras(renderer.sphere(), v, frame).front());
+        }
+        py::array_t<uint8_t> color = rgba8(r.color);
+        if (!depth && !alpha && !normal) return color;
+        py::dict d;
+        d["color"] = color;
+        if (r.depth) {
+          auto dz = channels(*r.depth, 0, 1);
+          for (size_t i = 0; i < r.depth->pixels.size(); ++i)
+            if (!(r.depth->pixels[i].w() > 0)) dz.mutable_data()[i] = 0;
+          d["depth"] = dz;
+        }
+        if (r.alpha) d["alpha"] = channels(*r.alpha, 0, 1);
+        if (r.normal) d["normal"] = channels(*r.normal, 0, 3);
+        return d;
+      },
+      py::arg("model"), py::arg("options") = py::dict(), py::arg("depth") = false, py::arg("alpha") = false,
+      py::arg("normal") = false,
+      R"doc(Renders a point or hybrid model by EWA splatting (thesis §4-§6.2) = `linesurf render`.
+
+Returns an (H, W, 4) uint8 RGBA array, or, when depth/alpha/normal is requested, a dict with
+'color' and the requested (H, W) float32 'depth' (linear depth, 0 where empty), (H, W) 'alpha',
+(H, W, 3) 'normal' ((n+1)/2). Camera: an orbit view (azimuth, elevation, distance, zoom, fov,
+up_axis) auto-framed on the bounding sphere, or look-at (eye, target, up). Raw scans get normals
+and radii from the §6.1 geometry (k) on every call; prepare() once for repeated renders. The
+keywords are the fields of ViewOptions, RenderOptions and PrepareOptions (the option tables,
+pipeline/option_tables.h); size = (width, height). The GIL is released.)doc");
+
+  // --- images (§7) ----------------------------------------------------------------------------
+  m.def(
+      "compare",
+      [](py::object a, py::object b) {
+        Image ia = imageFrom(a, "a"), ib = imageFrom(b, "b");
+        if (ia.width != ib.width || ia.height != ib.height)
+          throwBadOption("b", "size " + std::to_string(ib.width) + "x" + std::to_string(ib.height) + " differs from a (" +
+                                  std::to_string(ia.width) + "x" + std::to_string(ia.height) + ")");
+        ImageMetrics mt;
+        {
+          py::gil_scoped_release release;
+          mt = compareImages(ia, ib);
+        }
+        py::dict d;
+        d["mse"] = mt.mse, d["psnr"] = mt.psnr, d["nccm"] = mt.nccm, d["ssim"] = mt.ssim;
+        d["mean_abs_diff"] = mt.meanAbsDiff, d["std_abs_diff"] = mt.stdAbsDiff, d["max_abs_diff"] = mt.maxAbsDiff;
+        d["differing_pixels"] = mt.differingPixels;
+        return d;
+      },
+      py::arg("a"), py::arg("b"),
+      "Image metrics of thesis §7 (= `linesurf compare`): mse, psnr (inf when identical), nccm, ssim,\n"
+      "mean/std/max absolute difference in grey levels, fraction of differing pixels. a and b are\n"
+      "(H, W, 3|4) uint8 or float [0, 1] arrays, or image paths; alpha is ignored.");
+  m.def(
+      "difference_heatmap",
+      [](py::object a, py::object b, double saturate) {
+        Image ia = imageFrom(a, "a"), ib = imageFrom(b, "b");
+        if (ia.width != ib.width || ia.height != ib.height) throwBadOption("b", "size differs from a");
+        if (!(saturate > 0) || !std::isfinite(saturate)) throwBadOption("saturate", "must be a finite number > 0");
+        return rgba8(differenceHeatmap(ia, ib, saturate));
+      },
+      py::arg("a"), py::arg("b"), py::kw_only(), py::arg("saturate") = 32.0,
+      "Heat-map (H, W, 4) uint8 of the per-pixel maximum channel difference (= compare --diff).");
+  m.def(
+      "read_image",
+      [](const std::string& path) {
+        Image img;
+        {
+          py::gil_scoped_release release;
+          img = readImage(path);
+        }
+        return rgba8(img);
+      },
+      py::arg("path"), "Reads a PNG/JPEG/BMP/TGA image as an (H, W, 4) uint8 array.");
+  m.def(
+      "write_png",
+      [](const std::string& path, py::object image) {
+        Image img = imageFrom(image, "image");
+        py::array a = py::array::ensure(image);
+        const bool withAlpha = a && a.ndim() == 3 && a.shape(2) == 4;
+        py::gil_scoped_release release;
+        writePng(path, img, withAlpha);
+      },
+      py::arg("path"), py::arg("image"), "Writes an (H, W, 3|4) uint8 or float [0, 1] array as an 8-bit PNG.");
+
+  // --- threads --------------------------------------------------------------------------------
+  m.def(
+      "set_threads",
+      [](int threads) {
+        if (threads < 0 || threads > 1024) throwBadOption("threads", "must be in [0, 1024] (0 = all cores)");
+        threadLimit().reset();
+        if (threads > 0) threadLimit() = std::make_unique<ThreadLimit>(threads);
+      },
+      py::arg("threads"),
+      "Limits the worker threads of every later call (0 = all cores). Results do not depend on it.");
+  m.def("thread_count", &currentThreadCount, "Number of worker threads calls use now.");}
+
+}  // namespace linesurf::python
