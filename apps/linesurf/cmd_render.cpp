@@ -30,7 +30,7 @@ struct RenderArgs {
   PrepareOptions prepare;
   MeshRenderOptions mesh;
   std::string primitive = "auto";
-  bool zThresholdGiven = false, worldLight = false, noCull = false;
+  bool worldLight = false, noCull = false;
 };
 
 std::filesystem::path viewPath(const std::filesystem::path& out, int i) {
@@ -46,7 +46,6 @@ std::filesystem::path bufferPath(const std::string& base, int view, int views) {
 void run(RenderArgs& a) {
   Timer total;
   RenderOptions& o = a.render;
-  if (!a.zThresholdGiven) o.zThreshold = defaultZThreshold(o.zThresholdMode);
   o.light.headlight = !a.worldLight;
   o.backfaceCulling = !a.noCull;
   o.depthBuffer = !a.depthOut.empty();
@@ -108,7 +107,7 @@ void run(RenderArgs& a) {
   const int views = a.view.views;
 
   RenderStats sum;
-  uint64_t tris[5] = {0, 0, 0, 0, 0};
+  MeshRenderStats meshSum;
   for (size_t i = 0; i < cams.size(); ++i) {
     RenderResult r;
     uint64_t trianglesThisView = 0;
@@ -123,8 +122,7 @@ void run(RenderArgs& a) {
       r.stats.rasterSeconds = m.stats.rasterSeconds;
       r.stats.totalSeconds = m.stats.totalSeconds;
       trianglesThisView = m.stats.trianglesDrawn;
-      tris[0] += m.stats.trianglesDrawn; tris[1] += m.stats.trianglesClipped; tris[2] += m.stats.trianglesCulled;
-      tris[3] += m.stats.trianglesOutside; tris[4] += m.stats.trianglesDegenerate;
+      meshSum += m.stats;
     } else {
       r = renderer->render(cams[i]);
     }
@@ -138,14 +136,7 @@ void run(RenderArgs& a) {
     if (cams.size() > 1)
       say(fmt::format("{}: {:.1f} ms, {} {} drawn", out.string(), 1000 * s.totalSeconds,
                       triMesh ? trianglesThisView : s.pointsDrawn + s.segmentsDrawn, triMesh ? "triangles" : "splats"));
-    sum.pointsDrawn += s.pointsDrawn; sum.pointsClipped += s.pointsClipped; sum.pointsCulled += s.pointsCulled;
-    sum.pointsOutside += s.pointsOutside; sum.pointsDegenerate += s.pointsDegenerate;
-    sum.segmentsDrawn += s.segmentsDrawn; sum.segmentsClipped += s.segmentsClipped; sum.segmentsCulled += s.segmentsCulled;
-    sum.segmentsOutside += s.segmentsOutside; sum.segmentsDegenerate += s.segmentsDegenerate;
-    sum.segmentsFallback += s.segmentsFallback; sum.segmentsLod += s.segmentsLod;
-    sum.fragments += s.fragments; sum.merged += s.merged; sum.occluded += s.occluded; sum.compressed += s.compressed;
-    sum.prepareSeconds += s.prepareSeconds; sum.binSeconds += s.binSeconds; sum.rasterSeconds += s.rasterSeconds;
-    sum.totalSeconds += s.totalSeconds;
+    sum += s;
   }
   const std::string per = cams.size() > 1 ? fmt::format(" (over {} views)", cams.size()) : "";
   if (!model.points.empty())
@@ -158,7 +149,8 @@ void run(RenderArgs& a) {
                     sum.segmentsDegenerate, sum.segmentsFallback, sum.segmentsLod));
   if (triMesh)
     say(fmt::format("triangles{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate; "
-                    "{} samples covered", per, tris[0], tris[1], tris[2], tris[3], tris[4], sum.fragments));
+                    "{} samples covered", per, meshSum.trianglesDrawn, meshSum.trianglesClipped, meshSum.trianglesCulled,
+                    meshSum.trianglesOutside, meshSum.trianglesDegenerate, sum.fragments));
   else
     say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
@@ -225,9 +217,11 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bindEnum(vis, "zThresholdMode", o.zThresholdMode,
            {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}},
            "z threshold: primitive (delta-z, own depth extent) or fixed (thesis)", "--z-mode");
-  vis->add_option_function<float>(flagName("zThreshold"), [a](float z) { a->render.zThreshold = z, a->zThresholdGiven = true; },
-                                  "primitive: multiple of the depth extent (default 0.5); fixed: fraction of the "
-                                  "bounding radius (default 0.01)");
+  vis->add_option_function<float>(flagName("zThreshold"), [a](float z) { a->render.zThreshold = z; },
+                                  fmt::format("primitive: multiple of the depth extent (default {:g}); fixed: fraction "
+                                              "of the bounding radius (default {:g})",
+                                              defaultZThreshold(ZThresholdMode::PerPrimitive),
+                                              defaultZThreshold(ZThresholdMode::Fixed)));
   vis->add_option(flags("alphaOverride", "--alpha"), o.alphaOverride,
                   "Alpha of every primitive in [0, 1] (order-independent transparency)");
   vis->add_flag("--no-cull", a->noCull, "Keep back faces (two-sided lighting)");

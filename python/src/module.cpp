@@ -1059,7 +1059,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         o.reconstructionScale = reconstruction_scale, o.layers = layers;
         o.zThresholdMode = enumFrom<ZThresholdMode>(z_threshold_mode, "zThresholdMode",
                                                     {{"primitive", ZThresholdMode::PerPrimitive}, {"fixed", ZThresholdMode::Fixed}});
-        o.zThreshold = z_threshold ? *z_threshold : defaultZThreshold(o.zThresholdMode);
+        o.zThreshold = z_threshold;
         o.alphaOverride = alpha_override, o.backfaceCulling = backface_culling;
         o.material = {ambient, diffuse, specular, shininess};
         if (auto l = optionalVec3(light, "light")) o.light.direction = *l;

@@ -14,10 +14,18 @@
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
-#include "linesurf/geometry/mesh_normals.h"
-#include "linesurf/render/splat_context.h"
+#include "linesurf/core/mesh_normals.h"
+#include "splat_context.h"
 
 namespace linesurf {
+
+MeshRenderStats& MeshRenderStats::operator+=(const MeshRenderStats& o) {
+  trianglesDrawn += o.trianglesDrawn, trianglesClipped += o.trianglesClipped, trianglesCulled += o.trianglesCulled;
+  trianglesOutside += o.trianglesOutside, trianglesDegenerate += o.trianglesDegenerate;
+  samplesCovered += o.samplesCovered;
+  prepareSeconds += o.prepareSeconds, rasterSeconds += o.rasterSeconds, totalSeconds += o.totalSeconds;
+  return *this;
+}
 
 BoundingSphere boundingSphere(const TriangleMesh& mesh) {
   Bounds3f b;

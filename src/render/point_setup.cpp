@@ -1,4 +1,4 @@
-// SIMD set-up of point splats (thesis §4.2, §6.2: object-to-screen warp, culling, bounds) (see detail/splat_rows.h, pointSetup; the scalar reference is
+// SIMD set-up of point splats (thesis §4.2, §6.2: object-to-screen warp, culling, bounds) (see point_setup.h, pointSetup; the scalar reference is
 // preparePoint in point_splat.cpp, which handles every lane this code marks for it), and the
 // batches around it (point_setup.h: early culling, packing of the visible points).
 #include "point_setup.h"
@@ -8,8 +8,7 @@
 #include <cstdint>
 #include <new>
 
-#include "detail/splat_math.h"
-#include "detail/splat_rows.h"
+#include "splat_rules.h"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "render/point_setup.cpp"
@@ -63,7 +62,7 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     nz = hn::IfThenElse(flip, hn::Neg(nz), nz);
     facing = hn::Abs(facing);
     slow = hn::Or(slow, hn::Not(hn::Ge(facing, S(kMinFacing))));
-    // the lighting normal: the plane's, or the point's shading normal flipped with the plane (issue 14)
+    // the lighting normal: the plane's, or the point's shading normal flipped with the plane (smooth contour models)
     VF lx = nx, ly = ny, lz = nz;
     if (F.shadingNormals) {
       const VF sx = hn::LoadU(d, B.snx + i), sy = hn::LoadU(d, B.sny + i), sz = hn::LoadU(d, B.snz + i);
@@ -409,7 +408,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     m += !(setup.backfaceCulling & clearlyBackFacing(setup, p));
   }
   counts.culled += uint32_t(count - m);
-  if (setup.shadingNormals) {  // the kept points' shading normals (issue 14)
+  if (setup.shadingNormals) {  // the kept points' shading normals (smooth contour models)
     for (int j = 0; j < m; ++j) {
       const Vec3f& sn = frame.pointShadingNormals[first + uint32_t(b.lane[j])];
       b.snx[j] = sn.x(), b.sny[j] = sn.y(), b.snz[j] = sn.z();

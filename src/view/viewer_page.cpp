@@ -200,7 +200,8 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
                 "nothing to draw: no point or segment with finite coordinates and a positive radius");
 
   const RenderOptions& r = o.render;
-  const float zThreshold = r.zThresholdMode == ZThresholdMode::PerPrimitive ? r.zThreshold : 0.5f;
+  const float zThreshold =
+      zThresholdOf(r.zThresholdMode == ZThresholdMode::PerPrimitive ? r : RenderOptions{});
   meta["bytes"] = blob.bytes().size();
   meta["sphere"] = {{"center", vec(centre)}, {"radius", sphere.radius}};
   meta["upAxis"] = vec(o.upAxis.normalized());

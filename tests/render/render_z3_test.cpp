@@ -1,13 +1,15 @@
 // Modified Z^3 buffer (thesis §6.2.3.1): insertion, allocation, occlusion, compression, resolve.
 #include <gtest/gtest.h>
 
-#include "linesurf/render/z3_buffer.h"
+#include "render/z3_buffer.h"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-#include "render/detail/splat_rows.h"
+#include "render/point_rows.h"
+#include "render/segment_rows.h"
+#include "render/resolve.h"
 
 namespace linesurf {
 namespace {
