@@ -283,30 +283,18 @@ struct SegmentZ3Sets {
   }
 };
 
-template <bool kPoly, class DZ, bool kOneChunk>
-HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentFrameV& F, const SegmentShadeRows& A,
-                                   const RowSpan* spans, int count, Z3Tile& z3, Z3Rows<DZ>& zset) {
-  const DF d;
-  const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
-  // the smooth normals only when the tile blends normal sums (else nothing reads them: Z3Tile)
-  const bool smooth = A.smooth && z3.blendNormals();
-  const VF oneF = hn::Set(d, 1.0f), zero = hn::Zero(d), iota = hn::Iota(d, 0.0f), centre = hn::Iota(d, 0.5f);
-  // (the kernel's, the colour's, the stations' and the smooth normals' constants are broadcast
-  // where they are used: most segments need one vector, and hoisted they were spilled and
-  // reloaded for every segment)
+// At most L stations of a segment's colour (SegmentShadeRows::stations, 2 <= stations <= L): their
+// colours c_k and steps c_(k+1) - c_k as lane tables, looked up by a lane permutation (one
+// instruction) instead of gathered from memory (six per vector; the same values to the bit).
+HWY_INLINE void StationTables(DF d, const SegmentShadeRows& A, VF* st0, VF* stD) {
   const hn::RebindToSigned<DF> di;
-  // at most L stations: their colours c_k and steps c_(k+1) - c_k as lane tables, looked up by a
-  // lane permutation (one instruction) instead of gathered from memory (six per vector; the
-  // same values to the bit)
   const int stations = A.stations;
-  const bool stationTable = stations >= 2 && stations <= L;
-  VF st0[3], stD[3];
-  if (stationTable && A.stationPadded) {  // (lanes from `stations` on: the next channel or padding, never looked up)
+  if (A.stationPadded) {  // (lanes from `stations` on: the next channel or padding, never looked up)
     for (int c = 0; c < 3; ++c) {
       const float* sc = A.stationColour + c * stations;
       st0[c] = hn::LoadU(d, sc), stD[c] = hn::Sub(hn::LoadU(d, sc + 1), st0[c]);
     }
-  } else if (stationTable) {  // the record's own (3) stations: the tables from broadcasts
+  } else {  // the record's own (3) stations: the tables from broadcasts
     const auto laneI = hn::Iota(di, 0);
     for (int c = 0; c < 3; ++c) {
       const float* sc = A.stationColour + c * stations;
@@ -319,13 +307,75 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       st0[c] = t0, stD[c] = hn::Sub(t1, t0);
     }
   }
+}
+
+// A run of a chunk: pixels [x0, x1) of row y, from `at` in the chunk.
+struct ChunkRun {
+  int y, x0, x1, at;
+};
+
+// The pixel centres (px, py; `centre` = the lanes' 0.5, 1.5, ...) of the next chunk of the spans,
+// from span r at column rx on: kOneChunk, every span as it is (the spans hold at most kSegChunk
+// pixels); else up to kSegChunk pixels, a span wider than that cut, in runs[0 .. nRuns). Advances
+// r and rx past the chunk; returns its pixels. The arrays are padded by kMaxLanes: the next span
+// overwrites a vector's excess.
+template <bool kOneChunk>
+HWY_INLINE int GatherChunk(DF d, VF centre, const RowSpan* spans, int count, int& r, int& rx, float* px, float* py,
+                           ChunkRun* runs, int& nRuns) {
+  const int L = int(hn::Lanes(d));
+  int n = 0;
+  if (kOneChunk) {
+    for (; r < count; ++r) {
+      const RowSpan& sp = spans[r];
+      const VF y = hn::Set(d, float(sp.y) + 0.5f);
+      for (int i = 0; i < sp.x1 - sp.x0; i += L) {
+        hn::StoreU(hn::Add(centre, hn::Set(d, float(sp.x0 + i))), d, px + n + i);
+        hn::StoreU(y, d, py + n + i);
+      }
+      n += sp.x1 - sp.x0;
+    }
+  }
+  while (!kOneChunk && r < count && n < kSegChunk) {
+    const RowSpan& sp = spans[r];
+    const int x1 = std::min(sp.x1, rx + (kSegChunk - n));
+    if (x1 > rx) {
+      runs[nRuns++] = {sp.y, rx, x1, n};
+      const VF y = hn::Set(d, float(sp.y) + 0.5f);
+      for (int i = 0; i < x1 - rx; i += L) {
+        hn::StoreU(hn::Add(centre, hn::Set(d, float(rx + i))), d, px + n + i);
+        hn::StoreU(y, d, py + n + i);
+      }
+      n += x1 - rx;
+    }
+    if (x1 < sp.x1) {
+      rx = x1;
+    } else if (++r < count) {
+      rx = spans[r].x0;
+    }
+  }
+  return n;
+}
+
+template <bool kPoly, class DZ, bool kOneChunk>
+HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentFrameV& F, const SegmentShadeRows& A,
+                                   const RowSpan* spans, int count, Z3Tile& z3, Z3Rows<DZ>& zset) {
+  const DF d;
+  const int L = int(hn::Lanes(d)), LZ = int(hn::Lanes(dz));
+  // the smooth normals only when the tile blends normal sums (else nothing reads them: Z3Tile)
+  const bool smooth = A.smooth && z3.blendNormals();
+  const VF oneF = hn::Set(d, 1.0f), zero = hn::Zero(d), iota = hn::Iota(d, 0.0f), centre = hn::Iota(d, 0.5f);
+  // (the kernel's, the colour's, the stations' and the smooth normals' constants are broadcast
+  // where they are used: most segments need one vector, and hoisted they were spilled and
+  // reloaded for every segment)
+  const hn::RebindToSigned<DF> di;
+  const int stations = A.stations;
+  const bool stationTable = stations >= 2 && stations <= L;
+  VF st0[3], stD[3];
+  if (stationTable) StationTables(d, A, st0, stD);
   // the chunk's pixels (centres) and pass 1's results, kMaxLanes of padding for whole vectors
   constexpr int kPad = kSegChunk + kMaxLanes;
   HWY_ALIGN float px[kPad], py[kPad], bw[kPad], bz[kPad], bt[kPad], bc[3][kPad], bn[3][kPad];
-  struct Run {
-    int y, x0, x1, at;  ///< pixels [x0, x1) of row y, from `at` in the chunk
-  };
-  Run runs[kSegChunk];
+  ChunkRun runs[kSegChunk];
   using VZ = hn::Vec<DZ>;
   const VZ zeroZ = hn::Zero(dz);
   VZ constAttr[Z3Tile::kAttrs];
@@ -339,36 +389,8 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
   int r = 0, rx = count > 0 ? spans[0].x0 : 0;  // the next span and where in it the next chunk starts
   while (r < count) {
     // gather up to kSegChunk pixels of runs (a span wider than that is cut)
-    int n = 0, nRuns = 0;
-    if (kOneChunk) {
-      for (; r < count; ++r) {
-        const RowSpan& sp = spans[r];
-        const VF y = hn::Set(d, float(sp.y) + 0.5f);
-        for (int i = 0; i < sp.x1 - sp.x0; i += L) {  // the next span overwrites the excess
-          hn::StoreU(hn::Add(centre, hn::Set(d, float(sp.x0 + i))), d, px + n + i);
-          hn::StoreU(y, d, py + n + i);
-        }
-        n += sp.x1 - sp.x0;
-      }
-    }
-    while (!kOneChunk && r < count && n < kSegChunk) {
-      const RowSpan& sp = spans[r];
-      const int x1 = std::min(sp.x1, rx + (kSegChunk - n));
-      if (x1 > rx) {
-        runs[nRuns++] = {sp.y, rx, x1, n};
-        const VF y = hn::Set(d, float(sp.y) + 0.5f);
-        for (int i = 0; i < x1 - rx; i += L) {  // the next run overwrites the excess
-          hn::StoreU(hn::Add(centre, hn::Set(d, float(rx + i))), d, px + n + i);
-          hn::StoreU(y, d, py + n + i);
-        }
-        n += x1 - rx;
-      }
-      if (x1 < sp.x1) {
-        rx = x1;
-      } else if (++r < count) {
-        rx = spans[r].x0;
-      }
-    }
+    int nRuns = 0;
+    const int n = GatherChunk<kOneChunk>(d, centre, spans, count, r, rx, px, py, runs, nRuns);
     // 1. weights, depths, thresholds and attributes, lanes packed across rows
     const VF nv = hn::Set(d, float(n));
     for (int i = 0; i < n; i += L) {
@@ -432,7 +454,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       }
     }
     // 2. into the Z^3 tile, run by run (kOneChunk: the spans); lanes c .. c + LZ - 1 of a run:
-    auto blend = [&](const Run& run, size_t rowBase, int width, int c) HWY_ATTR __attribute__((always_inline)) {
+    auto blend = [&](const ChunkRun& run, size_t rowBase, int width, int c) HWY_ATTR __attribute__((always_inline)) {
       const int k = run.at + c;
       const VZ w = hn::LoadU(dz, bw + k);
       const auto inside = hn::And(hn::Gt(w, zeroZ), hn::FirstN(dz, size_t(width - c)));
@@ -456,7 +478,7 @@ HWY_NOINLINE uint64_t SegmentRowsT(DZ dz, const SegmentRaster& S, const SegmentF
       });
     };
     for (int q = 0, at = 0; q < (kOneChunk ? count : nRuns); ++q) {
-      const Run run = kOneChunk ? Run{spans[q].y, spans[q].x0, spans[q].x1, at} : runs[q];
+      const ChunkRun run = kOneChunk ? ChunkRun{spans[q].y, spans[q].x0, spans[q].x1, at} : runs[q];
       const size_t rowBase = z3.index(run.x0, run.y);
       const int width = run.x1 - run.x0;
       at += width;
