@@ -163,7 +163,8 @@ struct Z3Rows {
 
 // The lanes of `rest` that the fast path left (a new layer in front of or behind others,
 // compression, occlusion), one by one in lane order: insert(i) calls Z3Tile::insert for lane i.
-// Shared by the point and segment rows, so both hand the same fragments to the scalar insert.
+// The segment rows use it; the point rows spell the same loop out (through this helper their
+// code changed and point frames cost 7-12% more).
 template <class DZ, class Insert>
 HWY_INLINE void forEachRest(DZ dz, hn::Mask<DZ> rest, Insert&& insert) {
   HWY_ALIGN float mk[kMaxLanes];
