@@ -39,7 +39,7 @@ static_assert(int((offsetof(PreparedSegment, shade) - kRecordBegin) / 4) == kFla
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 #include <hwy/contrib/math/math-inl.h>
-#include "segment_footprint-inl.h"
+#include "segment_setup-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace linesurf::detail {

@@ -10,11 +10,11 @@
 #include "segment_setup.h"
 #include "splat_rules.h"
 
-#if defined(LINESURF_RENDER_SEGMENT_FOOTPRINT_INL_H_) == defined(HWY_TARGET_TOGGLE)
-#ifdef LINESURF_RENDER_SEGMENT_FOOTPRINT_INL_H_
-#undef LINESURF_RENDER_SEGMENT_FOOTPRINT_INL_H_
+#if defined(LINESURF_RENDER_SEGMENT_SETUP_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef LINESURF_RENDER_SEGMENT_SETUP_INL_H_
+#undef LINESURF_RENDER_SEGMENT_SETUP_INL_H_
 #else
-#define LINESURF_RENDER_SEGMENT_FOOTPRINT_INL_H_
+#define LINESURF_RENDER_SEGMENT_SETUP_INL_H_
 #endif
 
 #include <hwy/highway.h>
@@ -191,4 +191,4 @@ HWY_INLINE void SegmentScreenBox(DF d, const SegmentSetupFrame& F, SegmentSetupB
 }  // namespace linesurf::detail
 HWY_AFTER_NAMESPACE();
 
-#endif  // LINESURF_RENDER_SEGMENT_FOOTPRINT_INL_H_ toggle
+#endif  // LINESURF_RENDER_SEGMENT_SETUP_INL_H_ toggle
