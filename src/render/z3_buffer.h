@@ -144,7 +144,7 @@ class Z3Tile {
   /// Resolves pixel (x, y) (absolute, inside rect()): front-to-back "under" compositing of its
   /// normalised layers (== the thesis's back-to-front merge). Layer colours as stored. The
   /// renderer resolves one-layer pixels in SIMD rows with the same formula for n = 1
-  /// (detail::resolveSingleLayerRow, splat_rows.cpp): a change here goes there too (the test
+  /// (detail::resolveSingleLayerRow, resolve.cpp): a change here goes there too (the test
   /// EwaPoint.SimdResolveMatchesThePixelResolve compares them).
   ResolvedPixel resolve(int x, int y) const {
     return resolve(x, y, [](const Vec3f& c, const Vec3f&, float) { return c; });

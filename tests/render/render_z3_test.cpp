@@ -152,7 +152,7 @@ TEST(RenderZ3, ZeroWeightIsIgnoredAndResetClears) {
 // splats at several depths, opaque and translucent, flat and Gouraud, any layer count, so that
 // merges, allocations in front and behind, occlusion and compression all occur.
 TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
-  // cutoff^2 4: the rows' polynomial exp; 9: hn::Exp (splat_rows.cpp, kPolyExpMaxQ)
+  // cutoff^2 4: the rows' polynomial exp; 9: hn::Exp (simd_rows-inl.h, kPolyExpMaxQ)
   for (float cutoffQ : {4.0f, 9.0f})
   for (int layers : {1, 2, 4}) {
     std::mt19937 rng(7 + layers);
