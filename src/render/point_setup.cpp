@@ -183,10 +183,8 @@ HWY_INLINE void PointTailForm(DF d, PointSetupBatch& B, int i, VF R, VF s2, VF b
 void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
   using DF = hn::ScalableTag<float>;
   using VF = hn::Vec<DF>;
-  using DI = hn::RebindToSigned<DF>;
-  using VI = hn::Vec<DI>;
+  using VI = hn::Vec<hn::RebindToSigned<DF>>;
   const DF d;
-  const DI di;
   const int L = int(hn::Lanes(d));
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
   auto S = [&](float v) { return hn::Set(d, v); };
