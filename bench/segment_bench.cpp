@@ -27,9 +27,9 @@
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/render/renderer.h"
-#include "linesurf/render/segment_splat.h"
 #include "render/point_setup.h"
 #include "render/segment_setup.h"
+#include "render/segment_lod.h"
 #include "render/segment_splat.h"
 
 namespace {

@@ -32,7 +32,6 @@ struct RenderArgs {
   PrepareOptions prepare;
   MeshRenderOptions mesh;
   std::string primitive = "auto";
-  std::optional<TableBinder> renderFlags;  // asks whether --z-threshold was given
   uint64_t budget = 0;  ///< splats a view from a .lod hierarchy (0 = every leaf)
 };
 
@@ -49,7 +48,6 @@ std::filesystem::path bufferPath(const std::string& base, int view, int views) {
 void run(RenderArgs& a) {
   Timer total;
   RenderOptions& o = a.render;
-  if (!a.renderFlags->given("zThreshold")) o.zThreshold = defaultZThreshold(o.zThresholdMode);
   o.depthBuffer = !a.depthOut.empty();
   o.alphaBuffer = !a.alphaOut.empty();
   o.normalBuffer = !a.normalOut.empty();
@@ -133,7 +131,7 @@ void run(RenderArgs& a) {
   const int views = a.view.views;
 
   RenderStats sum;
-  uint64_t tris[5] = {0, 0, 0, 0, 0};
+  MeshRenderStats meshSum;
   for (size_t i = 0; i < cams.size(); ++i) {
     RenderResult r;
     uint64_t trianglesThisView = 0;
@@ -148,8 +146,7 @@ void run(RenderArgs& a) {
       r.stats.rasterSeconds = m.stats.rasterSeconds;
       r.stats.totalSeconds = m.stats.totalSeconds;
       trianglesThisView = m.stats.trianglesDrawn;
-      tris[0] += m.stats.trianglesDrawn; tris[1] += m.stats.trianglesClipped; tris[2] += m.stats.trianglesCulled;
-      tris[3] += m.stats.trianglesOutside; tris[4] += m.stats.trianglesDegenerate;
+      meshSum += m.stats;
     } else if (lodRenderer) {
       lod::LodFrameResult f = lodRenderer->render(cams[i]);
       r = std::move(f.render);
@@ -170,14 +167,7 @@ void run(RenderArgs& a) {
     if (cams.size() > 1)
       say(fmt::format("{}: {:.1f} ms, {} {} drawn", out.string(), 1000 * s.totalSeconds,
                       triMesh ? trianglesThisView : s.pointsDrawn + s.segmentsDrawn, triMesh ? "triangles" : "splats"));
-    sum.pointsDrawn += s.pointsDrawn; sum.pointsClipped += s.pointsClipped; sum.pointsCulled += s.pointsCulled;
-    sum.pointsOutside += s.pointsOutside; sum.pointsDegenerate += s.pointsDegenerate;
-    sum.segmentsDrawn += s.segmentsDrawn; sum.segmentsClipped += s.segmentsClipped; sum.segmentsCulled += s.segmentsCulled;
-    sum.segmentsOutside += s.segmentsOutside; sum.segmentsDegenerate += s.segmentsDegenerate;
-    sum.segmentsFallback += s.segmentsFallback; sum.segmentsLod += s.segmentsLod;
-    sum.fragments += s.fragments; sum.merged += s.merged; sum.occluded += s.occluded; sum.compressed += s.compressed;
-    sum.prepareSeconds += s.prepareSeconds; sum.binSeconds += s.binSeconds; sum.rasterSeconds += s.rasterSeconds;
-    sum.totalSeconds += s.totalSeconds;
+    sum += s;
   }
   const std::string per = cams.size() > 1 ? fmt::format(" (over {} views)", cams.size()) : "";
   if (!model.points.empty() || lodFile)
@@ -190,7 +180,8 @@ void run(RenderArgs& a) {
                     sum.segmentsDegenerate, sum.segmentsFallback, sum.segmentsLod));
   if (triMesh)
     say(fmt::format("triangles{}: {} drawn ({} clipped), {} culled (back-facing), {} outside the view, {} degenerate; "
-                    "{} samples covered", per, tris[0], tris[1], tris[2], tris[3], tris[4], sum.fragments));
+                    "{} samples covered", per, meshSum.trianglesDrawn, meshSum.trianglesClipped, meshSum.trianglesCulled,
+                    meshSum.trianglesOutside, meshSum.trianglesDegenerate, sum.fragments));
   else
     say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
@@ -215,7 +206,7 @@ RegisterCommand reg(40, [](CLI::App& app) {
   // the option tables (pipeline/option_tables.h).
   bindOptions(sub, v);
   bindOptions(sub, a->prepare);
-  a->renderFlags.emplace(bindOptions(sub, o));
+  bindOptions(sub, o);
   bindOptions(sub, a->mesh);
   sub->add_option("--budget", a->budget,
                   "With a .lod hierarchy: draw at most N splats a view, nodes chosen coarse to fine by their projected "

@@ -400,10 +400,9 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         RenderOptions o;
         PrepareOptions p;
         applyOptions(kw, v);
-        const std::set<std::string> given = applyOptions(kw, o);
+        applyOptions(kw, o);
         applyOptions(kw, p);
         rejectUnknown(kw);
-        if (!given.count("zThreshold")) o.zThreshold = defaultZThreshold(o.zThresholdMode);
         o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
         validate(o);
         validate(v);

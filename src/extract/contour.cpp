@@ -12,7 +12,7 @@
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
-#include "linesurf/geometry/mesh_normals.h"
+#include "linesurf/core/mesh_normals.h"
 #include "detail/contour_merge.h"
 
 namespace linesurf {

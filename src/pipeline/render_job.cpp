@@ -109,8 +109,6 @@ std::vector<Camera> viewCameras(const BoundingSphere& sphere, const ViewOptions&
   return cams;
 }
 
-float defaultZThreshold(ZThresholdMode mode) { return mode == ZThresholdMode::Fixed ? 0.01f : 0.5f; }
-
 void validate(const PrepareOptions& o) {
   requireRange("k", o.k, 3, 256);
   requireRange("radiusScale", o.radiusScale, 1e-3, 1e3);

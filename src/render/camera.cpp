@@ -3,14 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
-#include "detail/splat_math.h"
 #include "linesurf/core/error.h"
 
 namespace linesurf {
 
 namespace {
-float radians(float deg) { return float(deg * detail::kPi / 180.0); }
+float radians(float deg) { return float(deg * std::numbers::pi / 180.0); }
 }  // namespace
 
 BoundingSphere boundingSphere(const HybridModel& model) {
@@ -150,12 +150,12 @@ std::vector<Vec2f> Camera::spreadViewAngles(int n) {
     return out;
   }
   // Fibonacci lattice on the sphere with the "y" axis up; rotated so that view 0 is azimuth 0.
-  const double golden = detail::kPi * (3.0 - std::sqrt(5.0));
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < n; ++i) {
     double y = 1.0 - 2.0 * (i + 0.5) / n;           // from top to bottom
-    double az = std::fmod(golden * i, 2 * detail::kPi);
+    double az = std::fmod(golden * i, 2 * std::numbers::pi);
     double el = std::asin(std::clamp(y, -1.0, 1.0));
-    out.emplace_back(float(az * 180.0 / detail::kPi), float(el * 180.0 / detail::kPi));
+    out.emplace_back(float(az * 180.0 / std::numbers::pi), float(el * 180.0 / std::numbers::pi));
   }
   // Start with the view closest to the equator (a front view), keep the lattice order after it.
   size_t best = 0;

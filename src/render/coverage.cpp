@@ -1,11 +1,12 @@
-// Coverage constants of the primitives (beyond the thesis, issue 14; see coverage.h).
+// Coverage constants of the primitives (beyond the thesis; see coverage.h).
 #include "coverage.h"
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <cstdint>
 
-#include "detail/splat_math.h"
+#include "splat_rules.h"
 #include "linesurf/core/parallel.h"
 
 namespace linesurf::detail {
@@ -45,7 +46,7 @@ float weightAt(const Kernel& k, const Vec3f& x, const Vec3f& nx, float cut) {
   const float b2 = std::max(0.0f, d.squaredNorm() - a * a - off * off);
   if (b2 > reach * reach || a < -reach || a > k.length + reach) return 0;
   const float is = 1.0f / (k.sigma * std::sqrt(2.0f));
-  const float along = 0.5f * (std::erf(a * is) - std::erf((a - k.length) * is)) * k.sigma * std::sqrt(2.0f * float(kPi));
+  const float along = 0.5f * (std::erf(a * is) - std::erf((a - k.length) * is)) * k.sigma * std::sqrt(2.0f * float(std::numbers::pi));
   return std::exp(-0.5f * b2 / s2) * along * k.invRadius / s2;
 }
 
@@ -173,7 +174,7 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
     u.normalize();
     const Vec3f v = k.n.cross(u);
     for (int a = 0; a < kRing; ++a) {
-      const float t = 2 * float(kPi) * float(a) / float(kRing);
+      const float t = 2 * float(std::numbers::pi) * float(a) / float(kRing);
       const float at = density(x + ringR * (std::cos(t) * u + std::sin(t) * v));
       sum = std::min(sum, at);
       total += at;
@@ -182,67 +183,6 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
     c[i] = sum > 0 ? 1.0f / sum : 0.0f;
   }, 1024);
   return c;
-}
-
-// A neighbour is farther (a silhouette) when its front depth exceeds this pixel's by more than the
-// front layer's z threshold and by more than this fraction of its depth. Measured with reach 2
-// and gain 1.5 (docs/decisions.md, "Issue 14 (i14sil)"): with the z threshold alone the
-// shape-approximation hybrid of the random 100k sphere keeps 217-489 pixels per render at alpha
-// <= 1/2 three pixels inside the silhouette (neighbouring front layers of one surface more than a
-// threshold apart), with 1 % of the depth 37-97, with 2 % 1-8; against the z threshold alone, the
-// contour lines' SSIM against the mesh loses 0.000-0.007 at 1 %, 0.001-0.012 at 2 %, 0.002-0.015
-// at 3 %.
-constexpr float kSilhouetteDepthStep = 0.02f;
-
-namespace {
-// The front depth beyond which a neighbour of candidate c lies farther (atSilhouette).
-float beyondDepth(const SilhouettePixel& c, const float* frontZ, int w) {
-  const float z = frontZ[size_t(c.y) * size_t(w) + size_t(c.x)];
-  return z + std::max(c.zThreshold, kSilhouetteDepthStep * z);
-}
-}  // namespace
-
-bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, int reach) {
-  const int x = int(c.x), y = int(c.y);
-  const float beyond = beyondDepth(c, frontZ, w);
-  const int x0 = std::max(0, x - reach), x1 = std::min(w - 1, x + reach);
-  const int y0 = std::max(0, y - reach), y1 = std::min(h - 1, y + reach);
-  auto rowBeyond = [&](int yy) {
-    if (yy < y0 || yy > y1) return false;
-    const float* row = frontZ + size_t(yy) * size_t(w);
-    for (int xx = x0; xx <= x1; ++xx)
-      if (row[xx] > beyond) return true;  // (the background: +inf)
-    return false;
-  };
-  // nearest rows first: a fringe pixel finds the background next to it
-  if (rowBeyond(y)) return true;
-  for (int d = 1; d <= reach; ++d)
-    if (rowBeyond(y - d) || rowBeyond(y + d)) return true;
-  return false;
-}
-
-int64_t silhouetteBehind(const SilhouettePixel& c, const float* frontZ, const uint8_t* partial, int w, int h, int reach) {
-  const int x = int(c.x), y = int(c.y);
-  const float beyond = beyondDepth(c, frontZ, w);
-  int64_t best = -1, farthest = -1;
-  int bestDist = reach + 1;
-  float bestZ = 0, farZ = 0;
-  for (int yy = std::max(0, y - reach); yy <= std::min(h - 1, y + reach); ++yy) {
-    const size_t row = size_t(yy) * size_t(w);
-    for (int xx = std::max(0, x - reach); xx <= std::min(w - 1, x + reach); ++xx) {
-      const float zz = frontZ[row + size_t(xx)];
-      if (!(zz > beyond)) continue;  // (the background: +inf)
-      if (farthest < 0 || zz > farZ) farthest = int64_t(row) + xx, farZ = zz;
-      if (partial[row + size_t(xx)]) continue;
-      const int dist = std::max(std::abs(xx - x), std::abs(yy - y));
-      if (best < 0 || dist < bestDist || (dist == bestDist && zz > bestZ)) {
-        best = int64_t(row) + xx;
-        bestDist = dist;
-        bestZ = zz;
-      }
-    }
-  }
-  return best >= 0 ? best : farthest;
 }
 
 float medianCoverageConstant(const HybridModel& model, float reconstructionScale, float cutoff) {

@@ -1,5 +1,6 @@
 #pragma once
-/// Coverage alpha (RenderOptions::coverageGain; beyond the thesis, issue 14): the area each
+/// Coverage alpha (RenderOptions::coverageGain; beyond the thesis, see docs/decisions.md, "Coverage alpha
+/// (opt-in)"): the area each
 /// primitive stands for. Internal to the pipeline (renderer.cpp).
 ///
 /// The renderer's fragments carry resampling weights w_k(x) (normalised Gaussians in object space,
@@ -29,8 +30,8 @@ namespace linesurf::detail {
 /// 0: the troughs between samples reach 1 and the interior stays opaque), otherwise their mean
 /// (coverage at silhouettes only, where the interior is opaque anyway: the edge of a sampling then
 /// ends within half a cell of its samples' cells, as a box-filtered surface's does; the least
-/// density moved a grid of points' edge out by 1.8 half cells; docs/decisions.md "Issue 14 (lead,
-/// stop 24)"). stride > 1: only every stride-th primitive's constant is computed (the others are 0;
+/// density moved a grid of points' edge out by 1.8 half cells; docs/decisions.md, "Coverage alpha
+/// (opt-in)"). stride > 1: only every stride-th primitive's constant is computed (the others are 0;
 /// RenderOptions::tailCoverage takes the median of a sample).
 std::vector<float> coverageConstants(const HybridModel& model, float reconstructionScale, float cutoff, bool least = true,
                                      size_t stride = 1);
@@ -39,33 +40,5 @@ std::vector<float> coverageConstants(const HybridModel& model, float reconstruct
 /// most ~4096 primitives, evenly strided (RenderOptions::tailCoverage); 0 for a model without a
 /// usable primitive.
 float medianCoverageConstant(const HybridModel& model, float reconstructionScale, float cutoff);
-
-/// Coverage at silhouettes only (RenderOptions::coverageReach > 0; beyond the thesis, issue 14).
-/// The resolve writes every pixel with its front layer opaque (the normalised alpha of an opaque
-/// model) and the depth of its front layer to a frame-wide buffer (+inf where empty); a pixel
-/// whose front layer is partly covered is also kept as a candidate with its coverage result.
-struct SilhouettePixel {
-  uint32_t x, y;
-  float zThreshold;  ///< of the front layer
-  float rgba[4];     ///< the coverage result composited over the background, as the image stores it
-  float alpha;       ///< its coverage alpha before the background (the alpha buffer)
-  /// what lay behind its front layer (Z3Tile::resolveBehind: premultiplied, coverage alpha)
-  float behind[4] = {0, 0, 0, 0};
-};
-
-/// Whether the candidate at (x, y) lies at a silhouette: a pixel within `reach` (Chebyshev, inside
-/// the w x h frame) whose front depth exceeds this one's by more than its z threshold and 2 % of
-/// its depth (the background is +inf). Reads frontZ only.
-bool atSilhouette(const SilhouettePixel& c, const float* frontZ, int w, int h, int reach);
-
-/// What a silhouette candidate's partial coverage is composited over (the frame's layers are those
-/// of an opaque frame, Z3Tile::setCoverageOccludes(false): nothing behind the front layer is kept):
-/// of the pixels within `reach` (Chebyshev) whose front depth lies beyond the candidate's as in
-/// atSilhouette, the nearest that is fully covered or shows the background (partial[i] == 0: not
-/// a candidate itself, whose opaque-frame colour would hide the coverage), ties to the farthest
-/// depth (the background first), then row-major order; where every one is partial, the farthest.
-/// Its index y * w + x, or -1 where there is none (not at a silhouette). Its front depth is +inf
-/// where it shows the background.
-int64_t silhouetteBehind(const SilhouettePixel& c, const float* frontZ, const uint8_t* partial, int w, int h, int reach);
 
 }  // namespace linesurf::detail

@@ -1,4 +1,4 @@
-// SIMD set-up of point splats (thesis §4.2, §6.2: object-to-screen warp, culling, bounds) (see detail/splat_rows.h, pointSetup; the scalar reference is
+// SIMD set-up of point splats (thesis §4.2, §6.2: object-to-screen warp, culling, bounds) (see point_setup.h, pointSetup; the scalar reference is
 // preparePoint in point_splat.cpp, which handles every lane this code marks for it), and the
 // batches around it (point_setup.h: early culling, packing of the visible points).
 #include "point_setup.h"
@@ -8,8 +8,7 @@
 #include <cstdint>
 #include <new>
 
-#include "detail/splat_math.h"
-#include "detail/splat_rows.h"
+#include "splat_rules.h"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "render/point_setup.cpp"
@@ -22,13 +21,170 @@ namespace linesurf::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+// The splats stretched past kMaxStretch (lanes `stretched`, some of them not slow yet): the
+// thesis's construction, the exact path of preparePoint. V = Rot(theta) Lambda^2 Rot(theta)^T
+// (V = (a b; b c) in the tangent frame u, v; eigenvalues mean +- eig) with both radii clamped to
+// maxS = kMaxStretch sigma, bounds of the quadrilateral c +- R r0 E0 +- R r1 E1; in SIMD when no
+// corner leaves [near, far] (else the lane turns slow: preparePoint clips it). The stretched
+// lanes' plane vectors (a0, a1), weight scale, depth extent and Gouraud corners (b0, b1) are
+// replaced; q*: their screen bounds.
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+HWY_INLINE void PointStretched(DF d, const PointSetupFrame& F, VF ux, VF uy, VF uz, VF vx, VF vy, VF vz, VF nx, VF ny,
+                               VF nz, VF cx, VF cy, VF cz, VF a, VF b, VF c, VF mean, VF eig, VF maxS, VF R, VF f,
+                               MF stretched, VF& a0x, VF& a0y, VF& a0z, VF& a1x, VF& a1y, VF& a1z, VF& wscale, VF& ext,
+                               VF& b0x, VF& b0y, VF& b0z, VF& b1x, VF& b1y, VF& b1z, MF& slow, VF& qx0, VF& qx1,
+                               VF& qy0, VF& qy1) {
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  const VF l0 = hn::Add(mean, eig), l1 = hn::Max(hn::Sub(mean, eig), S(1e-30f));
+  const auto useB = hn::And(hn::Gt(hn::Abs(b), hn::Mul(S(1e-30f), hn::Add(hn::Abs(a), hn::Abs(c)))), hn::Ne(b, zero));
+  const VF gx = hn::Sub(l0, c), ie = hn::Div(one, hn::Sqrt(hn::MulAdd(gx, gx, hn::Mul(b, b))));
+  const auto aGeC = hn::Ge(a, c);
+  const VF e0x = hn::IfThenElse(useB, hn::Mul(gx, ie), hn::IfThenElseZero(aGeC, one));
+  const VF e0y = hn::IfThenElse(useB, hn::Mul(b, ie), hn::IfThenZeroElse(aGeC, one));
+  const VF r0 = hn::Min(hn::Sqrt(l0), maxS), r1 = hn::Min(hn::Sqrt(l1), maxS);
+  const VF E0x = hn::MulAdd(e0x, ux, hn::Mul(e0y, vx)), E0y = hn::MulAdd(e0x, uy, hn::Mul(e0y, vy)),
+           E0z = hn::MulAdd(e0x, uz, hn::Mul(e0y, vz));
+  const VF E1x = hn::MulSub(ny, E0z, hn::Mul(nz, E0y)), E1y = hn::MulSub(nz, E0x, hn::Mul(nx, E0z)),
+           E1z = hn::MulSub(nx, E0y, hn::Mul(ny, E0x));
+  auto exSlow = hn::Not(hn::And(hn::Gt(r0, zero), hn::Gt(r1, zero)));
+  const VF inf = S(INFINITY);
+  exSlow = hn::Or(exSlow, hn::Not(hn::And(hn::Lt(hn::Abs(E0x), inf), hn::And(hn::Lt(hn::Abs(E0y), inf), hn::Lt(hn::Abs(E0z), inf)))));
+  const VF ir0 = hn::Div(one, r0), ir1 = hn::Div(one, r1);
+  const VF Rr0 = hn::Mul(R, r0), Rr1 = hn::Mul(R, r1);
+  const VF hx0 = hn::Mul(Rr0, E0x), hy0 = hn::Mul(Rr0, E0y), hz0 = hn::Mul(Rr0, E0z);  // R r0 E0
+  const VF hx1 = hn::Mul(Rr1, E1x), hy1 = hn::Mul(Rr1, E1y), hz1 = hn::Mul(Rr1, E1z);  // R r1 E1
+  VF xmin = inf, xmax = hn::Neg(inf), ymin = inf, ymax = hn::Neg(inf);
+  for (int k = 0; k < 4; ++k) {
+    const VF ss = S(k & 1 ? 1.0f : -1.0f), tt = S(k & 2 ? 1.0f : -1.0f);
+    const VF qx = hn::MulAdd(tt, hx1, hn::MulAdd(ss, hx0, cx)), qy = hn::MulAdd(tt, hy1, hn::MulAdd(ss, hy0, cy)),
+             qz = hn::MulAdd(tt, hz1, hn::MulAdd(ss, hz0, cz));
+    const VF qd = hn::Neg(qz);
+    exSlow = hn::Or(exSlow, hn::Not(hn::And(hn::Ge(hn::Sub(qd, S(F.nearD)), zero), hn::Ge(hn::Add(S(F.farD), qz), zero))));
+    const VF iqd = hn::Div(one, qd);
+    const VF sx = hn::MulAdd(hn::Mul(f, qx), iqd, S(F.cx)), sy = hn::NegMulAdd(hn::Mul(f, qy), iqd, S(F.cy));
+    xmin = hn::Min(xmin, sx), xmax = hn::Max(xmax, sx), ymin = hn::Min(ymin, sy), ymax = hn::Max(ymax, sy);
+  }
+  qx0 = xmin, qx1 = xmax, qy0 = ymin, qy1 = ymax;
+  a0x = hn::IfThenElse(stretched, hn::Mul(E0x, ir0), a0x), a0y = hn::IfThenElse(stretched, hn::Mul(E0y, ir0), a0y),
+  a0z = hn::IfThenElse(stretched, hn::Mul(E0z, ir0), a0z);
+  a1x = hn::IfThenElse(stretched, hn::Mul(E1x, ir1), a1x), a1y = hn::IfThenElse(stretched, hn::Mul(E1y, ir1), a1y),
+  a1z = hn::IfThenElse(stretched, hn::Mul(E1z, ir1), a1z);
+  wscale = hn::IfThenElse(stretched, hn::Div(one, hn::Mul(r0, r1)), wscale);
+  ext = hn::IfThenElse(stretched, hn::Mul(R, hn::Sqrt(hn::MulAdd(hn::Mul(r0, r0), hn::Mul(E0z, E0z), hn::Mul(hn::Mul(r1, r1), hn::Mul(E1z, E1z))))), ext);
+  b0x = hn::IfThenElse(stretched, hx0, b0x), b0y = hn::IfThenElse(stretched, hy0, b0y), b0z = hn::IfThenElse(stretched, hz0, b0z);
+  b1x = hn::IfThenElse(stretched, hx1, b1x), b1y = hn::IfThenElse(stretched, hy1, b1y), b1z = hn::IfThenElse(stretched, hz1, b1z);
+  slow = hn::Or(slow, hn::And(stretched, exSlow));
+}
+
+// Phong factors (FrameContext::shade) of one vector of splats, lanes [i, n) of the batch: n.l is
+// the same over a splat, the specular term is taken at the centre and at the Gouraud corners
+// c +- R B0 +- R B1 (b0, b1), the corners only where some splat of the vector needs them.
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>, class VI = hn::Vec<hn::RebindToSigned<DF>>>
+HWY_INLINE void PointPhong(DF d, const PointSetupFrame& F, PointSetupBatch& B, int i, int n, VF lx, VF ly, VF lz, VF cx,
+                           VF cy, VF cz, VF b0x, VF b0y, VF b0z, VF b1x, VF b1y, VF b1z, VI ix0, VI ix1, VI iy0,
+                           VI iy1, MF culled, MF slow, MF empty) {
+  const hn::RebindToSigned<DF> di;
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  auto dot3 = [&](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
+  const VF ndl = hn::Max(zero, dot3(lx, ly, lz, S(F.lightDir[0]), S(F.lightDir[1]), S(F.lightDir[2])));
+  hn::StoreU(hn::MulAdd(S(F.diffuse), ndl, S(F.ambient)), d, B.diffuseFactor + i);
+  const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+  // the corners only matter for Gouraud splats, wider or taller than kFlatShadeSpan pixels;
+  // bounds of extent x1 - x0 <= kFlatShadeSpan - 1 hold at most kFlatShadeSpan pixel centres
+  const VI span = hn::Set(di, PreparedPoint::kFlatShadeSpan);
+  const auto flat = hn::RebindMask(d, hn::Not(hn::Or(hn::Gt(hn::Sub(ix1, ix0), span), hn::Gt(hn::Sub(iy1, iy0), span))));
+  const auto needed = hn::AndNot(hn::Or(hn::Or(flat, culled), hn::Or(slow, empty)), hn::FirstN(d, size_t(n - i)));
+  const int corners = hn::AllFalse(d, needed) ? 1 : 5;
+  for (int k = 0; k < corners; ++k) {
+    VF spec = zero;
+    if (F.specular > 0) {
+      const VF ss = S(sgn[k][0]), tt = S(sgn[k][1]);
+      const VF qx = hn::MulAdd(tt, b1x, hn::MulAdd(ss, b0x, cx)), qy = hn::MulAdd(tt, b1y, hn::MulAdd(ss, b0y, cy)),
+               qz = hn::MulAdd(tt, b1z, hn::MulAdd(ss, b0z, cz));
+      const VF qn2 = dot3(qx, qy, qz, qx, qy, qz);
+      const VF iq = hn::Neg(hn::Div(one, hn::Sqrt(qn2)));  // view vector -q / |q|
+      const VF hx3 = hn::MulAdd(qx, iq, S(F.lightDir[0])), hy3 = hn::MulAdd(qy, iq, S(F.lightDir[1])),
+               hz3 = hn::MulAdd(qz, iq, S(F.lightDir[2]));
+      const VF hn2 = dot3(hx3, hy3, hz3, hx3, hy3, hz3);
+      const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(lx, ly, lz, hx3, hy3, hz3), hn::Sqrt(hn2))));
+      const VF pw = hn::Exp(d, hn::Mul(S(F.shininess), hn::Log(d, hn::Max(ndh, S(1e-30f)))));
+      spec = hn::IfThenElseZero(hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(hn2, zero)), hn::Gt(qn2, zero)),
+                                hn::Mul(S(F.specular), pw));
+    }
+    hn::StoreU(spec, d, B.specular[k] + i);
+  }
+}
+
+// The screen bounds of the common case's splats in closed form: the conic S^2 + T^2 <= cutoffQ N^2
+// about the projected centre c (where S = T = 0 and N = nc / d, d the centre's depth) as
+// detail::conicBounds computes it, in float: centre (bx, by) and half-extents (ex, ey) with its
+// slack. Lanes whose conic is not a bounded ellipse join cfSlow.
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+HWY_INLINE void PointConicBounds(DF d, const PointSetupFrame& F, VF f, VF cx, VF cy, VF dd, VF nc, VF Nx, VF Ny, VF Sx,
+                                 VF Sy, VF Tx, VF Ty, MF& cfSlow, VF& bx, VF& by, VF& ex, VF& ey) {
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  // closed form: conic bounds about the projected centre, where S = T = 0 and N = nc / d
+  const VF id = hn::Div(one, dd);
+  const VF pcx = hn::MulAdd(hn::Mul(f, cx), id, S(F.cx)), pcy = hn::NegMulAdd(hn::Mul(f, cy), id, S(F.cy));
+  const VF Nc = hn::Mul(nc, id), cq = S(F.cutoffQ);
+  const VF A00 = hn::Sub(hn::MulAdd(Sx, Sx, hn::Mul(Tx, Tx)), hn::Mul(cq, hn::Mul(Nx, Nx)));
+  const VF A01 = hn::Sub(hn::MulAdd(Sx, Sy, hn::Mul(Tx, Ty)), hn::Mul(cq, hn::Mul(Nx, Ny)));
+  const VF A11 = hn::Sub(hn::MulAdd(Sy, Sy, hn::Mul(Ty, Ty)), hn::Mul(cq, hn::Mul(Ny, Ny)));
+  const VF b0 = hn::Neg(hn::Mul(cq, hn::Mul(Nx, Nc))), b1 = hn::Neg(hn::Mul(cq, hn::Mul(Ny, Nc)));
+  const VF m = hn::Neg(hn::Mul(cq, hn::Mul(Nc, Nc)));
+  const VF det = hn::MulSub(A00, A11, hn::Mul(A01, A01));
+  cfSlow = hn::Or(cfSlow, hn::Not(hn::And(hn::Gt(A00, zero), hn::Gt(det, zero))));
+  const VF idt = hn::Div(one, det);
+  const VF ox = hn::Mul(hn::MulSub(A01, b1, hn::Mul(A11, b0)), idt), oy = hn::Mul(hn::MulSub(A01, b0, hn::Mul(A00, b1)), idt);
+  const VF kk = hn::Neg(hn::MulAdd(b0, ox, hn::MulAdd(b1, oy, m)));
+  cfSlow = hn::Or(cfSlow, hn::Not(hn::Gt(kk, zero)));
+  const VF hx = hn::Sqrt(hn::Mul(hn::Mul(kk, A11), idt)), hy = hn::Sqrt(hn::Mul(hn::Mul(kk, A00), idt));
+  const VF slack = hn::MulAdd(S(1e-4f), hn::Add(hx, hy), S(0.01f));
+  bx = hn::Add(pcx, ox), by = hn::Add(pcy, oy), ex = hn::Add(hx, slack), ey = hn::Add(hy, slack);
+}
+
+// The pixel bounds of splats whose screen bounds are [x0, x1] x [y0, y1] (pixel centres inside,
+// within the viewport) to the batch's lanes [i, i + lanes), as detail::pixelBounds computes them;
+// cut: the viewport clamped them; empty: no pixel.
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>, class VI = hn::Vec<hn::RebindToSigned<DF>>>
+HWY_INLINE void PointPixelBounds(DF d, const PointSetupFrame& F, PointSetupBatch& B, int i, VF x0, VF x1, VF y0, VF y1,
+                                 VI& ix0, VI& ix1, VI& iy0, VI& iy1, MF& cut, MF& empty) {
+  const hn::RebindToSigned<DF> di;
+  auto S = [&](float v) { return hn::Set(d, v); };
+  // pixel bounds as detail::pixelBounds computes them (in float: the same integers while the
+  // bounds lie within 2^22 pixels of the view; beyond, both are cut to the view)
+  const VF lim = S(1e7f), half = S(0.5f);
+  auto lo = [&](VF v) { return hn::ConvertTo(di, hn::Ceil(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))); };
+  auto hi = [&](VF v) { return hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))), hn::Set(di, 1)); };
+  const VI bx0 = lo(x0), by0 = lo(y0), bx1 = hi(x1), by1 = hi(y1);
+  ix0 = hn::Max(bx0, hn::Zero(di)), iy0 = hn::Max(by0, hn::Zero(di));
+  ix1 = hn::Min(bx1, hn::Set(di, F.width)), iy1 = hn::Min(by1, hn::Set(di, F.height));
+  hn::StoreU(ix0, di, B.x0 + i), hn::StoreU(ix1, di, B.x1 + i), hn::StoreU(iy0, di, B.y0 + i), hn::StoreU(iy1, di, B.y1 + i);
+  cut = hn::RebindMask(d, hn::Not(hn::And(hn::And(hn::Eq(ix0, bx0), hn::Eq(iy0, by0)), hn::And(hn::Eq(ix1, bx1), hn::Eq(iy1, by1)))));
+  empty = hn::RebindMask(d, hn::Not(hn::And(hn::Gt(ix1, ix0), hn::Gt(iy1, iy0))));
+}
+
+// The tail form of the splats' own discs (PointCold::disc; tail layers, splat_rules.h kTailDisc):
+// |s B0 + t B1|^2 / (kTailDisc R sigma)^2 with b = R B, to the batch's lanes [i, i + lanes).
+template <class DF, class VF = hn::Vec<DF>>
+HWY_INLINE void PointTailForm(DF d, PointSetupBatch& B, int i, VF R, VF s2, VF b0x, VF b0y, VF b0z, VF b1x, VF b1y,
+                              VF b1z) {
+  auto S = [&](float v) { return hn::Set(d, v); };
+  auto dot3 = [&](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
+  const VF k = hn::Div(S(1.0f / (kTailDisc * kTailDisc)), hn::Mul(hn::Mul(hn::Mul(R, R), hn::Mul(R, R)), s2));
+  hn::StoreU(hn::Mul(k, dot3(b0x, b0y, b0z, b0x, b0y, b0z)), d, B.disc0 + i);
+  hn::StoreU(hn::Mul(hn::Add(k, k), dot3(b0x, b0y, b0z, b1x, b1y, b1z)), d, B.disc1 + i);
+  hn::StoreU(hn::Mul(k, dot3(b1x, b1y, b1z, b1x, b1y, b1z)), d, B.disc2 + i);
+}
+
 void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
   using DF = hn::ScalableTag<float>;
   using VF = hn::Vec<DF>;
-  using DI = hn::RebindToSigned<DF>;
-  using VI = hn::Vec<DI>;
+  using VI = hn::Vec<hn::RebindToSigned<DF>>;
   const DF d;
-  const DI di;
   const int L = int(hn::Lanes(d));
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
   auto S = [&](float v) { return hn::Set(d, v); };
@@ -63,7 +219,7 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
     nz = hn::IfThenElse(flip, hn::Neg(nz), nz);
     facing = hn::Abs(facing);
     slow = hn::Or(slow, hn::Not(hn::Ge(facing, S(kMinFacing))));
-    // the lighting normal: the plane's, or the point's shading normal flipped with the plane (issue 14)
+    // the lighting normal: the plane's, or the point's shading normal flipped with the plane (smooth contour models)
     VF lx = nx, ly = ny, lz = nz;
     if (F.shadingNormals) {
       const VF sx = hn::LoadU(d, B.snx + i), sy = hn::LoadU(d, B.sny + i), sz = hn::LoadU(d, B.snz + i);
@@ -127,51 +283,12 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
       b1x = hn::Mul(hn::Mul(hn::NegMulAdd(r, ux, vx), il11), R), b1y = hn::Mul(hn::Mul(hn::NegMulAdd(r, uy, vy), il11), R),
       b1z = hn::Mul(hn::Mul(hn::NegMulAdd(r, uz, vz), il11), R);
     }
-    // exact path: V = Rot(theta) Lambda^2 Rot(theta)^T with both radii clamped to kMaxStretch
-    // sigma, bounds of the quadrilateral c +- R r0 E0 +- R r1 E1; in SIMD when no corner leaves
-    // [near, far] (else exSlow: preparePoint clips it)
+    // exact path for the splats stretched past kMaxStretch (PointStretched)
     const auto exactLanes = hn::AndNot(slow, stretched);
     VF qx0 = zero, qx1 = zero, qy0 = zero, qy1 = zero;
     if (!hn::AllFalse(d, exactLanes)) {
-      const VF l0 = hn::Add(mean, eig), l1 = hn::Max(hn::Sub(mean, eig), S(1e-30f));
-      const auto useB = hn::And(hn::Gt(hn::Abs(b), hn::Mul(S(1e-30f), hn::Add(hn::Abs(a), hn::Abs(c)))), hn::Ne(b, zero));
-      const VF gx = hn::Sub(l0, c), ie = hn::Div(one, hn::Sqrt(hn::MulAdd(gx, gx, hn::Mul(b, b))));
-      const auto aGeC = hn::Ge(a, c);
-      const VF e0x = hn::IfThenElse(useB, hn::Mul(gx, ie), hn::IfThenElseZero(aGeC, one));
-      const VF e0y = hn::IfThenElse(useB, hn::Mul(b, ie), hn::IfThenZeroElse(aGeC, one));
-      const VF r0 = hn::Min(hn::Sqrt(l0), maxS), r1 = hn::Min(hn::Sqrt(l1), maxS);
-      const VF E0x = hn::MulAdd(e0x, ux, hn::Mul(e0y, vx)), E0y = hn::MulAdd(e0x, uy, hn::Mul(e0y, vy)),
-               E0z = hn::MulAdd(e0x, uz, hn::Mul(e0y, vz));
-      const VF E1x = hn::MulSub(ny, E0z, hn::Mul(nz, E0y)), E1y = hn::MulSub(nz, E0x, hn::Mul(nx, E0z)),
-               E1z = hn::MulSub(nx, E0y, hn::Mul(ny, E0x));
-      auto exSlow = hn::Not(hn::And(hn::Gt(r0, zero), hn::Gt(r1, zero)));
-      const VF inf = S(INFINITY);
-      exSlow = hn::Or(exSlow, hn::Not(hn::And(hn::Lt(hn::Abs(E0x), inf), hn::And(hn::Lt(hn::Abs(E0y), inf), hn::Lt(hn::Abs(E0z), inf)))));
-      const VF ir0 = hn::Div(one, r0), ir1 = hn::Div(one, r1);
-      const VF Rr0 = hn::Mul(R, r0), Rr1 = hn::Mul(R, r1);
-      const VF hx0 = hn::Mul(Rr0, E0x), hy0 = hn::Mul(Rr0, E0y), hz0 = hn::Mul(Rr0, E0z);  // R r0 E0
-      const VF hx1 = hn::Mul(Rr1, E1x), hy1 = hn::Mul(Rr1, E1y), hz1 = hn::Mul(Rr1, E1z);  // R r1 E1
-      VF xmin = inf, xmax = hn::Neg(inf), ymin = inf, ymax = hn::Neg(inf);
-      for (int k = 0; k < 4; ++k) {
-        const VF ss = S(k & 1 ? 1.0f : -1.0f), tt = S(k & 2 ? 1.0f : -1.0f);
-        const VF qx = hn::MulAdd(tt, hx1, hn::MulAdd(ss, hx0, cx)), qy = hn::MulAdd(tt, hy1, hn::MulAdd(ss, hy0, cy)),
-                 qz = hn::MulAdd(tt, hz1, hn::MulAdd(ss, hz0, cz));
-        const VF qd = hn::Neg(qz);
-        exSlow = hn::Or(exSlow, hn::Not(hn::And(hn::Ge(hn::Sub(qd, S(F.nearD)), zero), hn::Ge(hn::Add(S(F.farD), qz), zero))));
-        const VF iqd = hn::Div(one, qd);
-        const VF sx = hn::MulAdd(hn::Mul(f, qx), iqd, S(F.cx)), sy = hn::NegMulAdd(hn::Mul(f, qy), iqd, S(F.cy));
-        xmin = hn::Min(xmin, sx), xmax = hn::Max(xmax, sx), ymin = hn::Min(ymin, sy), ymax = hn::Max(ymax, sy);
-      }
-      qx0 = xmin, qx1 = xmax, qy0 = ymin, qy1 = ymax;
-      a0x = hn::IfThenElse(stretched, hn::Mul(E0x, ir0), a0x), a0y = hn::IfThenElse(stretched, hn::Mul(E0y, ir0), a0y),
-      a0z = hn::IfThenElse(stretched, hn::Mul(E0z, ir0), a0z);
-      a1x = hn::IfThenElse(stretched, hn::Mul(E1x, ir1), a1x), a1y = hn::IfThenElse(stretched, hn::Mul(E1y, ir1), a1y),
-      a1z = hn::IfThenElse(stretched, hn::Mul(E1z, ir1), a1z);
-      wscale = hn::IfThenElse(stretched, hn::Div(one, hn::Mul(r0, r1)), wscale);
-      ext = hn::IfThenElse(stretched, hn::Mul(R, hn::Sqrt(hn::MulAdd(hn::Mul(r0, r0), hn::Mul(E0z, E0z), hn::Mul(hn::Mul(r1, r1), hn::Mul(E1z, E1z))))), ext);
-      b0x = hn::IfThenElse(stretched, hx0, b0x), b0y = hn::IfThenElse(stretched, hy0, b0y), b0z = hn::IfThenElse(stretched, hz0, b0z);
-      b1x = hn::IfThenElse(stretched, hx1, b1x), b1y = hn::IfThenElse(stretched, hy1, b1y), b1z = hn::IfThenElse(stretched, hz1, b1z);
-      slow = hn::Or(slow, hn::And(stretched, exSlow));
+      PointStretched(d, F, ux, uy, uz, vx, vy, vz, nx, ny, nz, cx, cy, cz, a, b, c, mean, eig, maxS, R, f, stretched, a0x,
+                     a0y, a0z, a1x, a1y, a1z, wscale, ext, b0x, b0y, b0z, b1x, b1y, b1z, slow, qx0, qx1, qy0, qy1);
     } else {
       slow = hn::Or(slow, stretched);
     }
@@ -189,81 +306,25 @@ void PointSetup(const PointSetupFrame& F, PointSetupBatch& B, int n) {
              S0 = hn::MulSub(nc, rayC(a0x, a0y, a0z), hn::Mul(a0c, N0));
     const VF Tx = hn::MulSub(nc, rayDx(a1x), hn::Mul(a1c, Nx)), Ty = hn::MulSub(nc, rayDy(a1y), hn::Mul(a1c, Ny)),
              T0 = hn::MulSub(nc, rayC(a1x, a1y, a1z), hn::Mul(a1c, N0));
-    // closed form: conic bounds about the projected centre, where S = T = 0 and N = nc / d
-    const VF id = hn::Div(one, dd);
-    const VF pcx = hn::MulAdd(hn::Mul(f, cx), id, S(F.cx)), pcy = hn::NegMulAdd(hn::Mul(f, cy), id, S(F.cy));
-    const VF Nc = hn::Mul(nc, id), cq = S(F.cutoffQ);
-    const VF A00 = hn::Sub(hn::MulAdd(Sx, Sx, hn::Mul(Tx, Tx)), hn::Mul(cq, hn::Mul(Nx, Nx)));
-    const VF A01 = hn::Sub(hn::MulAdd(Sx, Sy, hn::Mul(Tx, Ty)), hn::Mul(cq, hn::Mul(Nx, Ny)));
-    const VF A11 = hn::Sub(hn::MulAdd(Sy, Sy, hn::Mul(Ty, Ty)), hn::Mul(cq, hn::Mul(Ny, Ny)));
-    const VF b0 = hn::Neg(hn::Mul(cq, hn::Mul(Nx, Nc))), b1 = hn::Neg(hn::Mul(cq, hn::Mul(Ny, Nc)));
-    const VF m = hn::Neg(hn::Mul(cq, hn::Mul(Nc, Nc)));
-    const VF det = hn::MulSub(A00, A11, hn::Mul(A01, A01));
-    cfSlow = hn::Or(cfSlow, hn::Not(hn::And(hn::Gt(A00, zero), hn::Gt(det, zero))));
-    const VF idt = hn::Div(one, det);
-    const VF ox = hn::Mul(hn::MulSub(A01, b1, hn::Mul(A11, b0)), idt), oy = hn::Mul(hn::MulSub(A01, b0, hn::Mul(A00, b1)), idt);
-    const VF kk = hn::Neg(hn::MulAdd(b0, ox, hn::MulAdd(b1, oy, m)));
-    cfSlow = hn::Or(cfSlow, hn::Not(hn::Gt(kk, zero)));
+    // closed form: the conic bounds (PointConicBounds)
+    VF bx, by, ex, ey;
+    PointConicBounds(d, F, f, cx, cy, dd, nc, Nx, Ny, Sx, Sy, Tx, Ty, cfSlow, bx, by, ex, ey);
     slow = hn::Or(slow, hn::AndNot(stretched, cfSlow));
-    const VF hx = hn::Sqrt(hn::Mul(hn::Mul(kk, A11), idt)), hy = hn::Sqrt(hn::Mul(hn::Mul(kk, A00), idt));
-    const VF slack = hn::MulAdd(S(1e-4f), hn::Add(hx, hy), S(0.01f));
-    const VF bx = hn::Add(pcx, ox), by = hn::Add(pcy, oy), ex = hn::Add(hx, slack), ey = hn::Add(hy, slack);
     const VF x0 = hn::IfThenElse(stretched, qx0, hn::Sub(bx, ex)), x1 = hn::IfThenElse(stretched, qx1, hn::Add(bx, ex));
     const VF y0 = hn::IfThenElse(stretched, qy0, hn::Sub(by, ey)), y1 = hn::IfThenElse(stretched, qy1, hn::Add(by, ey));
-    // pixel bounds as detail::pixelBounds computes them (in float: the same integers while the
-    // bounds lie within 2^22 pixels of the view; beyond, both are cut to the view)
-    const VF lim = S(1e7f), half = S(0.5f);
-    auto lo = [&](VF v) { return hn::ConvertTo(di, hn::Ceil(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))); };
-    auto hi = [&](VF v) { return hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))), hn::Set(di, 1)); };
-    const VI bx0 = lo(x0), by0 = lo(y0), bx1 = hi(x1), by1 = hi(y1);
-    const VI ix0 = hn::Max(bx0, hn::Zero(di)), iy0 = hn::Max(by0, hn::Zero(di));
-    const VI ix1 = hn::Min(bx1, hn::Set(di, F.width)), iy1 = hn::Min(by1, hn::Set(di, F.height));
-    hn::StoreU(ix0, di, B.x0 + i), hn::StoreU(ix1, di, B.x1 + i), hn::StoreU(iy0, di, B.y0 + i), hn::StoreU(iy1, di, B.y1 + i);
-    const auto cut = hn::RebindMask(d, hn::Not(hn::And(hn::And(hn::Eq(ix0, bx0), hn::Eq(iy0, by0)), hn::And(hn::Eq(ix1, bx1), hn::Eq(iy1, by1)))));
-    const auto empty = hn::RebindMask(d, hn::Not(hn::And(hn::Gt(ix1, ix0), hn::Gt(iy1, iy0))));
-    // Phong factors (FrameContext::shade): n.l is the same over the splat, the specular term is
-    // taken at the centre and at the Gouraud corners c +- R B0 +- R B1
-    if (F.light) {
-      const VF ndl = hn::Max(zero, dot3(lx, ly, lz, S(F.lightDir[0]), S(F.lightDir[1]), S(F.lightDir[2])));
-      hn::StoreU(hn::MulAdd(S(F.diffuse), ndl, S(F.ambient)), d, B.diffuseFactor + i);
-      const float sgn[5][2] = {{0, 0}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
-      // the corners only matter for Gouraud splats, wider or taller than kFlatShadeSpan pixels;
-      // bounds of extent x1 - x0 <= kFlatShadeSpan - 1 hold at most kFlatShadeSpan pixel centres
-      const VI span = hn::Set(di, PreparedPoint::kFlatShadeSpan);
-      const auto flat = hn::RebindMask(d, hn::Not(hn::Or(hn::Gt(hn::Sub(ix1, ix0), span), hn::Gt(hn::Sub(iy1, iy0), span))));
-      const auto needed = hn::AndNot(hn::Or(hn::Or(flat, culled), hn::Or(slow, empty)), hn::FirstN(d, size_t(n - i)));
-      const int corners = hn::AllFalse(d, needed) ? 1 : 5;
-      for (int k = 0; k < corners; ++k) {
-        VF spec = zero;
-        if (F.specular > 0) {
-          const VF ss = S(sgn[k][0]), tt = S(sgn[k][1]);
-          const VF qx = hn::MulAdd(tt, b1x, hn::MulAdd(ss, b0x, cx)), qy = hn::MulAdd(tt, b1y, hn::MulAdd(ss, b0y, cy)),
-                   qz = hn::MulAdd(tt, b1z, hn::MulAdd(ss, b0z, cz));
-          const VF qn2 = dot3(qx, qy, qz, qx, qy, qz);
-          const VF iq = hn::Neg(hn::Div(one, hn::Sqrt(qn2)));  // view vector -q / |q|
-          const VF hx3 = hn::MulAdd(qx, iq, S(F.lightDir[0])), hy3 = hn::MulAdd(qy, iq, S(F.lightDir[1])),
-                   hz3 = hn::MulAdd(qz, iq, S(F.lightDir[2]));
-          const VF hn2 = dot3(hx3, hy3, hz3, hx3, hy3, hz3);
-          const VF ndh = hn::Min(one, hn::Max(zero, hn::Div(dot3(lx, ly, lz, hx3, hy3, hz3), hn::Sqrt(hn2))));
-          const VF pw = hn::Exp(d, hn::Mul(S(F.shininess), hn::Log(d, hn::Max(ndh, S(1e-30f)))));
-          spec = hn::IfThenElseZero(hn::And(hn::And(hn::Gt(ndl, zero), hn::Gt(hn2, zero)), hn::Gt(qn2, zero)),
-                                    hn::Mul(S(F.specular), pw));
-        }
-        hn::StoreU(spec, d, B.specular[k] + i);
-      }
-    }
+    VI ix0, ix1, iy0, iy1;
+    hn::Mask<DF> cut, empty;
+    PointPixelBounds(d, F, B, i, x0, x1, y0, y1, ix0, ix1, iy0, iy1, cut, empty);
+    if (F.light)
+      PointPhong(d, F, B, i, n, lx, ly, lz, cx, cy, cz, b0x, b0y, b0z, b1x, b1y, b1z, ix0, ix1, iy0, iy1, culled, slow,
+                 empty);
     const VF status = hn::IfThenElse(empty, S(4.0f), hn::IfThenElseZero(cut, S(3.0f)));
     hn::StoreU(hn::IfThenElse(bad, S(2.0f), hn::IfThenElse(culled, one, hn::IfThenElse(slow, S(2.0f), status))), d, B.status + i);
     hn::StoreU(Nx, d, B.Nx + i), hn::StoreU(Ny, d, B.Ny + i), hn::StoreU(N0, d, B.N0 + i);
     hn::StoreU(Sx, d, B.Sx + i), hn::StoreU(Sy, d, B.Sy + i), hn::StoreU(S0, d, B.S0 + i);
     hn::StoreU(Tx, d, B.Tx + i), hn::StoreU(Ty, d, B.Ty + i), hn::StoreU(T0, d, B.T0 + i);
     hn::StoreU(nc, d, B.depthNum + i), hn::StoreU(wscale, d, B.weightScale + i), hn::StoreU(ext, d, B.depthExtent + i);
-    {  // the disc's tail form (PointCold::disc): |s B0 + t B1|^2 / (kTailDisc R sigma)^2 with b = R B
-      const VF k = hn::Div(S(1.0f / (kTailDisc * kTailDisc)), hn::Mul(hn::Mul(hn::Mul(R, R), hn::Mul(R, R)), s2));
-      hn::StoreU(hn::Mul(k, dot3(b0x, b0y, b0z, b0x, b0y, b0z)), d, B.disc0 + i);
-      hn::StoreU(hn::Mul(hn::Add(k, k), dot3(b0x, b0y, b0z, b1x, b1y, b1z)), d, B.disc1 + i);
-      hn::StoreU(hn::Mul(k, dot3(b1x, b1y, b1z, b1x, b1y, b1z)), d, B.disc2 + i);
-    }
+    PointTailForm(d, B, i, R, s2, b0x, b0y, b0z, b1x, b1y, b1z);
     hn::StoreU(lx, d, B.onx + i), hn::StoreU(ly, d, B.ony + i), hn::StoreU(lz, d, B.onz + i);
   }
 }
@@ -409,7 +470,7 @@ int preparePoints(const Point* points, uint32_t first, int count, const FrameCon
     m += !(setup.backfaceCulling & clearlyBackFacing(setup, p));
   }
   counts.culled += uint32_t(count - m);
-  if (setup.shadingNormals) {  // the kept points' shading normals (issue 14)
+  if (setup.shadingNormals) {  // the kept points' shading normals (smooth contour models)
     for (int j = 0; j < m; ++j) {
       const Vec3f& sn = frame.pointShadingNormals[first + uint32_t(b.lane[j])];
       b.snx[j] = sn.x(), b.sny[j] = sn.y(), b.snz[j] = sn.z();

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <new>
 
-#include "detail/splat_math.h"
+#include "splat_rules.h"
 
 namespace linesurf {
 
@@ -248,7 +248,7 @@ PrimitiveStatus preparePoint(const Point& point, uint32_t index, const FrameCont
   out.zThreshold = frame.zThreshold(s.depthExtent + point.radius);
   const Color col = frame.primitiveColor(point.color);
   out.color[0] = col.x(), out.color[1] = col.y(), out.color[2] = col.z(), out.color[3] = std::clamp(col.w(), 0.0f, 1.0f);
-  // shading normal (issue 14): the point's own when the model has them, flipped with the plane
+  // shading normal (see docs/decisions.md, "Smooth contour models"): the point's own when the model has them, flipped with the plane
   Vec3f ln = n;
   if (frame.pointShadingNormals) {
     Vec3f m = cam.rotation() * frame.pointShadingNormals[index];

@@ -22,14 +22,14 @@
 /// tangent plane (perspective-exact, equivalent to the thesis's perspective-correct weight
 /// texture coordinates); the plane coordinates give the weight exp(-q/2) / sqrt(det V), q <=
 /// cutoff^2, and the depth. Rows of pixels are evaluated in SIMD and go straight into the Z^3
-/// tile with its fast path in SIMD too (detail/splat_rows.h, pointRunZ3: a tile's run of splats
+/// tile with its fast path in SIMD too (point_rows.h, pointRunZ3: a tile's run of splats
 /// in one call).
 #include <cmath>
 #include <cstdint>
 
-#include "detail/splat_rows.h"
 #include "linesurf/core/model.h"
-#include "linesurf/render/splat_context.h"
+#include "point_rows.h"
+#include "splat_context.h"
 
 namespace linesurf {
 
@@ -68,7 +68,7 @@ static_assert(sizeof(PreparedPoint) == 64);
 struct PointCold {
   float normal[3] = {};
   uint32_t index = 0;
-  /// the tail form of the splat's own disc (beyond the thesis, issue 14; detail::PointTail): a
+  /// the tail form of the splat's own disc (beyond the thesis, detail::PointTail; docs/decisions.md, "Tail layers"): a
   /// fragment at plane coordinates (s, t) lies outside kTailDisc times the disc |p - c| <= cutoff
   /// sigma_r where disc[0] s^2 + disc[1] s t + disc[2] t^2 > 1 (disc[3] unused). Zero: never.
   float disc[4] = {};

@@ -1,4 +1,4 @@
-// SIMD set-up of segment splats (beyond the thesis, issue 13: the stages of thesis §5 / §6.2.2 that
+// SIMD set-up of segment splats (beyond the thesis: the stages of thesis §5 / §6.2.2 that
 // segment_splat.cpp runs per segment, for the common case, over a batch in float), and the batches
 // around it (segment_setup.h). The exact path, which takes every lane this code marks for it, is
 // prepareSegment (segment_splat.cpp).
@@ -9,10 +9,11 @@
 #include <bit>
 #include <cstddef>
 #include <cmath>
+#include <numbers>
 #include <cstring>
 #include <new>
 
-#include "detail/splat_math.h"
+#include "splat_rules.h"
 #include "point_setup.h"
 
 #ifndef LINESURF_SEGMENT_SETUP_FLAGS  // once: foreach_target includes this file per target
@@ -38,6 +39,7 @@ static_assert(int((offsetof(PreparedSegment, shade) - kRecordBegin) / 4) == kFla
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 #include <hwy/contrib/math/math-inl.h>
+#include "segment_setup-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace linesurf::detail {
@@ -157,147 +159,6 @@ const std::array<int32_t, kRecordSlots>& recordSources() {
   return table;
 }
 
-// The batch's input from segments [0, n) (AoS -> SoA, world space) and the prefetches of the
-// input a batch ahead and of the record slots whose plane faces the eye (issue 13, i13prep2):
-// 16 segments at once, each 16-byte block of the Segment (p0x p0y p0z p1x | p1y p1z nx ny | nz
-// n0x n0y n0z | n1x n1y n1z - | r g b a | radius ...) of 4 x 4 segments transposed to 4 field
-// vectors. Only with 512-bit vectors; false elsewhere (the caller copies lane by lane).
-bool SegmentLoad(const SegmentSetupFrame& F, SegmentSetupBatch& B, const Segment* seg, int n, const PreparedSegment* out) {
-#if HWY_TARGET <= HWY_AVX3 && HWY_ARCH_X86
-  static_assert(sizeof(Segment) == 112 && alignof(Segment) % 16 == 0 && offsetof(Segment, p0) == 0 &&
-                    offsetof(Segment, p1) == 12 && offsetof(Segment, normal) == 24 && offsetof(Segment, normal0) == 36 &&
-                    offsetof(Segment, normal1) == 48 && offsetof(Segment, color) == 64 && offsetof(Segment, radius) == 80,
-                "the Segment's 16-byte blocks");
-  const float* const base = reinterpret_cast<const float*>(seg);
-  const __m512 eye[3] = {_mm512_set1_ps(F.view.eye[0]), _mm512_set1_ps(F.view.eye[1]), _mm512_set1_ps(F.view.eye[2])};
-  for (int i = 0; i < n; i += 16) {
-    {  // the input a batch ahead, every line it spans (a hint: an address past the array is harmless)
-      const uintptr_t next = reinterpret_cast<uintptr_t>(seg + i) + kSegmentBatch * sizeof(Segment);
-      for (size_t o = 0; o < 16 * sizeof(Segment); o += 64) __builtin_prefetch(reinterpret_cast<const void*>(next + o));
-    }
-    const float* at[16];  // lanes past n read segment 0 (their values are not used)
-    for (int j = 0; j < 16; ++j) at[j] = base + 28 * (i + j < n ? i + j : 0);
-    // block k of the 16 segments as 4 vectors of field 4 k .. 4 k + 3
-    auto block = [&](int k, __m512* f) {
-      __m512 t[4];
-      for (int q = 0; q < 4; ++q) {
-        __m512 v = _mm512_castps128_ps512(_mm_load_ps(at[q] + 4 * k));
-        v = _mm512_insertf32x4(v, _mm_load_ps(at[4 + q] + 4 * k), 1);
-        v = _mm512_insertf32x4(v, _mm_load_ps(at[8 + q] + 4 * k), 2);
-        t[q] = _mm512_insertf32x4(v, _mm_load_ps(at[12 + q] + 4 * k), 3);
-      }
-      const __m512d l01 = _mm512_castps_pd(_mm512_unpacklo_ps(t[0], t[1])), l23 = _mm512_castps_pd(_mm512_unpacklo_ps(t[2], t[3]));
-      const __m512d h01 = _mm512_castps_pd(_mm512_unpackhi_ps(t[0], t[1])), h23 = _mm512_castps_pd(_mm512_unpackhi_ps(t[2], t[3]));
-      f[0] = _mm512_castpd_ps(_mm512_unpacklo_pd(l01, l23)), f[1] = _mm512_castpd_ps(_mm512_unpackhi_pd(l01, l23));
-      f[2] = _mm512_castpd_ps(_mm512_unpacklo_pd(h01, h23)), f[3] = _mm512_castpd_ps(_mm512_unpackhi_pd(h01, h23));
-    };
-    __m512 f[4];
-    block(0, f);
-    _mm512_store_ps(B.p0x + i, f[0]), _mm512_store_ps(B.p0y + i, f[1]), _mm512_store_ps(B.p0z + i, f[2]);
-    _mm512_store_ps(B.p1x + i, f[3]);
-    const __m512 tx = _mm512_sub_ps(eye[0], f[0]), ty = _mm512_sub_ps(eye[1], f[1]), tz = _mm512_sub_ps(eye[2], f[2]);
-    block(1, f);
-    _mm512_store_ps(B.p1y + i, f[0]), _mm512_store_ps(B.p1z + i, f[1]), _mm512_store_ps(B.wx + i, f[2]);
-    _mm512_store_ps(B.wy + i, f[3]);
-    __m512 facing = _mm512_add_ps(_mm512_mul_ps(f[2], tx), _mm512_mul_ps(f[3], ty));
-    block(2, f);
-    _mm512_store_ps(B.wz + i, f[0]);
-    facing = _mm512_add_ps(facing, _mm512_mul_ps(f[0], tz));
-    if (F.smoothFrame) {
-      _mm512_store_ps(B.m0x + i, f[1]), _mm512_store_ps(B.m0y + i, f[2]), _mm512_store_ps(B.m0z + i, f[3]);
-      block(3, f);
-      _mm512_store_ps(B.m1x + i, f[0]), _mm512_store_ps(B.m1y + i, f[1]), _mm512_store_ps(B.m1z + i, f[2]);
-    }
-    if (F.modelColors) {
-      block(4, f);
-    } else {
-      for (int c = 0; c < 4; ++c) f[c] = _mm512_set1_ps(F.defaultColor[c]);
-    }
-    if (F.alphaOverride >= 0) f[3] = _mm512_set1_ps(F.alphaOverride);
-    _mm512_store_ps(B.cr + i, f[0]), _mm512_store_ps(B.cg + i, f[1]), _mm512_store_ps(B.cb + i, f[2]);
-    _mm512_store_ps(B.ca + i, f[3]);
-    block(5, f);
-    _mm512_store_ps(B.radius + i, f[0]);
-    // the lanes' record slots, all their lines, into L2 unless the plane clearly faces away (issue
-    // 13, i13segprep: the records stream through memory once per frame; fetched a few lanes
-    // before their writing, the writes stalled; from here the batch's set-up passes meanwhile)
-    unsigned bits = F.view.backfaceCulling ? unsigned(_mm512_cmp_ps_mask(facing, _mm512_setzero_ps(), _CMP_NLT_UQ)) : 0xFFFFu;
-    bits &= n - i >= 16 ? 0xFFFFu : (1u << (n - i)) - 1u;
-    for (; bits; bits &= bits - 1) {
-      const char* slot = reinterpret_cast<const char*>(out + i + std::countr_zero(bits));
-      for (size_t o = 0; o < sizeof(PreparedSegment); o += 64) __builtin_prefetch(slot + o, 0, 2);
-    }
-  }
-  return true;
-#else
-  (void)F, (void)B, (void)seg, (void)n, (void)out;
-  return false;
-#endif
-}
-
-// World to camera space in place over lanes [0, n) of the batch, rounded as the exact path's
-// Camera::toCamera and rotation() products round (Eigen: r0 x + (r1 y + r2 z), then + t; separate
-// products and sums: no contraction to fused multiply-adds here), and the smooth flags.
-#if defined(__clang__)
-#define LINESURF_NO_CONTRACT _Pragma("clang fp contract(off)")
-#else
-#define LINESURF_NO_CONTRACT
-#pragma GCC push_options
-#pragma GCC optimize("fp-contract=off")
-#endif
-HWY_NOINLINE void SegmentToCamera(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
-  LINESURF_NO_CONTRACT
-  const PointSetupFrame& V = F.view;
-  using DF = hn::ScalableTag<float>;
-  using VF = hn::Vec<DF>;
-  const DF d;
-  const int lanes = int(hn::Lanes(d));
-  const VF zero = hn::Zero(d), inf = hn::Set(d, INFINITY);
-  VF r[9], t[3];
-  for (int k = 0; k < 9; ++k) r[k] = hn::Set(d, V.rot[k]);
-  for (int k = 0; k < 3; ++k) t[k] = hn::Set(d, V.trans[k]);
-  auto row = [&](int i, VF x, VF y, VF z) { return hn::Add(hn::Mul(r[3 * i], x), hn::Add(hn::Mul(r[3 * i + 1], y), hn::Mul(r[3 * i + 2], z))); };
-  auto rotate = [&](float* x, float* y, float* z, int i, VF X, VF Y, VF Z) {
-    hn::StoreU(row(0, X, Y, Z), d, x + i), hn::StoreU(row(1, X, Y, Z), d, y + i), hn::StoreU(row(2, X, Y, Z), d, z + i);
-  };
-  auto point = [&](float* x, float* y, float* z, int i) {
-    const VF X = hn::LoadU(d, x + i), Y = hn::LoadU(d, y + i), Z = hn::LoadU(d, z + i);
-    hn::StoreU(hn::Add(row(0, X, Y, Z), t[0]), d, x + i), hn::StoreU(hn::Add(row(1, X, Y, Z), t[1]), d, y + i);
-    hn::StoreU(hn::Add(row(2, X, Y, Z), t[2]), d, z + i);
-  };
-  auto norm2 = [](VF x, VF y, VF z) { return hn::Add(hn::Add(hn::Mul(x, x), hn::Mul(y, y)), hn::Mul(z, z)); };
-  for (int i = 0; i < n; i += lanes) {
-    point(B.p0x, B.p0y, B.p0z, i);
-    point(B.p1x, B.p1y, B.p1z, i);
-    VF wx = hn::LoadU(d, B.wx + i), wy = hn::LoadU(d, B.wy + i), wz = hn::LoadU(d, B.wz + i);
-    if (F.smoothFrame) {
-      const VF ax = hn::LoadU(d, B.m0x + i), ay = hn::LoadU(d, B.m0y + i), az = hn::LoadU(d, B.m0z + i);
-      const VF bx = hn::LoadU(d, B.m1x + i), by = hn::LoadU(d, B.m1y + i), bz = hn::LoadU(d, B.m1z + i);
-      auto finite3 = [&](VF x, VF y, VF z) {
-        return hn::And(hn::And(hn::Lt(hn::Abs(x), inf), hn::Lt(hn::Abs(y), inf)), hn::Lt(hn::Abs(z), inf));
-      };
-      // a sum of squares is positive where one term is, whatever the order of the sums
-      const auto sm = hn::And(hn::And(finite3(ax, ay, az), finite3(bx, by, bz)),
-                              hn::And(hn::Gt(norm2(ax, ay, az), zero), hn::Gt(norm2(bx, by, bz), zero)));
-      hn::StoreU(hn::IfThenElseZero(sm, hn::Set(d, 1.0f)), d, B.smooth + i);
-      const auto sum = hn::AndNot(hn::Gt(norm2(wx, wy, wz), zero), sm);
-      wx = hn::IfThenElse(sum, hn::Add(ax, bx), wx), wy = hn::IfThenElse(sum, hn::Add(ay, by), wy);
-      wz = hn::IfThenElse(sum, hn::Add(az, bz), wz);
-      const VF ux = hn::IfThenElseZero(sm, ax), uy = hn::IfThenElseZero(sm, ay), uz = hn::IfThenElse(sm, az, hn::Set(d, 1.0f));
-      const VF vx = hn::IfThenElseZero(sm, bx), vy = hn::IfThenElseZero(sm, by), vz = hn::IfThenElse(sm, bz, hn::Set(d, 1.0f));
-      rotate(B.m0x, B.m0y, B.m0z, i, ux, uy, uz);
-      rotate(B.m1x, B.m1y, B.m1z, i, vx, vy, vz);
-    } else {
-      hn::StoreU(zero, d, B.smooth + i);
-    }
-    rotate(B.wx, B.wy, B.wz, i, wx, wy, wz);
-  }
-}
-#if !defined(__clang__)
-#pragma GCC pop_options
-#endif
-#undef LINESURF_NO_CONTRACT
-
 // Stage 1 of one vector of lanes (camera-space input): the strip's axis and plane, and the
 // culling decisions, as SegmentCull and SegmentSetup both take them.
 template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
@@ -358,7 +219,7 @@ HWY_INLINE Strip<DF> StripOf(DF d, const SegmentSetupFrame& F, VF cx, VF cy, VF 
   return st;
 }
 
-// Stage 1 over lanes [0, n) (issue 13, i13prep2): the lanes it decides (unusual input or
+// Stage 1 over lanes [0, n) (see docs/decisions.md, "Segment prepare"): the lanes it decides (unusual input or
 // undecided: the exact path; outside; culled) get their status in B.decidedStatus and
 // B.exactLanes, the others are compacted to lanes [0, m) of the batch's input arrays, B.lane[k]
 // the original lane of lane k, so that SegmentSetup runs on full vectors of them. Returns m.
@@ -407,6 +268,161 @@ int SegmentCull(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   return int(m);
 }
 
+// The lit colours of the interior stations of a batch's turning lanes (segmentSetup queued them as
+// jobs: B.stationJobs): the jobs lit a vector at a time, each job's inputs taken from the vectors
+// of the lanes it belongs to by a lane permutation (a batch-wide queue needed ~20 gathers per
+// vector of jobs); two vectors of jobs interleaved, so that their long dependency chains (three
+// square roots, three divisions and a gather in a row) overlap.
+HWY_INLINE void SegmentStationColours(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
+  using DF = hn::ScalableTag<float>;
+  using VF = hn::Vec<DF>;
+  using DI = hn::RebindToSigned<DF>;
+  using VI = hn::Vec<DI>;
+  const DF d;
+  const DI di;
+  const int lanes = int(hn::Lanes(d));
+  const VF one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  int jobAt[kSegmentBatch * kMaxSegmentPieces], jobGroup[kSegmentBatch * kMaxSegmentPieces], jobVectors = 0;
+  for (int i = 0; i < n; i += lanes)
+    for (int q = 0; q < B.groupJobs[i / lanes]; q += lanes) jobAt[jobVectors] = q, jobGroup[jobVectors++] = i;
+  const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
+  constexpr int W = 2;
+  for (int v = 0; v < jobVectors; v += W) {
+    VF u[W], mx[W], my[W], mz[W], px[W], py[W], pz[W], ar[W], ag[W], ab[W], dif[W], spec[W];
+    for (int w = 0; w < W; ++w) {
+      const int jv = std::min(v + w, jobVectors - 1), i = jobGroup[jv], q = jobAt[jv];
+      // job j's lane: the last whose first job is <= j
+      const VI j = hn::Iota(di, q);
+      VI lane = hn::Set(di, lanes - 1);
+      for (int t = 1; t < lanes; ++t) lane = hn::Add(lane, hn::VecFromMask(di, hn::Gt(hn::Set(di, B.jobFirst[i + t]), j)));
+      const auto idx = hn::IndicesFromVec(d, lane);
+      auto T = [&](const float* a) { return hn::TableLookupLanes(hn::LoadU(d, a + i), idx); };
+      // u = s / S, s = j - first + 1 (as float(s) / float(S) rounds)
+      const VI first = hn::TableLookupLanes(hn::LoadU(di, B.jobFirst + i), hn::IndicesFromVec(di, lane));
+      u[w] = hn::Div(hn::ConvertTo(d, hn::Add(hn::Sub(j, first), hn::Set(di, 1))), T(B.jobIntervals));
+      mx[w] = hn::MulAdd(u[w], T(B.dnx), T(B.n0x)), my[w] = hn::MulAdd(u[w], T(B.dny), T(B.n0y));
+      mz[w] = hn::MulAdd(u[w], T(B.dnz), T(B.n0z));
+      const VF cx = T(B.p0x), cy = T(B.p0y), cz = T(B.p0z);
+      px[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cx), cx), cx), py[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cy), cy), cy);
+      pz[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cz), cz), cz);
+      ar[w] = T(B.cr), ag[w] = T(B.cg), ab[w] = T(B.cb);
+    }
+    for (int w = 0; w < W; ++w) {
+      const VF im = hn::Div(one, hn::Sqrt(hn::MulAdd(mx[w], mx[w], hn::MulAdd(my[w], my[w], hn::Mul(mz[w], mz[w])))));
+      mx[w] = hn::Mul(mx[w], im), my[w] = hn::Mul(my[w], im), mz[w] = hn::Mul(mz[w], im);
+    }
+    PhongN<W>(d, F, mx, my, mz, px, py, pz, dif, spec);
+    for (int w = 0; w < W && v + w < jobVectors; ++w) {
+      const int at = B.groupBase[jobGroup[v + w] / lanes] + jobAt[v + w];
+      hn::StoreU(Lit(ar[w], dif[w], spec[w], lr), d, B.stationR + at);
+      hn::StoreU(Lit(ag[w], dif[w], spec[w], lg), d, B.stationG + at);
+      hn::StoreU(Lit(ab[w], dif[w], spec[w], lb), d, B.stationB + at);
+    }
+  }
+}
+
+// Stage 6's shading normals of a smooth frame (the model's segments carry endpoint normals): the
+// endpoint normals n0, n1 on the plane normal n's side where a lane is smooth (sm); a lane turning
+// by more than kStationTurn (0.1 rad) is shaded at stations (Gouraud at ceil(turn / kStationTurn)
+// + 1 stations, prepareSegment's stage 6; none where lighting is deferred); near the threshold,
+// or near an integer ceil(), the exact path decides (exact).
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+HWY_INLINE void SegmentSmoothNormals(DF d, const SegmentSetupFrame& F, const SegmentSetupBatch& B, int i, VF nx, VF ny,
+                                     VF nz, VF& n0x, VF& n0y, VF& n0z, VF& n1x, VF& n1y, VF& n1z, MF& sm, MF& turning,
+                                     VF& stations, MF& exact) {
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  auto L = [&](const float* a) { return hn::LoadU(d, a + i); };
+  auto dot3 = [](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
+  const VF inf = S(INFINITY);
+  auto finite = [&](VF v) { return hn::Lt(hn::Abs(v), inf); };
+  sm = hn::Gt(L(B.smooth), zero);
+  VF ax = L(B.m0x), ay = L(B.m0y), az = L(B.m0z), bx = L(B.m1x), by = L(B.m1y), bz = L(B.m1z);
+  const VF ia = hn::Div(one, hn::Sqrt(dot3(ax, ay, az, ax, ay, az))), ib = hn::Div(one, hn::Sqrt(dot3(bx, by, bz, bx, by, bz)));
+  const MF flip = hn::Lt(dot3(nx, ny, nz, hn::MulAdd(ax, ia, hn::Mul(bx, ib)), hn::MulAdd(ay, ia, hn::Mul(by, ib)),
+                              hn::MulAdd(az, ia, hn::Mul(bz, ib))), zero);
+  const VF sa = hn::IfThenElse(flip, hn::Neg(ia), ia), sb = hn::IfThenElse(flip, hn::Neg(ib), ib);
+  ax = hn::Mul(ax, sa), ay = hn::Mul(ay, sa), az = hn::Mul(az, sa);
+  bx = hn::Mul(bx, sb), by = hn::Mul(by, sb), bz = hn::Mul(bz, sb);
+  // turning by more than kStationTurn (0.1 rad): shade Stations, Gouraud at ceil(turn /
+  // kStationTurn) + 1 stations (prepareSegment's stage 6), or none where lighting is deferred;
+  // near the threshold, or near an integer ceil(), the exact path decides
+  const VF cosTurn = dot3(ax, ay, az, bx, by, bz);
+  exact = hn::Or(exact, hn::And(sm, hn::Not(hn::Gt(hn::Abs(hn::Sub(cosTurn, S(kCosStationTurn))), S(1e-5f)))));
+  exact = hn::Or(exact, hn::And(sm, hn::Not(hn::And(finite(ax), finite(bx)))));
+  turning = hn::And(sm, hn::Lt(cosTurn, S(kCosStationTurn)));
+  if (!hn::AllFalse(d, turning)) {
+    if (F.perPixelLighting) {
+      stations = hn::IfThenElse(turning, zero, stations);
+    } else {
+      const VF turn = hn::Acos(d, hn::Min(hn::Max(cosTurn, S(-1.0f)), one));
+      const VF x = hn::Div(turn, S(segment::kStationTurn));
+      exact = hn::Or(exact, hn::And(turning, hn::Lt(hn::Abs(hn::Sub(x, hn::Round(x))), S(1e-3f))));
+      const VF count = hn::Min(hn::Max(hn::Ceil(x), one), S(float(kMaxSegmentPieces)));
+      stations = hn::IfThenElse(turning, count, stations);
+    }
+  }
+  n0x = hn::IfThenElse(sm, ax, nx), n0y = hn::IfThenElse(sm, ay, ny), n0z = hn::IfThenElse(sm, az, nz);
+  n1x = hn::IfThenElse(sm, bx, nx), n1y = hn::IfThenElse(sm, by, ny), n1z = hn::IfThenElse(sm, bz, nz);
+    }
+
+// The record words of a vector of lanes that the batch writes per lane beside the template: the
+// index, the word holding `smooth` and `shade`, and stationCount (untexturedStations).
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+HWY_INLINE void SegmentFlags(DF d, const SegmentSetupFrame& F, SegmentSetupBatch& B, int i, MF shaded, MF sm,
+                             VF stations) {
+  const hn::RebindToSigned<DF> di;
+  const VF zero = hn::Zero(d);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  const hn::RebindToUnsigned<DF> du;
+  using VU = hn::Vec<decltype(du)>;
+  hn::StoreU(hn::Add(hn::Set(du, B.first), hn::BitCast(du, hn::LoadU(di, B.lane + i))), du, B.index + i);
+  const VU shade = hn::IfThenElse(hn::RebindMask(du, shaded), hn::Set(du, uint32_t(SegmentShade::Stations)),
+                                  hn::IfThenElse(hn::RebindMask(du, sm), hn::Set(du, uint32_t(SegmentShade::Smooth)),
+                                                 hn::Set(du, uint32_t(F.perPixelLighting ? SegmentShade::Constant
+                                                                                         : SegmentShade::Linear))));
+  const VU smooth = hn::IfThenElseZero(hn::RebindMask(du, sm), hn::Set(du, 1u));
+  const uint32_t keep = F.record.word[kFlagSlot] & ~((0xFFu << kSmoothShift) | (0xFFu << kShadeShift));
+  const VU flags = hn::Or(hn::Set(du, keep), hn::Or(hn::ShiftLeftSame(smooth, kSmoothShift), hn::ShiftLeftSame(shade, kShadeShift)));
+  hn::StoreU(flags, du, B.flags + i);
+  // stationCount (untexturedStations): 0 where lighting is deferred, kInlineStations for two
+  // intervals, else -1 (in SegmentExtra)
+  const auto inl = hn::And(shaded, hn::Or(hn::Eq(stations, zero), hn::Eq(stations, S(float(kInlineStations - 1)))));
+  const VF count = hn::IfThenElse(inl, hn::IfThenElseZero(hn::Gt(stations, zero), S(float(kInlineStations))), S(-1.0f));
+  hn::StoreU(hn::And(hn::BitCast(du, hn::ConvertTo(di, count)), hn::Set(du, 0xFFu)), du, B.stationCount + i);
+    }
+
+// Stage 6's attributes at u = 0 (setBaseAttributes) and the colour's change to u = 1: Gouraud
+// between the ends (F.light; Phong at the ends n0 at c, n1 at q1); the albedo where lighting is
+// deferred, for lanes with stations (shaded: their colours in SegmentExtra) and where
+// prepareSegments lights the ends per lane (!F.light).
+template <class DF, class VF = hn::Vec<DF>, class MF = hn::Mask<DF>>
+HWY_INLINE void SegmentEndColours(DF d, const SegmentSetupFrame& F, SegmentSetupBatch& B, int i, VF n0x, VF n0y,
+                                  VF n0z, VF n1x, VF n1y, VF n1z, VF cx, VF cy, VF cz, VF qx1, VF qy1, VF qz1,
+                                  MF shaded) {
+  const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  auto S = [&](float v) { return hn::Set(d, v); };
+  auto L = [&](const float* a) { return hn::LoadU(d, a + i); };
+  auto St = [&](VF v, float* a) { hn::StoreU(v, d, a + i); };
+  const VF cr = L(B.cr), cg = L(B.cg), cb = L(B.cb);
+  St(hn::Min(hn::Max(L(B.ca), zero), one), B.aa);
+  VF ar = cr, ag = cg, ab = cb, dcx = zero, dcy = zero, dcz = zero;
+  if (F.light) {
+    VF dif0, spec0, dif1, spec1;
+    Phong(d, F, n0x, n0y, n0z, cx, cy, cz, dif0, spec0);
+    Phong(d, F, n1x, n1y, n1z, qx1, qy1, qz1, dif1, spec1);
+    St(dif0, B.diffuse0), St(spec0, B.specular0), St(dif1, B.diffuse1), St(spec1, B.specular1);
+    const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
+    const VF r0 = Lit(cr, dif0, spec0, lr), g0 = Lit(cg, dif0, spec0, lg), b0 = Lit(cb, dif0, spec0, lb);
+    ar = hn::IfThenElse(shaded, cr, r0), ag = hn::IfThenElse(shaded, cg, g0), ab = hn::IfThenElse(shaded, cb, b0);
+    dcx = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cr, dif1, spec1, lr), r0));
+    dcy = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cg, dif1, spec1, lg), g0));
+    dcz = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cb, dif1, spec1, lb), b0));
+  }
+  St(ar, B.ar), St(ag, B.ag), St(ab, B.ab), St(dcx, B.dcx), St(dcy, B.dcy), St(dcz, B.dcz);
+}
+
 // Stages 1-6 over lanes [0, n) of camera-space input (SegmentCull's compacted lanes).
 void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   const PointSetupFrame& V = F.view;
@@ -414,15 +430,12 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
   using VF = hn::Vec<DF>;
   using MF = hn::Mask<DF>;
   using DI = hn::RebindToSigned<DF>;
-  using VI = hn::Vec<DI>;
   const DF d;
   const DI di;
   const int lanes = int(hn::Lanes(d));
   const VF zero = hn::Zero(d), one = hn::Set(d, 1.0f), half = hn::Set(d, 0.5f);
   auto S = [&](float v) { return hn::Set(d, v); };
   auto dot3 = [](VF ax, VF ay, VF az, VF bx, VF by, VF bz) { return hn::MulAdd(ax, bx, hn::MulAdd(ay, by, hn::Mul(az, bz))); };
-  const VF inf = S(INFINITY);
-  auto finite = [&](VF v) { return hn::Lt(hn::Abs(v), inf); };
   const VF f = S(V.f), R = S(V.cutoff), Vh = S(V.prefilter);
   for (int i = 0; i < n; i += lanes) {
     auto L = [&](const float* a) { return hn::LoadU(d, a + i); };
@@ -445,52 +458,8 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     // stage 2: the resampling covariance (segment::covariance) at both ends and the middle
     const VF sigma = hn::Mul(S(V.reconstructionScale), rad), s2 = hn::Mul(sigma, sigma);
     const VF hiX = hn::Mul(S(kMaxStretch * kMaxStretch), s2);
-    struct Cov {
-      VF a, b, c, det;
-    };
-    auto cov = [&](VF x, VF y, VF z, MF& bad) {
-      const VF dd = hn::Neg(z);
-      bad = hn::Or(bad, hn::Not(hn::Gt(dd, S(V.nearD))));
-      const VF id = hn::Div(one, dd), fd = hn::Mul(f, id);
-      const VF gx = hn::Mul(hn::Mul(fd, x), id), gy = hn::Neg(hn::Mul(hn::Mul(fd, y), id));
-      const VF j00 = hn::MulAdd(fd, ex, hn::Mul(gx, ez)), j01 = hn::MulAdd(fd, sx, hn::Mul(gx, sz));
-      const VF j10 = hn::MulSub(gy, ez, hn::Mul(fd, ey)), j11 = hn::MulSub(gy, sz, hn::Mul(fd, sy));
-      const VF ja = hn::MulAdd(j00, j00, hn::Mul(j10, j10)), jb = hn::MulAdd(j00, j01, hn::Mul(j10, j11)),
-               jc = hn::MulAdd(j01, j01, hn::Mul(j11, j11));
-      const VF detJ = hn::MulSub(j00, j11, hn::Mul(j01, j10));
-      const VF det = hn::Mul(detJ, detJ);
-      bad = hn::Or(bad, hn::Not(hn::And(hn::Gt(det, zero), finite(det))));
-      const VF v = hn::Div(Vh, det);
-      Cov M;
-      M.a = hn::MulAdd(v, jc, s2), M.b = hn::Neg(hn::Mul(v, jb)), M.c = hn::MulAdd(v, ja, s2);
-      // det M without cancellation: s2^2 + s2 v (ja + jc) + Vh v
-      M.det = hn::MulAdd(s2, hn::MulAdd(v, hn::Add(ja, jc), s2), hn::Mul(Vh, v));
-      // the stretch clamp (segment::clampEigen): an eigenvalue beyond (kMaxStretch sigma_r)^2 is
-      // clamped there (tiny far segments, whose prefilter dominates); one within 0.1% of the clamp
-      // leaves the decision to the exact path
-      const VF hm = hn::Mul(half, hn::Sub(M.a, M.c)), mean = hn::Mul(half, hn::Add(M.a, M.c));
-      const VF rad = hn::Sqrt(hn::MulAdd(hm, hm, hn::Mul(M.b, M.b)));
-      const VF l0 = hn::Add(mean, rad), l1 = hn::Div(M.det, l0);  // l1 without cancellation
-      bad = hn::Or(bad, hn::Lt(hn::Abs(hn::Sub(l0, hiX)), hn::Mul(S(1e-3f), hiX)));
-      bad = hn::Or(bad, hn::Lt(hn::Abs(hn::Sub(l1, hiX)), hn::Mul(S(1e-3f), hiX)));
-      const MF over = hn::Gt(l0, hiX);
-      if (!hn::AllFalse(d, over)) {
-        // unit eigenvector of l0: (l0 - c, b) when a >= c, else (b, l0 - a) (no cancellation)
-        const MF aBig = hn::Ge(M.a, M.c);
-        VF ux = hn::IfThenElse(aBig, hn::Add(hm, rad), M.b), uy = hn::IfThenElse(aBig, M.b, hn::Sub(rad, hm));
-        const VF u2 = hn::MulAdd(ux, ux, hn::Mul(uy, uy));
-        const MF none = hn::Not(hn::Gt(u2, zero));  // M = l0 I
-        const VF iu = hn::Div(one, hn::Sqrt(hn::IfThenElse(none, one, u2)));
-        ux = hn::IfThenElse(none, one, hn::Mul(ux, iu)), uy = hn::IfThenElseZero(hn::Not(none), hn::Mul(uy, iu));
-        const VF L0 = hn::Min(l0, hiX), L1 = hn::Min(l1, hiX);
-        const VF xx = hn::Mul(ux, ux), yy = hn::Mul(uy, uy);
-        M.a = hn::IfThenElse(over, hn::MulAdd(L0, xx, hn::Mul(L1, yy)), M.a);
-        M.b = hn::IfThenElse(over, hn::Mul(hn::Sub(L0, L1), hn::Mul(ux, uy)), M.b);
-        M.c = hn::IfThenElse(over, hn::MulAdd(L0, yy, hn::Mul(L1, xx)), M.c);
-        M.det = hn::IfThenElse(over, hn::Mul(L0, L1), M.det);
-      }
-      return M;
-    };
+    using Cov = SegmentCov<VF>;
+    const SegmentCovariance<DF> cov{d, V, f, Vh, s2, hiX, ex, ey, ez, sx, sy, sz};
     const Cov M0 = cov(cx, cy, cz, exact);
     const Cov M1 = cov(qx1, qy1, qz1, exact);
     Cov Mm{hn::Mul(half, hn::Add(M0.a, M1.a)), hn::Mul(half, hn::Add(M0.b, M1.b)), hn::Mul(half, hn::Add(M0.c, M1.c)), zero};
@@ -532,78 +501,17 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     slope = hn::IfThenElseZero(hn::Gt(hn::Mul(hn::Abs(slope), len), hn::Mul(S(1e-4f), scale0)), slope);
     VF skew = hn::Neg(hn::Mul(Mm.b, ic)), across = ic;
     VF aMin = hn::Neg(pieceReach), aMax = hn::Add(len, pieceReach), bMax = hn::Mul(R, hn::Sqrt(Mm.c));
-    if (!hn::AllFalse(d, hn::AndNot(exact, hn::And(multi, active)))) {
-      // K > 1 (issue 13, i13prep3: hybrid models' long segments): piece p over [L p / K, L (p + 1)
-      // / K] with the covariance at its middle, its weight scales from the covariances at its ends
-      // (M0, M1, the middle's where 2 (p + 1) = K, else the covariance there), as the exact path's
-      // stage 2; the footprint box around all pieces
-      VF maxReach = zero, loDet = M0.det;
-      aMin = hn::IfThenElse(multi, zero, aMin), aMax = hn::IfThenElse(multi, len, aMax);
-      bMax = hn::IfThenElseZero(hn::Not(multi), bMax);
-      const VF invK = hn::Div(one, K);
-      const int maxK = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(hn::AndNot(exact, active), K))));
-      for (int p = 0; p < maxK; ++p) {
-        const MF live = hn::And(multi, hn::Lt(S(float(p)), K));
-        const VF a0 = hn::Mul(hn::Mul(len, S(float(p))), invK), a1 = hn::Mul(hn::Mul(len, S(float(p + 1))), invK);
-        const VF am = hn::Mul(half, hn::Add(a0, a1));
-        MF bad = hn::Lt(one, zero);
-        const Cov Mp = cov(hn::MulAdd(am, ex, cx), hn::MulAdd(am, ey, cy), hn::MulAdd(am, ez, cz), bad);
-        const Cov Mh = cov(hn::MulAdd(a1, ex, cx), hn::MulAdd(a1, ey, cy), hn::MulAdd(a1, ez, cz), bad);
-        const MF last = hn::Eq(S(float(p + 1)), K), middle = hn::Eq(S(float(2 * (p + 1))), K);
-        const VF hiDet = hn::IfThenElse(last, M1.det, hn::IfThenElse(middle, Mm.det, Mh.det));
-        exact = hn::Or(exact, hn::And(live, hn::Or(bad, hn::AndNot(hn::Or(last, middle), hn::Not(hn::Gt(hiDet, zero))))));
-        const VF det = hn::MulSub(Mp.a, Mp.c, hn::Mul(Mp.b, Mp.b)), idet = hn::Div(one, det);
-        const VF pic = hn::Div(one, Mp.c), pInv = hn::Mul(det, pic), reach = hn::Mul(R, hn::Sqrt(Mp.a));
-        const VF s0 = hn::Div(one, hn::Mul(rad, hn::Sqrt(loDet))), s1 = hn::Div(one, hn::Mul(rad, hn::Sqrt(hiDet)));
-        VF sl = hn::Div(hn::Sub(s1, s0), hn::Sub(a1, a0));
-        sl = hn::IfThenElseZero(hn::Gt(hn::Mul(hn::Abs(sl), hn::Sub(a1, a0)), hn::Mul(S(1e-4f), s0)), sl);
-        const VF pk = hn::Sqrt(hn::Div(half, pInv)), pErf = hn::Sqrt(hn::Mul(S(0.5f * float(kPi)), pInv));
-        const VF pSkew = hn::Neg(hn::Mul(Mp.b, pic));
-        const VF fields[kPieceFields] = {a0, a1, hn::Mul(Mp.c, idet), hn::Neg(hn::Mul(Mp.b, idet)), hn::Mul(Mp.a, idet),
-                                         s0, s1, reach, pSkew, pic, pInv, pk, pErf, sl};
-        for (int q = 0; q < kPieceFields; ++q) St(fields[q], B.piece[q][p]);
-        if (p == 0) {
-          skew = hn::IfThenElse(multi, pSkew, skew), across = hn::IfThenElse(multi, pic, across);
-          invM00 = hn::IfThenElse(multi, pInv, invM00), scale0 = hn::IfThenElse(multi, s0, scale0);
-          slope = hn::IfThenElse(multi, sl, slope);
-        }
-        aMin = hn::IfThenElse(live, hn::Min(aMin, hn::Sub(a0, reach)), aMin);
-        aMax = hn::IfThenElse(live, hn::Max(aMax, hn::Add(a1, reach)), aMax);
-        bMax = hn::IfThenElse(live, hn::Max(bMax, hn::Mul(R, hn::Sqrt(Mp.c))), bMax);
-        maxReach = hn::IfThenElse(live, hn::Max(maxReach, reach), maxReach);
-        loDet = hiDet;
-      }
-      St(maxReach, B.pieceMaxReach), St(hn::Mul(K, iL), B.pieceInvLength);
-    }
+    if (!hn::AllFalse(d, hn::AndNot(exact, hn::And(multi, active))))
+      SegmentPieces(d, B, i, cov, R, rad, len, iL, K, multi, active, cx, cy, cz, ex, ey, ez, M0, M1, Mm, exact, skew,
+                    across, invM00, scale0, slope, aMin, aMax, bMax);
     St(K, B.pieceCount);
     St(skew, B.skew), St(across, B.across), St(invM00, B.invM00);
-    St(hn::Sqrt(hn::Div(half, invM00)), B.k), St(hn::Sqrt(hn::Mul(S(0.5f * float(kPi)), invM00)), B.erfScale);
+    St(hn::Sqrt(hn::Div(half, invM00)), B.k), St(hn::Sqrt(hn::Mul(S(0.5f * float(std::numbers::pi)), invM00)), B.erfScale);
     St(scale0, B.scale0), St(slope, B.slope);
     St(aMin, B.aMin), St(aMax, B.aMax), St(bMax, B.bMax), St(len, B.length);
-    // stage 4: the footprint box between the near and far planes, projected
-    VF x0 = inf, x1 = hn::Neg(inf), y0 = inf, y1 = hn::Neg(inf);
-    for (int k = 0; k < 4; ++k) {
-      const VF as = k == 0 || k == 3 ? aMin : aMax, bs = k < 2 ? hn::Neg(bMax) : bMax;
-      const VF qx = hn::MulAdd(bs, sx, hn::MulAdd(as, ex, cx)), qy = hn::MulAdd(bs, sy, hn::MulAdd(as, ey, cy));
-      const VF depth = hn::Neg(hn::MulAdd(bs, sz, hn::MulAdd(as, ez, cz)));
-      exact = hn::Or(exact, hn::Not(hn::And(hn::Gt(depth, hn::Mul(S(1.0001f), S(V.nearD))),
-                                            hn::Lt(depth, hn::Mul(S(0.9999f), S(V.farD))))));
-      const VF id = hn::Div(f, depth);
-      const VF X = hn::MulAdd(qx, id, S(V.cx)), Y = hn::NegMulAdd(qy, id, S(V.cy));
-      St(X, B.qx[k]), St(Y, B.qy[k]);
-      exact = hn::Or(exact, hn::Not(hn::And(finite(X), finite(Y))));
-      x0 = hn::Min(x0, X), x1 = hn::Max(x1, X), y0 = hn::Min(y0, Y), y1 = hn::Max(y1, Y);
-    }
-    const VF lim = S(1e8f);
-    auto pix = [&](VF v) {
-      return hn::Add(hn::ConvertTo(di, hn::Floor(hn::Sub(hn::Min(hn::Max(v, hn::Neg(lim)), lim), half))), hn::Set(di, 1));
-    };
-    const VI bx0 = pix(x0), by0 = pix(y0), bx1 = pix(x1), by1 = pix(y1);
-    const VI ix0 = hn::Max(bx0, hn::Zero(di)), iy0 = hn::Max(by0, hn::Zero(di));
-    const VI ix1 = hn::Min(bx1, hn::Set(di, V.width)), iy1 = hn::Min(by1, hn::Set(di, V.height));
-    hn::StoreU(ix0, di, B.x0 + i), hn::StoreU(ix1, di, B.x1 + i), hn::StoreU(iy0, di, B.y0 + i), hn::StoreU(iy1, di, B.y1 + i);
-    const MF cut = hn::RebindMask(d, hn::Not(hn::And(hn::And(hn::Eq(ix0, bx0), hn::Eq(iy0, by0)), hn::And(hn::Eq(ix1, bx1), hn::Eq(iy1, by1)))));
-    const MF empty = hn::RebindMask(d, hn::Not(hn::And(hn::Gt(ix1, ix0), hn::Gt(iy1, iy0))));
+    // stage 4: the footprint box between the near and far planes, projected (SegmentScreenBox)
+    MF cut, empty;
+    SegmentScreenBox(d, F, B, i, f, cx, cy, cz, ex, ey, ez, sx, sy, sz, aMin, aMax, bMax, exact, cut, empty);
     // stage 5: per-pixel constants; k.r(px, py) = k.x/f px - k.y/f py + (k.y cy - k.x cx)/f - k.z
     const VF invF = S(F.invF);
     const VF no = dot3(nx, ny, nz, cx, cy, cz);
@@ -620,44 +528,16 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       const VF q = hn::MulAdd(M.a, hn::Mul(ez, ez), hn::MulAdd(hn::Add(M.b, M.b), hn::Mul(ez, sz), hn::Mul(M.c, hn::Mul(sz, sz))));
       return hn::MulAdd(R, hn::Sqrt(hn::Max(q, zero)), rad);
     };
-    if (F.zPerPrimitive) St(hn::Mul(S(F.zScale), extent(M0)), B.zt0), St(hn::Mul(S(F.zScale), extent(M1)), B.zt1);
-    else St(S(F.zFixed), B.zt0), St(S(F.zFixed), B.zt1);
+    if (F.z.perPrimitive) St(hn::Mul(S(F.z.scale), extent(M0)), B.zt0), St(hn::Mul(S(F.z.scale), extent(M1)), B.zt1);
+    else St(S(F.z.fixed), B.zt0), St(S(F.z.fixed), B.zt1);
     St(hn::Mul(S(kTailDisc), hn::Mul(R, sigma)), B.tailB);
     St(qx1, B.p1cx), St(qy1, B.p1cy), St(qz1, B.p1cz);
     // stage 6: shading normals (smooth: the endpoint normals on the plane normal's side) and Phong
     VF n0x = nx, n0y = ny, n0z = nz, n1x = nx, n1y = ny, n1z = nz;
     MF sm = hn::Lt(one, zero), turning = sm;
     VF stations = S(-1.0f);
-    if (F.smoothFrame) {
-      sm = hn::Gt(L(B.smooth), zero);
-      VF ax = L(B.m0x), ay = L(B.m0y), az = L(B.m0z), bx = L(B.m1x), by = L(B.m1y), bz = L(B.m1z);
-      const VF ia = hn::Div(one, hn::Sqrt(dot3(ax, ay, az, ax, ay, az))), ib = hn::Div(one, hn::Sqrt(dot3(bx, by, bz, bx, by, bz)));
-      const MF flip = hn::Lt(dot3(nx, ny, nz, hn::MulAdd(ax, ia, hn::Mul(bx, ib)), hn::MulAdd(ay, ia, hn::Mul(by, ib)),
-                                  hn::MulAdd(az, ia, hn::Mul(bz, ib))), zero);
-      const VF sa = hn::IfThenElse(flip, hn::Neg(ia), ia), sb = hn::IfThenElse(flip, hn::Neg(ib), ib);
-      ax = hn::Mul(ax, sa), ay = hn::Mul(ay, sa), az = hn::Mul(az, sa);
-      bx = hn::Mul(bx, sb), by = hn::Mul(by, sb), bz = hn::Mul(bz, sb);
-      // turning by more than kStationTurn (0.1 rad): shade Stations, Gouraud at ceil(turn /
-      // kStationTurn) + 1 stations (prepareSegment's stage 6), or none where lighting is deferred;
-      // near the threshold, or near an integer ceil(), the exact path decides
-      const VF cosTurn = dot3(ax, ay, az, bx, by, bz);
-      exact = hn::Or(exact, hn::And(sm, hn::Not(hn::Gt(hn::Abs(hn::Sub(cosTurn, S(kCosStationTurn))), S(1e-5f)))));
-      exact = hn::Or(exact, hn::And(sm, hn::Not(hn::And(finite(ax), finite(bx)))));
-      turning = hn::And(sm, hn::Lt(cosTurn, S(kCosStationTurn)));
-      if (!hn::AllFalse(d, turning)) {
-        if (F.perPixelLighting) {
-          stations = hn::IfThenElse(turning, zero, stations);
-        } else {
-          const VF turn = hn::Acos(d, hn::Min(hn::Max(cosTurn, S(-1.0f)), one));
-          const VF x = hn::Div(turn, S(segment::kStationTurn));
-          exact = hn::Or(exact, hn::And(turning, hn::Lt(hn::Abs(hn::Sub(x, hn::Round(x))), S(1e-3f))));
-          const VF count = hn::Min(hn::Max(hn::Ceil(x), one), S(float(kMaxSegmentPieces)));
-          stations = hn::IfThenElse(turning, count, stations);
-        }
-      }
-      n0x = hn::IfThenElse(sm, ax, nx), n0y = hn::IfThenElse(sm, ay, ny), n0z = hn::IfThenElse(sm, az, nz);
-      n1x = hn::IfThenElse(sm, bx, nx), n1y = hn::IfThenElse(sm, by, ny), n1z = hn::IfThenElse(sm, bz, nz);
-    }
+    if (F.smoothFrame)
+      SegmentSmoothNormals(d, F, B, i, nx, ny, nz, n0x, n0y, n0z, n1x, n1y, n1z, sm, turning, stations, exact);
     // shade Stations: turning, or K > 1 sub-segments with Gouraud colours (at least K intervals:
     // prepareSegment's stage 6)
     MF shaded = turning;
@@ -668,48 +548,13 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
     St(n0x, B.n0x), St(n0y, B.n0y), St(n0z, B.n0z), St(n1x, B.n1x), St(n1y, B.n1y), St(n1z, B.n1z);
     St(hn::Sub(n1x, n0x), B.dnx), St(hn::Sub(n1y, n0y), B.dny), St(hn::Sub(n1z, n0z), B.dnz);
     St(stations, B.stations);
-    // the attributes at u = 0 (setBaseAttributes) and the colour's change to u = 1: Gouraud
-    // between the ends (F.light); the albedo where lighting is deferred, for lanes with stations
-    // (their colours in SegmentExtra) and where prepareSegments lights the ends per lane (!F.light)
-    const VF cr = L(B.cr), cg = L(B.cg), cb = L(B.cb);
-    St(hn::Min(hn::Max(L(B.ca), zero), one), B.aa);
-    VF ar = cr, ag = cg, ab = cb, dcx = zero, dcy = zero, dcz = zero;
-    if (F.light) {
-      VF dif0, spec0, dif1, spec1;
-      Phong(d, F, n0x, n0y, n0z, cx, cy, cz, dif0, spec0);
-      Phong(d, F, n1x, n1y, n1z, qx1, qy1, qz1, dif1, spec1);
-      St(dif0, B.diffuse0), St(spec0, B.specular0), St(dif1, B.diffuse1), St(spec1, B.specular1);
-      const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
-      const VF r0 = Lit(cr, dif0, spec0, lr), g0 = Lit(cg, dif0, spec0, lg), b0 = Lit(cb, dif0, spec0, lb);
-      ar = hn::IfThenElse(shaded, cr, r0), ag = hn::IfThenElse(shaded, cg, g0), ab = hn::IfThenElse(shaded, cb, b0);
-      dcx = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cr, dif1, spec1, lr), r0));
-      dcy = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cg, dif1, spec1, lg), g0));
-      dcz = hn::IfThenElseZero(hn::Not(shaded), hn::Sub(Lit(cb, dif1, spec1, lb), b0));
-    }
-    St(ar, B.ar), St(ag, B.ag), St(ab, B.ab), St(dcx, B.dcx), St(dcy, B.dcy), St(dcz, B.dcz);
-    {  // the index, and the word holding smooth and shade
-      const hn::RebindToUnsigned<DF> du;
-      using VU = hn::Vec<decltype(du)>;
-      hn::StoreU(hn::Add(hn::Set(du, B.first), hn::BitCast(du, hn::LoadU(di, B.lane + i))), du, B.index + i);
-      const VU shade = hn::IfThenElse(hn::RebindMask(du, shaded), hn::Set(du, uint32_t(SegmentShade::Stations)),
-                                      hn::IfThenElse(hn::RebindMask(du, sm), hn::Set(du, uint32_t(SegmentShade::Smooth)),
-                                                     hn::Set(du, uint32_t(F.perPixelLighting ? SegmentShade::Constant
-                                                                                             : SegmentShade::Linear))));
-      const VU smooth = hn::IfThenElseZero(hn::RebindMask(du, sm), hn::Set(du, 1u));
-      const uint32_t keep = F.record.word[kFlagSlot] & ~((0xFFu << kSmoothShift) | (0xFFu << kShadeShift));
-      const VU flags = hn::Or(hn::Set(du, keep), hn::Or(hn::ShiftLeftSame(smooth, kSmoothShift), hn::ShiftLeftSame(shade, kShadeShift)));
-      hn::StoreU(flags, du, B.flags + i);
-      // stationCount (untexturedStations): 0 where lighting is deferred, kInlineStations for two
-      // intervals, else -1 (in SegmentExtra)
-      const auto inl = hn::And(shaded, hn::Or(hn::Eq(stations, zero), hn::Eq(stations, S(float(kInlineStations - 1)))));
-      const VF count = hn::IfThenElse(inl, hn::IfThenElseZero(hn::Gt(stations, zero), S(float(kInlineStations))), S(-1.0f));
-      hn::StoreU(hn::And(hn::BitCast(du, hn::ConvertTo(di, count)), hn::Set(du, 0xFFu)), du, B.stationCount + i);
-    }
+    SegmentEndColours(d, F, B, i, n0x, n0y, n0z, n1x, n1y, n1z, cx, cy, cz, qx1, qy1, qz1, shaded);
+    SegmentFlags(d, F, B, i, shaded, sm, stations);
     const VF status = hn::IfThenElse(empty, S(4.0f), hn::IfThenElseZero(cut, S(3.0f)));
     const VF two = S(2.0f);
     St(hn::IfThenElse(badInput, two, hn::IfThenElse(outside, S(4.0f), hn::IfThenElse(early, two,
         hn::IfThenElse(culled, one, hn::IfThenElse(exact, two, status))))), B.status);
-    // the interior stations of the drawn lanes with two or more intervals (issue 13, i13prep4):
+    // the interior stations of the drawn lanes with two or more intervals (see docs/decisions.md, "Segment prepare"):
     // lane t's jobs (one per station) at [jobFirst[t], jobFirst[t + 1]) of this vector's, lit below
     const MF drawn = hn::AndNot(hn::Or(hn::Or(hn::Or(badInput, outside), hn::Or(early, culled)), hn::Or(exact, empty)), active);
     const VF jobLanes = hn::IfThenElse(drawn, stations, S(-1.0f));
@@ -726,48 +571,7 @@ void SegmentSetup(const SegmentSetupFrame& F, SegmentSetupBatch& B, int n) {
       B.stationJobs += jobs;
     }
   }
-  if (!F.light || B.stationJobs == 0) return;
-  // the jobs lit a vector at a time, each job's inputs taken from the vectors of the lanes it
-  // belongs to by a lane permutation (a batch-wide queue needed ~20 gathers per vector of jobs);
-  // two vectors of jobs interleaved, so that their long dependency chains (three square
-  // roots, three divisions and a gather in a row) overlap
-  int jobAt[kSegmentBatch * kMaxSegmentPieces], jobGroup[kSegmentBatch * kMaxSegmentPieces], jobVectors = 0;
-  for (int i = 0; i < n; i += lanes)
-    for (int q = 0; q < B.groupJobs[i / lanes]; q += lanes) jobAt[jobVectors] = q, jobGroup[jobVectors++] = i;
-  const VF lr = S(F.lightColor[0]), lg = S(F.lightColor[1]), lb = S(F.lightColor[2]);
-  constexpr int W = 2;
-  for (int v = 0; v < jobVectors; v += W) {
-    VF u[W], mx[W], my[W], mz[W], px[W], py[W], pz[W], ar[W], ag[W], ab[W], dif[W], spec[W];
-    for (int w = 0; w < W; ++w) {
-      const int jv = std::min(v + w, jobVectors - 1), i = jobGroup[jv], q = jobAt[jv];
-      // job j's lane: the last whose first job is <= j
-      const VI j = hn::Iota(di, q);
-      VI lane = hn::Set(di, lanes - 1);
-      for (int t = 1; t < lanes; ++t) lane = hn::Add(lane, hn::VecFromMask(di, hn::Gt(hn::Set(di, B.jobFirst[i + t]), j)));
-      const auto idx = hn::IndicesFromVec(d, lane);
-      auto T = [&](const float* a) { return hn::TableLookupLanes(hn::LoadU(d, a + i), idx); };
-      // u = s / S, s = j - first + 1 (as float(s) / float(S) rounds)
-      const VI first = hn::TableLookupLanes(hn::LoadU(di, B.jobFirst + i), hn::IndicesFromVec(di, lane));
-      u[w] = hn::Div(hn::ConvertTo(d, hn::Add(hn::Sub(j, first), hn::Set(di, 1))), T(B.jobIntervals));
-      mx[w] = hn::MulAdd(u[w], T(B.dnx), T(B.n0x)), my[w] = hn::MulAdd(u[w], T(B.dny), T(B.n0y));
-      mz[w] = hn::MulAdd(u[w], T(B.dnz), T(B.n0z));
-      const VF cx = T(B.p0x), cy = T(B.p0y), cz = T(B.p0z);
-      px[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cx), cx), cx), py[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cy), cy), cy);
-      pz[w] = hn::MulAdd(u[w], hn::Sub(T(B.p1cz), cz), cz);
-      ar[w] = T(B.cr), ag[w] = T(B.cg), ab[w] = T(B.cb);
-    }
-    for (int w = 0; w < W; ++w) {
-      const VF im = hn::Div(one, hn::Sqrt(hn::MulAdd(mx[w], mx[w], hn::MulAdd(my[w], my[w], hn::Mul(mz[w], mz[w])))));
-      mx[w] = hn::Mul(mx[w], im), my[w] = hn::Mul(my[w], im), mz[w] = hn::Mul(mz[w], im);
-    }
-    PhongN<W>(d, F, mx, my, mz, px, py, pz, dif, spec);
-    for (int w = 0; w < W && v + w < jobVectors; ++w) {
-      const int at = B.groupBase[jobGroup[v + w] / lanes] + jobAt[v + w];
-      hn::StoreU(Lit(ar[w], dif[w], spec[w], lr), d, B.stationR + at);
-      hn::StoreU(Lit(ag[w], dif[w], spec[w], lg), d, B.stationG + at);
-      hn::StoreU(Lit(ab[w], dif[w], spec[w], lb), d, B.stationB + at);
-    }
-  }
+  if (F.light && B.stationJobs > 0) SegmentStationColours(F, B, n);
 }
 
 // The records' images (lane-major in 16-byte chunks) from the batch arrays and the template.
@@ -800,18 +604,9 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace linesurf::detail {
-HWY_EXPORT(SegmentLoad);
-HWY_EXPORT(SegmentToCamera);
 HWY_EXPORT(SegmentCull);
 HWY_EXPORT(SegmentSetup);
 HWY_EXPORT(SegmentRecords);
-bool segmentLoad(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, const Segment* segments, int n,
-                 const PreparedSegment* out) {
-  return HWY_DYNAMIC_DISPATCH(SegmentLoad)(frame, batch, segments, n, out);
-}
-void segmentToCamera(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
-  HWY_DYNAMIC_DISPATCH(SegmentToCamera)(frame, batch, n);
-}
 int segmentCull(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n) {
   return HWY_DYNAMIC_DISPATCH(SegmentCull)(frame, batch, n);
 }
@@ -823,201 +618,4 @@ void segmentRecords(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, in
 }
 }  // namespace linesurf::detail
 
-namespace linesurf {
-
-detail::SegmentSetupFrame segmentSetupFrame(const FrameContext& frame) {
-  const RenderOptions& opt = frame.opt();
-  detail::SegmentSetupFrame f;
-  f.view = pointSetupFrame(frame);  // the camera, filter and material constants points use
-  f.invF = 1 / f.view.f;
-  f.reach = float(double(opt.cutoffRadius) * opt.reconstructionScale * detail::kMaxStretch);
-  f.smoothFrame = frame.endpointNormals;
-  f.modelColors = frame.modelHasColors;
-  for (int c = 0; c < 4; ++c) f.defaultColor[c] = opt.defaultColor[c];
-  f.alphaOverride = opt.alphaOverride >= 0 ? opt.alphaOverride : -1.0f;
-  f.perPixelLighting = opt.perPixelLighting;
-  f.specularTable = frame.specularPow ? frame.specularPow->data() : nullptr;
-  f.light = !opt.perPixelLighting && (f.specularTable || !(opt.material.specular > 0));
-  for (int c = 0; c < 3; ++c) f.lightColor[c] = opt.light.color[c];
-  f.zPerPrimitive = opt.zThresholdMode == ZThresholdMode::PerPrimitive;
-  f.zScale = opt.zThreshold, f.zFixed = frame.fixedZThreshold;
-  // the common case the SIMD code handles: the ScreenSpace method, untextured, with a prefilter
-  f.simd = opt.segmentMethod == SegmentMethod::ScreenSpace && !frame.texture && opt.prefilterVariance > 0;
-  // the record words every common-case segment shares (as prepareSegment writes them for it);
-  // padding zero
-  alignas(PreparedSegment) unsigned char bytes[sizeof(PreparedSegment)] = {};
-  PreparedSegment* t = new (bytes) PreparedSegment;
-  t->method = SegmentMethod::ScreenSpace;
-  t->fallback = false;
-  t->useSpans = true;
-  t->shade = SegmentShade::Linear;
-  detail::SegmentRaster& k = t->raster;
-  k.R2 = frame.cutoffQ;
-  k.nearD = f.view.nearD, k.farD = f.view.farD;
-  k.clipDepth = false;
-  k.pieceCount = 1;
-  k.pieces = nullptr;
-  k.pieceInvLength = 0, k.pieceMaxReach = 0;
-  t->attr[Z3Tile::kW] = 1.0f;
-  std::memcpy(f.record.word, bytes + detail::kRecordBegin, sizeof(f.record.word));
-  t->~PreparedSegment();
-  return f;
-}
-
-namespace {
-
-// The colours of a turning lane's stations + 1 lighting stations (prepareSegment's stage 6):
-// the ends from the batch's Phong factors, the stations between them as segmentSetup lit them
-// (F.light); else every station by FrameContext::shade.
-void stationColours(const detail::SegmentSetupBatch& b, int j, const FrameContext& frame,
-                    const detail::SegmentSetupFrame& F, int stations, float* colour) {
-  const int n = stations + 1;
-  if (F.light) {
-    for (int c = 0; c < 3; ++c) {
-      const float albedo = c == 0 ? b.cr[j] : c == 1 ? b.cg[j] : b.cb[j];
-      colour[c * n] = (albedo * b.diffuse0[j] + b.specular0[j]) * F.lightColor[c];
-      colour[c * n + stations] = (albedo * b.diffuse1[j] + b.specular1[j]) * F.lightColor[c];
-    }
-    const int at = b.stationJob[j] - 1;
-    for (int s = 1; s < stations; ++s)
-      colour[s] = b.stationR[at + s], colour[n + s] = b.stationG[at + s], colour[2 * n + s] = b.stationB[at + s];
-    return;
-  }
-  const Vec3f p0(b.p0x[j], b.p0y[j], b.p0z[j]), p1(b.p1cx[j], b.p1cy[j], b.p1cz[j]);
-  const Vec3f n0(b.n0x[j], b.n0y[j], b.n0z[j]), dn(b.dnx[j], b.dny[j], b.dnz[j]), albedo(b.cr[j], b.cg[j], b.cb[j]);
-  for (int s = 0; s <= stations; ++s) {
-    const float u = float(s) / float(stations);
-    const Vec3f m = n0 + u * dn;
-    const Vec3f c = frame.shade(albedo, m / m.norm(), p0 + u * (p1 - p0));
-    for (int ch = 0; ch < 3; ++ch) colour[ch * n + s] = c[ch];
-  }
-}
-
-}  // namespace
-
-size_t prepareSegments(const Segment* segments, uint32_t first, size_t count, const FrameContext& frame,
-                       const detail::SegmentSetupFrame& F, PreparedSegment* out, PrimitiveStatus* status) {
-  if (!F.simd) {
-    for (size_t j = 0; j < count; ++j) status[j] = prepareSegment(segments[first + j], uint32_t(first + j), frame, out[j]);
-    return count;
-  }
-  size_t scalar = 0;
-  detail::SegmentSetupBatch b;
-  for (size_t base = 0; base < count; base += detail::kSegmentBatch) {
-    const int n = int(std::min<size_t>(detail::kSegmentBatch, count - base));
-    const bool loaded = detail::segmentLoad(F, b, segments + first + base, n, out + base);
-    for (int j = 0; j < n && !loaded; ++j) {  // AoS -> SoA
-      const Segment& s = segments[first + base + size_t(j)];
-      // the input a batch ahead, every line it spans (a hint: an address past the array is harmless)
-      const uintptr_t next = reinterpret_cast<uintptr_t>(&s) + detail::kSegmentBatch * sizeof(Segment);
-      __builtin_prefetch(reinterpret_cast<const void*>(next));
-      __builtin_prefetch(reinterpret_cast<const void*>(next + 64));
-      __builtin_prefetch(reinterpret_cast<const void*>(next + sizeof(Segment) - 1));
-      b.p0x[j] = s.p0.x(), b.p0y[j] = s.p0.y(), b.p0z[j] = s.p0.z();
-      b.p1x[j] = s.p1.x(), b.p1y[j] = s.p1.y(), b.p1z[j] = s.p1.z();
-      b.wx[j] = s.normal.x(), b.wy[j] = s.normal.y(), b.wz[j] = s.normal.z();
-      b.radius[j] = s.radius;
-      if (F.smoothFrame) {
-        b.m0x[j] = s.normal0.x(), b.m0y[j] = s.normal0.y(), b.m0z[j] = s.normal0.z();
-        b.m1x[j] = s.normal1.x(), b.m1y[j] = s.normal1.y(), b.m1z[j] = s.normal1.z();
-      }
-      // the lane's record slot, all its lines, into L2 unless the plane clearly faces away (issue
-      // 13, i13segprep: the records stream through memory once per frame; fetched a few lanes
-      // before their writing, the writes stalled; from here the batch's set-up passes meanwhile)
-      const Vec3f toEye = Vec3f(F.view.eye[0], F.view.eye[1], F.view.eye[2]) - s.p0;
-      if (!(F.view.backfaceCulling && s.normal.dot(toEye) < 0)) {
-        const char* slot = reinterpret_cast<const char*>(out + base + size_t(j));
-        for (size_t o = 0; o < sizeof(PreparedSegment); o += 64) __builtin_prefetch(slot + o, 0, 2);
-      }
-      const Color col = frame.primitiveColor(s.color);
-      b.cr[j] = col.x(), b.cg[j] = col.y(), b.cb[j] = col.z(), b.ca[j] = col.w();
-    }
-    for (int j = n; j < detail::kSegmentBatch && j < ((n + 15) & ~15); ++j) {  // harmless padding lanes
-      b.p0x[j] = b.p0y[j] = b.p0z[j] = b.p1y[j] = b.p1z[j] = b.wx[j] = b.wy[j] = 0;
-      b.p1x[j] = b.wz[j] = b.radius[j] = 1;
-      b.smooth[j] = 0;
-      b.m0x[j] = b.m0y[j] = b.m1x[j] = b.m1y[j] = 0;
-      b.m0z[j] = b.m1z[j] = 1;
-      b.cr[j] = b.cg[j] = b.cb[j] = b.ca[j] = 0;
-    }
-    b.first = uint32_t(first + base);
-    detail::segmentToCamera(F, b, n);
-    const int m = detail::segmentCull(F, b, n);  // lanes [0, m): b.lane[k] of [0, n), not decided yet
-    // the lanes stage 1 decided (the others' bytes are written again below)
-    std::memcpy(status + base, b.decidedStatus, size_t(n));
-    for (uint64_t bits = b.exactLanes; bits; bits &= bits - 1) {
-      const size_t i = base + size_t(std::countr_zero(bits));
-      const uint32_t index = uint32_t(first + i);
-      status[i] = prepareSegment(segments[index], index, frame, out[i]);
-      ++scalar;
-    }
-    if (m == 0) continue;
-    // the SegmentExtras kept in the survivors' slots (turning lanes whose stations do not fit the
-    // record, and lanes with sub-segments, keep theirs from frame to frame: which lanes these are
-    // does not depend on the view), fetched before the set-up: they missed the cache in the
-    // writes below (issue 13, i13prep4)
-    for (int k = 0; k < m; ++k)
-      if (const SegmentExtra* x = out[base + size_t(b.lane[k])].extra.get()) {
-        const char* c = reinterpret_cast<const char*>(&x->colour);
-        __builtin_prefetch(x, 1);
-        __builtin_prefetch(c, 1);
-        __builtin_prefetch(c + sizeof(x->colour) + 2 * sizeof(Vec2f) + 2 * sizeof(int), 1);
-      }
-    b.stationJobs = 0;
-    detail::segmentSetup(F, b, m);
-    detail::segmentRecords(F, b, m);
-    for (int k = 0; k < m; ++k) {
-      const size_t i = base + size_t(b.lane[k]);
-      const uint32_t index = uint32_t(first + i);
-      switch (int(b.status[k])) {
-        case 0: status[i] = PrimitiveStatus::Drawn; break;
-        case 1: status[i] = PrimitiveStatus::Culled; continue;
-        case 3: status[i] = PrimitiveStatus::Clipped; break;
-        case 4: status[i] = PrimitiveStatus::Outside; continue;
-        default:
-          status[i] = prepareSegment(segments[index], index, frame, out[i]);
-          ++scalar;
-          continue;
-      }
-      // the lane's record image (all but `extra`, which the common case neither reads nor resets)
-      PreparedSegment& rec = out[i];
-      char* dst = reinterpret_cast<char*>(&rec);
-      std::memcpy(dst + 8, b.rec[0] + 4 * k + 2, 8);
-      for (int c = 1; c < detail::kRecordChunks; ++c) std::memcpy(dst + 16 * c, b.rec[c] + 4 * k, 16);
-      if (const int K = int(b.pieceCount[k]); K > 1) {  // its sub-segments in the slot's SegmentExtra
-        SegmentExtra& x = extraOf(rec);
-        x.pieces.resize(size_t(K));
-        for (int p = 0; p < K; ++p) {
-          auto f = [&](int field) { return b.piece[field][p][k]; };
-          SegmentPiece& q = x.pieces[size_t(p)];
-          q.a0 = f(detail::kPieceA0), q.a1 = f(detail::kPieceA1);
-          q.m00 = f(detail::kPieceM00), q.m01 = f(detail::kPieceM01), q.m11 = f(detail::kPieceM11);
-          q.scale0 = f(detail::kPieceScale0), q.scale1 = f(detail::kPieceScale1), q.reach = f(detail::kPieceReach);
-          q.skew = f(detail::kPieceSkew), q.across = f(detail::kPieceAcross), q.invM00 = f(detail::kPieceInvM00);
-          q.k = f(detail::kPieceK), q.erfScale = f(detail::kPieceErfScale), q.slope = f(detail::kPieceSlope);
-        }
-        x.pieceInvLength = b.pieceInvLength[k], x.pieceMaxReach = b.pieceMaxReach[k];
-        detail::SegmentRaster& r = rec.raster;
-        r.pieceCount = K, r.pieces = x.pieces.data();
-        r.pieceInvLength = x.pieceInvLength, r.pieceMaxReach = x.pieceMaxReach;
-      }
-      const int stations = int(b.stations[k]);
-      if (stations >= 0) {  // turning: shade Stations (in the record or SegmentExtra), lit at the stations
-        float* colour = untexturedStations(rec, segments[index], stations);
-        if (stations > 0) stationColours(b, k, frame, F, stations, colour);
-      } else if (!F.light && !F.perPixelLighting) {  // Gouraud between the ends, lit per lane
-        const Vec3f albedo(b.cr[k], b.cg[k], b.cb[k]);
-        const Vec3f n1 = rec.n0 + rec.dn;
-        const Vec3f k0 = frame.shade(albedo, rec.n0, Vec3f(b.p0x[k], b.p0y[k], b.p0z[k]));
-        const Vec3f k1 = frame.shade(albedo, n1, Vec3f(b.p1cx[k], b.p1cy[k], b.p1cz[k]));
-        float* a = rec.attr;
-        a[Z3Tile::kR] = k0.x(), a[Z3Tile::kG] = k0.y(), a[Z3Tile::kB] = k0.z();
-        rec.dc = k1 - k0;
-      }
-    }
-  }
-  return scalar;
-}
-
-}  // namespace linesurf
 #endif  // HWY_ONCE

@@ -1,5 +1,5 @@
 #pragma once
-/// The prepare stage of segment splats in batches (beyond the thesis, issue 13): the common case
+/// The prepare stage of segment splats in batches (beyond the thesis; see docs/decisions.md, "Segment prepare"): the common case
 /// of prepareSegment (segment_splat.h: ScreenSpace, untextured, up to kBatchPieces sub-segments,
 /// not depth-clipped) in SIMD over a batch of segments, in float
 /// (segment_setup.cpp, Highway runtime dispatch). Every lane the SIMD code cannot decide safely
@@ -10,13 +10,14 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "point_setup.h"
 #include "segment_splat.h"
 
 namespace linesurf {
 
 namespace detail {
 
-/// A PreparedSegment as the batches write it (issue 13, i13segprep): one image per lane of the
+/// A PreparedSegment as the batches write it (the records stream through memory once per frame): one image per lane of the
 /// record's bytes [0, 16 kRecordChunks) in 16-byte chunks (aligned: no store splits a cache line),
 /// all written but `extra` (its first 8 bytes: neither read nor written in the common case).
 inline constexpr size_t kRecordBegin = 0;
@@ -34,8 +35,8 @@ struct SegmentRecordTemplate {
 };
 
 inline constexpr int kSegmentBatch = 64;
-/// The most ScreenSpace sub-segments a lane of the batches takes (issue 13, i13prep3: hybrid
-/// models' long segments); more go to the exact path.
+/// The most ScreenSpace sub-segments a lane of the batches takes (hybrid models' long
+/// segments); more go to the exact path.
 inline constexpr int kBatchPieces = 8;
 /// The fields of a sub-segment (SegmentPiece) as the batches write them, one array each.
 enum PieceField { kPieceA0, kPieceA1, kPieceM00, kPieceM01, kPieceM11, kPieceScale0, kPieceScale1, kPieceReach,
@@ -58,9 +59,8 @@ struct SegmentSetupFrame {
   bool light = false, perPixelLighting = false;
   const float* specularTable = nullptr;
   float lightColor[3] = {1, 1, 1};  ///< RenderOptions::light.color
-  /// FrameContext::zThreshold: zScale * depth extent (PerPrimitive), else zFixed
-  bool zPerPrimitive = true;
-  float zScale = 0, zFixed = 0;
+  /// FrameContext::zThreshold's rule (splat_rules.h), applied here to vectors of depth extents
+  ZThresholdRule z;
   SegmentRecordTemplate record;
 };
 
@@ -81,7 +81,7 @@ struct SegmentSetupBatch {
   uint32_t first = 0;  ///< the index of lane 0's segment before segmentCull
   /// segmentCull: the status of each lane [0, n) stage 1 decides as PrimitiveStatus bytes
   /// (Culled, Outside; Drawn for the others, which the exact path or segmentSetup decide), the
-  /// lanes it leaves to the exact path as bits (issue 13, i13prep4: no branch per lane); it moves
+  /// lanes it leaves to the exact path as bits (no branch per lane); it moves
   /// the others to lanes [0, m), lane[k] the original lane of lane k
   alignas(64) uint8_t decidedStatus[kSegmentBatch];
   uint64_t exactLanes = 0;
@@ -97,7 +97,7 @@ struct SegmentSetupBatch {
   alignas(64) float skew[kSegmentBatch], across[kSegmentBatch], invM00[kSegmentBatch], k[kSegmentBatch],
       erfScale[kSegmentBatch], scale0[kSegmentBatch], slope[kSegmentBatch];
   alignas(64) float qx[4][kSegmentBatch], qy[4][kSegmentBatch];      ///< projected footprint box
-  /// ScreenSpace sub-segments (prepareSegment's stage 2, issue 13, i13prep3): K per lane (1: the
+  /// ScreenSpace sub-segments (prepareSegment's stage 2): K per lane (1: the
   /// piece above only), K / length, the largest reach, and for K > 1 piece p's field f at
   /// piece[f][p][lane] (piece 0 is also the one above)
   alignas(64) float pieceCount[kSegmentBatch], pieceInvLength[kSegmentBatch], pieceMaxReach[kSegmentBatch];
@@ -123,7 +123,7 @@ struct SegmentSetupBatch {
   /// Gouraud intervals of a turning smooth lane (shade Stations): > 0, or 0 where lighting is
   /// deferred; -1 for a lane that does not turn
   alignas(64) float stations[kSegmentBatch];
-  /// The lit colours of the interior stations (issue 13, i13prep4; frame.light): lane k drawn with
+  /// The lit colours of the interior stations (frame.light): lane k drawn with
   /// S = stations[k] >= 2 has station s = 1 .. S - 1 (the shading normal normalize(n0 + u dn) and
   /// the point p0 + u (p1 - p0) at u = s / S, lit as FrameContext::shade with the batch's Phong)
   /// at stationJob[k] + s - 1 of stationR, stationG, stationB; stationJobs of them in all
@@ -150,7 +150,7 @@ bool segmentLoad(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, const
 /// flags and the plane normals (runtime dispatch).
 void segmentToCamera(const SegmentSetupFrame& frame, SegmentSetupBatch& batch, int n);
 
-/// Stage 1 (culling) over lanes [0, n) of camera-space input (issue 13, i13prep2): the lanes it
+/// Stage 1 (culling) over lanes [0, n) of camera-space input (see docs/decisions.md, "Segment prepare"): the lanes it
 /// decides (culled, outside, or for the exact path) get their status in `decidedStatus` and
 /// `exactLanes`; the others are compacted to lanes [0, m) (`lane`: their original lanes), m
 /// returned, so that segmentSetup runs on full vectors of them (runtime dispatch).

@@ -1,20 +1,70 @@
 #pragma once
-/// Object-space EWA segment splats, thesis §5: the pipeline's two stages for line segments.
-/// The method (the filter, its three evaluations, shading, the contract) is described in the
-/// public header linesurf/render/segment_splat.h; this header is internal to the pipeline
-/// (renderer.cpp) and its tests. The evaluations' own state lives in segment_methods.h.
+/// Object-space EWA splatting of line segments, thesis §5 (docs/segment-splatting.md).
 ///
+/// A segment p0-p1 of radius r is the integral of point resampling filters along it (§5.1.1),
+/// normalised as the row of points it replaces. Every point of this project carries radius =
+/// local sample spacing, so a segment of radius r stands for points at spacing h = r along it:
+///
+///     w(x) = (1/h) * integral_0^L  exp(-q_t(x)/2) / sqrt(det M(t))  dt,    h = r,
+///
+/// with M(t) = sigma_r^2 I + V_h J(t)^-1 J(t)^-T the object-space resampling covariance of the
+/// point p(t) (Jacobian J(t) recomputed along the segment, §5.1.2), q_t the Mahalanobis distance
+/// in M(t) of the pixel's ray/plane intersection from p(t), each point kernel cut off at
+/// q <= cutoffRadius^2 exactly as point splats are (point_splat.h: weight exp(-q/2)/(r0 r1)).
+/// A row of points at spacing h and a segment through them therefore give the same weight
+/// profile, and points and segments blend into one surface through Z^3.
+///
+/// Three evaluations (RenderOptions::segmentMethod):
+///  - Approx (§5.2.3, the thesis): endpoint resampling ellipses M_k = Rot(theta) Lambda^2
+///    Rot(theta)^T, their outer common tangents (points 1-4), the axis line 9-10 meeting the
+///    ellipses at 5-8, tangents there (11-18); 10 quadrilaterals (long case) or 8 (short case,
+///    split by the line through the ellipses' intersection points), mapped with the weight
+///    textures T1 (endpoint portions) and T2 (middle) of §5.2.3.2 and the scaling factor
+///    interpolated between points 9 and 10 (§5.2.3.3, Figure 19). Constructions that fail
+///    (nested, tiny or wildly eccentric ellipses) fall back to ScreenSpace and are counted
+///    (PreparedSegment::fallback).
+///  - ScreenSpace (after §9.3, the default): per pixel, the integral along each of up to
+///    kMaxPieces sub-segments in closed form (erf), M constant and the weight scale linear per
+///    sub-segment; sub-segments where M changes along the segment.
+///  - Reference: per pixel, numerical quadrature over t of the exact integrand with M(t)
+///    recomputed at every node (midpoint rule, node spacing sigma_r / 32: relative weight error
+///    below 2e-3). Slow; for measuring the other two.
+///
+/// Contract with the pipeline (splat_context.h: the two stages):
+///  - prepareSegment is called once per segment per frame, in parallel, with the segment's
+///    index in model.segments. It fills out.bounds (screen pixels, clamped to the viewport,
+///    empty when nothing is drawn) and returns the PrimitiveStatus that the pipeline counts.
+///    Zero length, zero/NaN radius or non-finite input: Degenerate (a zero-length segment has
+///    zero weight). A zero normal is replaced by the strip facing the viewer.
+///  - rasterizeSegment is called for every screen tile that out.bounds touches, in segment index
+///    order within the tile (after the tile's points); it writes only through
+///    ctx.tile.insert(x, y, fragment) for pixels inside ctx.rect. Fragment.zThreshold via
+///    frame.zThreshold(depth extent), interpolated along the segment in PerPrimitive mode.
+///  - Texture (§5.2.4): uv interpolated between the endpoints and held constant beyond them
+///    (the thesis assigns the endpoint's uv to points 1, 4, 5, 9, 11, 18); sampled per pixel.
+///  - Lighting: Phong at stations along the segment interpolated along it (Gouraud, §6.2.2), or
+///    per pixel with RenderOptions::perPixelLighting (deferred: the fragments carry albedo and
+///    normal, lit once per pixel and Z^3 layer at the resolve, renderer.cpp).
+///  - Smooth line models (beyond the thesis): when the model has Attributes::endpointNormals
+///    (FrameContext::endpointNormals) and both of a segment's normal0/normal1 are usable, the
+///    shading normal is interpolated between them along the segment (normalize(lerp(n0, n1, u)),
+///    u the along-axis parameter); the strip's plane (weights, depth, culling) still comes from
+///    Segment::normal (or from n0 + n1 when that is zero).
+///
+/// The pipeline's two stages for line segments, internal to src/render (renderer.cpp):
 /// prepare (one stage per function in segment_splat.cpp):
 ///  1. stripFrame: culling, model-view transform, the strip's axes (along, across, normal);
-///  2. footprint: the resampling covariance along the segment (§5.1.2) in sub-segments, and
-///     the footprint box in plane coordinates;
-///  3. the method's own data (Reference nodes, Approx quadrilaterals; SegmentExtra);
+///  2. footprint: the resampling covariance along the segment (§5.1.2, segment_filter.h) in
+///     sub-segments, and the footprint box in plane coordinates;
+///  3. the method's own data (Reference nodes, Approx quadrilaterals; SegmentExtra,
+///     segment_extra.h);
 ///  4. screenBounds: frustum test, near/far clipping, pixel bounds, the projected box;
-///  5. the per-pixel constants of the SIMD rows (detail::SegmentRaster);
+///  5. the per-pixel constants of the SIMD rows (detail::SegmentRaster, segment_rows.h);
 ///  6. shading: Gouraud colours, smooth normals.
 /// The common case (ScreenSpace, one sub-segment, untextured, colour linear along the segment)
 /// allocates nothing and is rasterised by the SIMD rows; everything else keeps its state in
-/// PreparedSegment::extra (allocated once per record slot, reused across frames).
+/// PreparedSegment::extra (allocated once per record slot, reused across frames). The common case
+/// is prepared in SIMD batches too: segment_setup.h.
 #include <cmath>
 #include <cstddef>
 #include <algorithm>
@@ -22,11 +72,12 @@
 #include <memory>
 #include <vector>
 
-#include "detail/splat_rows.h"
-#include "point_splat.h"
 #include "linesurf/core/model.h"
-#include "linesurf/render/segment_splat.h"
-#include "linesurf/render/splat_context.h"
+#include "point_splat.h"
+#include "segment_extra.h"
+#include "segment_rows.h"
+#include "segment_spans.h"
+#include "splat_context.h"
 
 namespace linesurf {
 
@@ -41,79 +92,6 @@ inline constexpr double kShortSegment = 0.01;
 inline constexpr float kStationTurn = 0.1f;
 }  // namespace segment
 
-/// One sub-segment of the ScreenSpace method (detail/splat_rows.h: the SIMD rows evaluate them).
-using SegmentPiece = detail::SegmentPiece;
-
-/// One node of the Reference quadrature.
-struct SegmentNode {
-  float m00 = 1, m01 = 0, m11 = 1;  ///< M(t)^-1 in (a, b)
-  float scale = 0;                  ///< dt / (h sqrt(det M(t)))
-};
-
-/// One weight-texture-mapped quadrilateral of the Approx method (§5.2.3.2).
-struct SegmentQuad {
-  Vec2f corner[4];  ///< plane coordinates (a, b); bilinear order 00, 10, 11, 01 (a cycle)
-  Vec2f tex[4];     ///< weight-texture coordinates (x inward from the endpoint, y across)
-  float scale[4];   ///< weight scaling factor at the corners (Figure 19)
-  bool middle = false;   ///< T2 (middle portion) instead of T1 (endpoint portion)
-  float tail = 1e30f;    ///< texture length of the segment: T1(x) - T1(x - tail) (short case)
-  Vec2f lo = Vec2f::Zero(), hi = Vec2f::Zero();  ///< bounding box of the corners
-};
-
-namespace segment {
-struct WeightTextures;  // §5.2.3.2 tables, segment_methods.cpp
-}
-
-/// What the common case does not need, allocated only when a segment needs it.
-struct SegmentExtra {
-  /// ScreenSpace with K > 1 sub-segments, evenly spaced (piece k covers [k, k+1] /
-  /// pieceInvLength); a pixel at a only meets the pieces within pieceMaxReach (the largest reach).
-  std::vector<SegmentPiece> pieces;
-  float pieceInvLength = 0, pieceMaxReach = 0;
-  /// Reference: nodes at spacing nodeStep starting at nodeStep / 2.
-  std::vector<SegmentNode> nodes;
-  float nodeStep = 0, nodeReach = 0;
-  /// Approx: 10 quads (long case) or 8 (short).
-  std::vector<SegmentQuad> quads;
-  bool longCase = true;
-  const segment::WeightTextures* textures = nullptr;
-  /// Shading at stations evenly spaced over [0, length] (Gouraud, §6.2.2): the lit colour when
-  /// untextured; textured, colour = albedo * diffuse + specular with the albedo from the
-  /// texture (§5.2.4: uv interpolated between the endpoints).
-  std::vector<Vec3f> diffuse, specular;
-  /// untextured: the lit colour of station k, channel c at [c * stations + k], then
-  /// detail::kMaxLanes floats of padding (the SIMD rows load whole vectors of a channel)
-  std::vector<float> colour;
-  int stations = 0;
-  bool textured = false;
-  Vec2f uv0 = Vec2f::Zero(), uv1 = Vec2f::Zero();
-
-  /// Back to a default-constructed SegmentExtra's state, keeping the vectors' capacity (the
-  /// renderer's record slots keep their SegmentExtra from frame to frame: issue 13, i13hot).
-  /// Every member above must be reset here.
-  void reset() {
-    pieces.clear();
-    pieceInvLength = pieceMaxReach = 0;
-    nodes.clear();
-    nodeStep = nodeReach = 0;
-    quads.clear();
-    longCase = true;
-    textures = nullptr;
-    diffuse.clear();
-    specular.clear();
-    colour.clear();
-    stations = 0;
-    textured = false;
-    uv0 = uv1 = Vec2f::Zero();
-  }
-};
-
-/// Resets a record slot's SegmentExtra (if it has one) for the next segment, keeping the
-/// allocation: only a segment that needs it reads it (method, pieceCount, shade say which).
-inline void resetExtra(std::unique_ptr<SegmentExtra>& extra) {
-  if (extra) extra->reset();
-}
-
 /// How a segment's fragments get their blended attributes (Z3Tile::Attr) from the
 /// along-axis parameter u in [0, 1].
 enum class SegmentShade : uint8_t {
@@ -126,7 +104,7 @@ enum class SegmentShade : uint8_t {
 /// The most lighting stations a record holds itself (PreparedSegment::stationColour).
 inline constexpr int kInlineStations = 3;
 
-/// The record is aligned to cache lines and ordered hot first (issue 13, i13hot): what the rows of
+/// The record is aligned to cache lines and ordered hot first (see docs/decisions.md, "Segment records"): what the rows of
 /// the common case read (extra, bounds, flags, raster, attr, dc, n0, dn) fills its first
 /// kSegmentHotBytes; screenQuad (only the box walk reads it) comes last. Stage 3 prefetches only
 /// the hot lines (4 instead of the 5-6 a 280-byte unaligned record spans).
@@ -144,7 +122,7 @@ struct alignas(64) PreparedSegment {
   bool useSpans = false; ///< screenQuad holds the projected footprint box (not depth-clipped)
   bool smooth = false;   ///< shading normals interpolated between the endpoints
   SegmentShade shade = SegmentShade::Constant;
-  /// shade Stations, untextured (issue 13, i13prep2): how many stations' colours stationColour
+  /// shade Stations, untextured: how many stations' colours stationColour
   /// holds, 0 for none (lighting deferred); -1: the stations are in extra
   int8_t stationCount = -1;
   /// The strip's plane, footprint box, first sub-segment and z thresholds as per-pixel
@@ -224,7 +202,7 @@ inline void setBaseAttributes(PreparedSegment& out, const Color& col, const Vec3
   out.dc = Vec3f::Zero();
 }
 
-/// Prepare stage for one segment (see linesurf/render/segment_splat.h and splat_context.h): the
+/// Prepare stage for one segment (see the head of this file and splat_context.h): the
 /// exact path, in double. The renderer prepares segments in batches (segment_setup.h: the common
 /// case in SIMD, float), which hand every segment they cannot decide safely to this function.
 PrimitiveStatus prepareSegment(const Segment& segment, uint32_t index, const FrameContext& frame,
@@ -239,21 +217,6 @@ void rasterizeSegment(const PreparedSegment& segment, const SplatContext& ctx);
 inline constexpr int kRasterBatch = 16;
 void rasterizeSegments(const PreparedSegment* const* segments, int n, const SplatContext& ctx);
 
-/// Segment level of detail (beyond the thesis, issue 13; cf. the §5.2.3 approximation). A one-piece
-/// ScreenSpace segment's weight is its kernel (covariance M in the strip's plane coordinates (a, b))
-/// integrated along it with the linear scale w(tau) = scale0 + slope tau, tau in [0, l]: a box (l)
-/// convolved with a Gaussian. When l is short against the kernel (lambda = l sqrt((M^-1)_aa) <=
-/// RenderOptions::segmentLod) that is nearly the one Gaussian of the same mass, mean a_m and
-/// covariance Sigma = M + var e_a e_a^T (var, a_m: the moments of w over [0, l]): an elliptical
-/// object-space point splat in the strip's plane, rasterised by the point rows (4-5x cheaper per
-/// fragment and per tile). Its plane coordinates (s, t) = L^T ((a, b) - (a_m, 0)), Sigma^-1 = L L^T
-/// (Sherman-Morrison: L^T = [[l00, l00 skew], [0, sqrt(across)]], l00^2 = m00 / (1 + var m00)),
-/// weightScale = w's mass / sqrt(1 + var m00), the frame's cutoff; z threshold the mean of the
-/// ends', colour attr + (a_m + a) / l dc (Gouraud when the splat is wide, as points are), normal
-/// the normalised mean of the endpoint normals. Writes slot 0 of `out` and returns true when the
-/// segment qualifies (drawn, ScreenSpace without fallback, one piece, shade Constant / Linear /
-/// Smooth, not depth-clipped, lambda <= maxLambda, finite constants); otherwise writes nothing.
-bool segmentLodPoint(const PreparedSegment& segment, const FrameContext& frame, float maxLambda, const PointSlots& out);
 
 /// The row spans rasterizeSegment walks for the segment over `rect` (a tile): with tight, those of
 /// the polygon around the cutoff region it walks (ScreenSpace), else those of the footprint box.

@@ -1,44 +1,11 @@
-// Per-frame constants, option validation and Phong lighting of the pipeline (thesis §6.2.2).
-#include "linesurf/render/splat_context.h"
+// Per-frame constants and Phong lighting of the pipeline (thesis §6.2.2).
+#include "splat_context.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "linesurf/core/error.h"
-#include "linesurf/core/options.h"
 
 namespace linesurf {
-
-// The ranges are those of the option table (pipeline/option_tables.h); tests/options checks the
-// two agree for every field with hostile values.
-void validate(const RenderOptions& o) {
-  requireRange("prefilterVariance", o.prefilterVariance, 0, 100, "pixels^2");
-  requireRange("cutoffRadius", o.cutoffRadius, 1, 5, "standard deviations");
-  // Below 0.01 the reconstruction kernel is cut by the stretch limit in every view: nothing is drawn.
-  requireRange("reconstructionScale", o.reconstructionScale, 0.01, 4);
-  requireRange("zThreshold", o.zThreshold, 0, 1e6);
-  requireRange("layers", o.layers, 1, RenderOptions::kMaxLayers);
-  const Material& m = o.material;
-  requireRange("ambient", m.ambient, 0, 1);
-  requireRange("diffuse", m.diffuse, 0, 1);
-  requireRange("specular", m.specular, 0, 1);
-  requireRange("shininess", m.shininess, 1e-3, 1e4);
-  if (!o.light.direction.allFinite() || o.light.direction.norm() == 0)
-    throwBadOption("light", "must be a finite non-zero vector");
-  if (!o.light.color.allFinite() || (o.light.color.array() < 0).any())
-    throwBadOption("lightColor", "must be finite and >= 0");
-  if (!o.defaultColor.allFinite() || (o.defaultColor.array() < 0).any() || (o.defaultColor.array() > 1).any())
-    throwBadOption("defaultColor", "channels must be in [0, 1]");
-  if (!o.background.allFinite() || (o.background.array() < 0).any() || (o.background.array() > 1).any())
-    throwBadOption("background", "channels must be in [0, 1]");
-  if (o.alphaOverride != -1.0f && !(o.alphaOverride >= 0 && o.alphaOverride <= 1))
-    throwBadOption("alphaOverride", "must be in [0, 1] (or -1, the default: the model's alpha), got " + numberText(o.alphaOverride));
-  requireRange("segmentLod", o.segmentLod, 0, 4, "kernel standard deviations (0 = every segment exact)");
-  requireRange("coverageGain", o.coverageGain, 0, 100);
-  requireRange("tailCoverage", o.tailCoverage, 0, 100);
-  requireRange("coverageReach", o.coverageReach, 0, 16, "pixels (0 = everywhere)");
-  requireRange("tileSize", o.tileSize, 8, 1024, "pixels");
-}
 
 FrameContext FrameContext::make(const Camera& camera, const RenderOptions& options, const BoundingSphere& sphere,
                                 bool modelHasColors, const Image* texture) {
@@ -50,7 +17,7 @@ FrameContext FrameContext::make(const Camera& camera, const RenderOptions& optio
   f.modelHasColors = modelHasColors;
   Vec3f l = options.light.direction.normalized();
   f.lightDirCamera = options.light.headlight ? l : Vec3f((camera.rotation() * l).normalized());
-  f.fixedZThreshold = options.zThreshold * (sphere.radius > 0 ? sphere.radius : 1.0f);
+  f.zRule = detail::ZThresholdRule::make(options, sphere.radius);
   f.cutoffQ = options.cutoffRadius * options.cutoffRadius;
   f.frustum = camera.frustumPlanes();
   const Material& m = options.material;

@@ -1,5 +1,5 @@
 // Modified Z^3 visibility and blending, thesis §6.2.3.1 (see z3_buffer.h and docs/decisions.md).
-#include "linesurf/render/z3_buffer.h"
+#include "z3_buffer.h"
 
 #include <algorithm>
 #include <cmath>

@@ -15,7 +15,7 @@
 #include "linesurf/pipeline/option_tables.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/web_assets.h"
-#include "render/detail/splat_math.h"  // kMaxStretch, kMinFacing: the page's shaders must cut and cull alike
+#include "render/splat_rules.h"  // kMaxStretch, kMinFacing: the page's shaders must cut and cull alike
 
 namespace linesurf {
 
@@ -96,7 +96,8 @@ json viewerDefaults(const ViewerPageOptions& o) {
   ViewOptions view = o.view;
   RenderOptions render = o.render;
   // The page always blends by each primitive's own depth extent (PerPrimitive).
-  if (render.zThresholdMode != ZThresholdMode::PerPrimitive) render.zThreshold = defaultZThreshold(ZThresholdMode::PerPrimitive);
+  if (render.zThresholdMode != ZThresholdMode::PerPrimitive || !render.zThreshold)
+    render.zThreshold = defaultZThreshold(ZThresholdMode::PerPrimitive);
   describeOptions(view, d);
   describeOptions(render, d);
   return d.out;

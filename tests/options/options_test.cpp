@@ -87,7 +87,9 @@ TEST(OptionValidation, OutOfRangeIsRejectedNotClamped) {
 }
 
 TEST(OptionValidation, ZThresholdDefaultDependsOnTheMode) {
-  EXPECT_EQ(defaultZThreshold(ZThresholdMode::PerPrimitive), RenderOptions{}.zThreshold);
+  EXPECT_FALSE(RenderOptions{}.zThreshold.has_value());  // the mode's default
+  EXPECT_EQ(zThresholdOf(RenderOptions{}), defaultZThreshold(ZThresholdMode::PerPrimitive));
+  EXPECT_EQ(defaultZThreshold(ZThresholdMode::PerPrimitive), 0.5f);
   EXPECT_EQ(defaultZThreshold(ZThresholdMode::Fixed), 0.01f);
 }
 

@@ -11,7 +11,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/shapes.h"
 #include "linesurf/render/renderer.h"
-#include "linesurf/render/z3_buffer.h"
+#include "render/z3_buffer.h"
 #include "test_util.h"
 
 namespace linesurf {

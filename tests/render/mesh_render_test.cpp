@@ -9,7 +9,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/shapes.h"
-#include "linesurf/geometry/mesh_normals.h"
+#include "linesurf/core/mesh_normals.h"
 #include "test_util.h"
 
 namespace linesurf {

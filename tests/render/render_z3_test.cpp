@@ -1,13 +1,15 @@
 // Modified Z^3 buffer (thesis §6.2.3.1): insertion, allocation, occlusion, compression, resolve.
 #include <gtest/gtest.h>
 
-#include "linesurf/render/z3_buffer.h"
+#include "render/z3_buffer.h"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-#include "render/detail/splat_rows.h"
+#include "render/point_rows.h"
+#include "render/segment_rows.h"
+#include "render/resolve.h"
 
 namespace linesurf {
 namespace {
@@ -150,7 +152,7 @@ TEST(RenderZ3, ZeroWeightIsIgnoredAndResetClears) {
 // splats at several depths, opaque and translucent, flat and Gouraud, any layer count, so that
 // merges, allocations in front and behind, occlusion and compression all occur.
 TEST(RenderZ3, SimdFastPathGivesTheLayersOfTheScalarPath) {
-  // cutoff^2 4: the rows' polynomial exp; 9: hn::Exp (splat_rows.cpp, kPolyExpMaxQ)
+  // cutoff^2 4: the rows' polynomial exp; 9: hn::Exp (simd_rows-inl.h, kPolyExpMaxQ)
   for (float cutoffQ : {4.0f, 9.0f})
   for (int layers : {1, 2, 4}) {
     std::mt19937 rng(7 + layers);

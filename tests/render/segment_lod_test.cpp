@@ -2,6 +2,7 @@
 // ScreenSpace segment drawn as its moment-matched elliptical point splat. The ellipse against the
 // exact segment kernel (segmentWeightAt) as a function of the length in kernel sigmas; images with
 // the level of detail on and off; thread counts.
+#include "render/segment_lod.h"
 #include "render/segment_splat.h"
 
 #include <gtest/gtest.h>

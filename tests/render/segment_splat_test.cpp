@@ -1,5 +1,6 @@
 // Line-segment splats (thesis §5): points vs segments on the same surface, the three filter
 // evaluations against each other, the Approx construction's cases, degenerate segments.
+#include "render/segment_approx.h"
 #include "render/segment_splat.h"
 #include "render/segment_setup.h"
 

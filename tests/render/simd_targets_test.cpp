@@ -1,4 +1,4 @@
-// The SIMD splat rows (src/render/splat_rows.cpp, Highway runtime dispatch) give the same picture
+// The SIMD splat rows (src/render/point_rows.cpp, segment_rows.cpp, resolve.cpp; Highway runtime dispatch) give the same picture
 // on every target this machine runs: each target is forced in turn and the images of a hybrid
 // model (points, ScreenSpace segments, a textured-free smooth surface) compared with the first.
 #include <gtest/gtest.h>

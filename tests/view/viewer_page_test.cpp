@@ -96,7 +96,7 @@ TEST(ViewerPage, EmbedsEveryPrimitiveRelativeToTheBoundingSphere) {
   const RenderOptions ro;
   EXPECT_FLOAT_EQ(meta["defaults"]["cutoffRadius"].get<float>(), ro.cutoffRadius);
   EXPECT_FLOAT_EQ(meta["defaults"]["ambient"].get<float>(), ro.material.ambient);
-  EXPECT_FLOAT_EQ(meta["defaults"]["zThreshold"].get<float>(), ro.zThreshold);
+  EXPECT_FLOAT_EQ(meta["defaults"]["zThreshold"].get<float>(), zThresholdOf(ro));
 }
 
 TEST(ViewerPage, LeavesOutAndCountsUndrawablePrimitives) {

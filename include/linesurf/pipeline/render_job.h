@@ -50,10 +50,6 @@ Color parseBackground(const std::string& text);
 /// Validates first.
 std::vector<Camera> viewCameras(const BoundingSphere& sphere, const ViewOptions& options, const ModelFrame& frame = {});
 
-/// The z threshold a mode uses when none is given: 0.5 of the primitive's depth extent
-/// (PerPrimitive), 0.01 of the bounding radius (Fixed, the thesis). See docs/rendering.md.
-float defaultZThreshold(ZThresholdMode mode);
-
 /// Preparation of a model before rendering.
 struct PrepareOptions {
   int k = 12;              ///< neighbours for the normals/radii of raw scans (§6.1), [3, 256]

@@ -1,11 +1,12 @@
 #pragma once
 /// Triangle meshes as a render primitive: the ground truth a splat image of the same surface is
-/// compared with (beyond the thesis; issue 14). Anti-aliased by supersampling: every pixel holds
+/// compared with (beyond the thesis; docs/decisions.md, "Mesh ground truth and the
+/// silhouette band"). Anti-aliased by supersampling: every pixel holds
 /// S x S samples on a regular grid, each z-buffered (nearest triangle wins, ties to the lower
 /// face index); a pixel's colour is the box-filtered average of its samples, each shaded by the
 /// same Phong model (RenderOptions::material, light) as the splats, per pixel and per triangle at
 /// the centroid of the triangle's samples in that pixel, with normals interpolated from the
-/// vertex normals (area-weighted when the mesh has none, geometry/mesh_normals.h). Same Camera,
+/// vertex normals (area-weighted when the mesh has none, core/mesh_normals.h). Same Camera,
 /// background, colour/alpha conventions and output buffers as Renderer (renderer.h), so the two
 /// images are directly comparable. Tiles are rendered in parallel, each from its own triangle list
 /// in face order: identical images for any thread count.
@@ -33,6 +34,8 @@ struct MeshRenderStats {
            trianglesDegenerate = 0;
   uint64_t samplesCovered = 0;  ///< samples whose nearest surface is a triangle
   double prepareSeconds = 0, rasterSeconds = 0, totalSeconds = 0;
+  /// Adds every counter and time of `o` (several views of one mesh).
+  MeshRenderStats& operator+=(const MeshRenderStats& o);
 };
 
 struct MeshRenderResult {

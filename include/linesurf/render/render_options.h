@@ -12,6 +12,7 @@
 ///  - The resampling filter is cut off at cutoffRadius standard deviations (its bounding
 ///    quadrilateral is Rot(theta) * Lambda scaled by the cutoff, §5.2.3.1).
 #include <cstdint>
+#include <optional>
 
 #include "linesurf/core/math.h"
 #include "linesurf/core/progress.h"
@@ -60,7 +61,7 @@ struct RenderOptions {
   /// pixel filter, sigma 0.5), not the thesis's identity (Zwicker et al. 2001): 1 paints small
   /// splats' colour ~1 px past every silhouette; 0.25 keeps the hole tests closed with the
   /// geometry stage's regrown open stars and still halves the grazing checkerboard's error against
-  /// no prefilter (docs/decisions.md, "Issue 14 (i14edge)" and "Issue 14 (i14pf)").
+  /// no prefilter (docs/decisions.md, "Screen prefilter").
   float prefilterVariance = 0.25f;
   /// Cut-off of the resampling Gaussian, in standard deviations; fragments beyond it are not
   /// generated. [1, 5], default 2 (weights below e^-2 = 13.5% of the peak are dropped; 2.5
@@ -70,7 +71,7 @@ struct RenderOptions {
   /// the primitive's radius is the 2-sigma ellipse of its reconstruction Gaussian. (0, 4].
   float reconstructionScale = 0.5f;
 
-  /// Coverage alpha (beyond the thesis; issue 14). > 0: a pixel's alpha is the surface's coverage
+  /// Coverage alpha (beyond the thesis). > 0: a pixel's alpha is the surface's coverage
   /// min(1, g sum_k c_k w_k) (w_k the fragments' resampling weights, c_k the inverse of the model's
   /// least kernel density around primitive k, src/render/coverage.h; g this gain), composited over
   /// what lies behind, instead of the normalised alpha that paints a splat's colour out to its
@@ -81,11 +82,11 @@ struct RenderOptions {
   /// its farther neighbour. Only when every primitive is opaque (no alphaOverride < 1, no colour
   /// alpha < 1, no texture); otherwise the thesis's alpha. 0 = off, the default: Table 5 (line vs
   /// point model) gets worse and frames cost 4-28% more at silhouettes only (10-120% everywhere;
-  /// docs/decisions.md, "Issue 14 (i14edge)", "(i14sil)", "(lead, stop 24)"); 1.25 measured best
+  /// docs/decisions.md, "Coverage alpha (opt-in)"); 1.25 measured best
   /// for contour models at silhouettes only (1.5 everywhere). [0, 100].
   float coverageGain = 0.0f;
-  /// Where coverage alpha applies (beyond the thesis; issue 14, docs/decisions.md "Issue 14
-  /// (i14sil)"). > 0: only at silhouettes, i.e. at a pixel whose front layer is partly covered
+  /// Where coverage alpha applies (beyond the thesis; docs/decisions.md, "The
+  /// silhouette fringe"). > 0: only at silhouettes, i.e. at a pixel whose front layer is partly covered
   /// and that has, within this many pixels (a square of side 2 reach + 1), a pixel showing the
   /// background or a front layer farther than this one's by its z threshold and 2 % of its
   /// depth; every other pixel keeps the normalised (opaque) alpha, so the gaps of an irregular or
@@ -96,24 +97,23 @@ struct RenderOptions {
   // --- visibility and blending (§6.2.3, modified Z^3) -----------------------------------------
   ZThresholdMode zThresholdMode = ZThresholdMode::PerPrimitive;
   /// Fixed: fraction of the bounding-sphere radius. PerPrimitive: multiple of the primitive's
-  /// depth extent. >= 0; default 0.5 for PerPrimitive, use ~0.01 for Fixed (see
-  /// docs/rendering.md and the measurement in docs/decisions.md).
-  float zThreshold = 0.5f;
+  /// depth extent. >= 0; unset: the mode's default, defaultZThreshold(zThresholdMode) (read it
+  /// through zThresholdOf; see docs/rendering.md and the measurement in docs/decisions.md).
+  std::optional<float> zThreshold;
   /// Fragment layers per pixel, [1, kMaxLayers]. Default 4 (thesis).
   int layers = 4;
-  /// Tail layers (beyond the thesis; issue 14, docs/decisions.md "Issue 14 (i14disc)"): a
+  /// Tail layers (beyond the thesis; docs/decisions.md, "Tail layers"): a
   /// fragment whose ray meets its primitive's plane outside 1.5 times the primitive's own disc
   /// (a point: radius cutoff sigma_r; a segment: its strip) is a prefilter tail, its depth the
   /// plane's extrapolated; it occludes nothing and is not composited in front of another layer,
   /// only over the background (a silhouette's anti-aliasing). Removes most fold speckles (a
   /// grazing splat's tail as the opaque front layer): on the 7 contour meshes Table 5 and the
   /// line and point models against the mesh get better; line frames cost −3 to +10% and point
-  /// frames −2 to +3% more (BM_ContourFrame, stop 27; +6-13% at stop 26, before the small point
-  /// path's Z^3 rows were specialised for tails). Only in an opaque frame without coverage alpha and with the ScreenSpace
+  /// frames −2 to +3% more (BM_ContourFrame). Only in an opaque frame without coverage alpha and with the ScreenSpace
   /// segment method (the Approx and Reference methods are the thesis's comparison paths: their
-  /// frames keep the thesis's Z^3 for points too). On by default since stop 26.
+  /// frames keep the thesis's Z^3 for points too). On by default.
   bool tailLayers = true;
-  /// Tail coverage (beyond the thesis; issue 14, docs/decisions.md "Issue 14 (lead, stop 28)"):
+  /// Tail coverage (beyond the thesis; docs/decisions.md, "Tail coverage"):
   /// with tail layers, a pixel that only tails reached (its centre off every primitive's own disc
   /// or strip by half its size; nothing lies behind such a layer) and that borders an empty pixel
   /// (3 x 3) lies past a silhouette: it is composited over the background with alpha
@@ -170,6 +170,16 @@ struct RenderOptions {
   int tileSize = 64;
   ProgressFn progress;  ///< optional, reported per tile batch from the calling thread
 };
+
+/// The z threshold a mode uses when RenderOptions::zThreshold is unset: 0.5 of the primitive's
+/// depth extent (PerPrimitive), 0.01 of the bounding radius (Fixed, the thesis). See
+/// docs/rendering.md.
+constexpr float defaultZThreshold(ZThresholdMode mode) { return mode == ZThresholdMode::Fixed ? 0.01f : 0.5f; }
+
+/// The z threshold in force: options.zThreshold, or its mode's default when unset.
+inline float zThresholdOf(const RenderOptions& options) {
+  return options.zThreshold.value_or(defaultZThreshold(options.zThresholdMode));
+}
 
 /// Throws linesurf::Error (BadParameter) naming the first absurd field.
 void validate(const RenderOptions& options);

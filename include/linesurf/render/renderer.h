@@ -14,28 +14,9 @@
 #include "linesurf/core/model.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/render/render_options.h"
+#include "linesurf/render/render_stats.h"
 
 namespace linesurf {
-
-struct RenderStats {
-  // per primitive kind: drawn = rasterised (including clipped ones)
-  uint64_t pointsDrawn = 0, pointsClipped = 0, pointsCulled = 0, pointsOutside = 0, pointsDegenerate = 0;
-  uint64_t segmentsDrawn = 0, segmentsClipped = 0, segmentsCulled = 0, segmentsOutside = 0, segmentsDegenerate = 0;
-  uint64_t segmentsFallback = 0;  ///< Approx (§5.2.3) construction failed; drawn with ScreenSpace
-  uint64_t segmentsLod = 0;  ///< drawn as one point splat (RenderOptions::segmentLod; among segmentsDrawn)
-  // Z^3 (summed over tiles)
-  uint64_t fragments = 0, merged = 0, allocated = 0, occluded = 0, compressed = 0;
-  uint64_t tileBins = 0;  ///< (primitive, tile) pairs rasterised
-  // seconds
-  double prepareSeconds = 0, binSeconds = 0, rasterSeconds = 0, totalSeconds = 0;
-  /// Within the raster stage: CPU time spent rasterising primitives (fragments into Z^3) and
-  /// resolving pixels, each summed over the worker threads (for per-fragment costs: robust
-  /// against other processes on a shared machine).
-  double fragmentThreadSeconds = 0, resolveThreadSeconds = 0;
-  /// CPU time of the prepare and binning stages, summed over the worker threads (per-point
-  /// set-up costs, robust against other processes as above).
-  double prepareThreadSeconds = 0, binThreadSeconds = 0;
-};
 
 struct RenderResult {
   Image color;                 ///< RGBA, composited over options.background

@@ -13,17 +13,17 @@
 ///     composited into one (normalised colours, "over" operator, W = 1; step c);
 ///  2. resolve: layers normalised (C/W, A/W), lit when shading is deferred (C is then the
 ///     weighted albedo, lit once per layer with the normalised N), composited back to front.
-/// Coverage alpha (beyond the thesis; issue 14, setCoverageScale): A then sums each fragment's
+/// Coverage alpha (beyond the thesis, setCoverageScale; docs/decisions.md, "Coverage alpha (opt-in)"): A then sums each fragment's
 /// coverage, weight times a per-primitive constant, and a layer's alpha is min(1, s A) (s the
 /// tile's coverage scale) instead of the weighted mean A/W; a layer is opaque (step b) only once
 /// that reaches 1, so a partly covered layer keeps what lies behind it; or, without coverage
 /// occlusion (setCoverageOccludes(false), coverage at silhouettes only), at once as without
 /// coverage, with what it hides summed per pixel (resolveBehind).
-/// Tail layers (beyond the thesis, issue 14, setTailLayers): a prefilter tail fragment occludes
+/// Tail layers (beyond the thesis, setTailLayers; docs/decisions.md, "Tail layers"): a prefilter tail fragment occludes
 /// nothing (a tail-only layer has opaque flag -1) and is not composited in front of another layer.
 /// Storage: a fixed number of layers per pixel in structure-of-arrays planes, one plane of
 /// floats per (layer, field), row-major over the tile, so that the SIMD point rows
-/// (detail/splat_rows.h, pointRowsZ3) test and merge a whole row of pixels per instruction (the
+/// (point_rows.h, segment_rows.h) test and merge a whole row of pixels per instruction (the
 /// fast path: a pixel with no layer or with one layer the fragment falls within); scalar insert()
 /// handles the rest (no allocation per fragment).
 #include <algorithm>
@@ -33,20 +33,9 @@
 
 #include "linesurf/core/image.h"
 #include "linesurf/core/math.h"
+#include "pixel_rect.h"
 
 namespace linesurf {
-
-/// A rectangle of pixels [x0, x1) x [y0, y1).
-struct PixelRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  bool empty() const { return x1 <= x0 || y1 <= y0; }
-  int width() const { return x1 - x0; }
-  int height() const { return y1 - y0; }
-  PixelRect intersect(const PixelRect& o) const {
-    PixelRect r{x0 > o.x0 ? x0 : o.x0, y0 > o.y0 ? y0 : o.y0, x1 < o.x1 ? x1 : o.x1, y1 < o.y1 ? y1 : o.y1};
-    return r;
-  }
-};
 
 /// One fragment produced by a rasteriser at one pixel.
 struct Fragment {
@@ -73,6 +62,19 @@ struct ResolvedPixel {
   float depth = 0;                  ///< depth of the nearest layer, 0 when empty
   Vec3f normal = Vec3f::Zero();     ///< normalised weighted normal of the nearest layer
 };
+
+/// A resolved pixel's colour (premultiplied, coverage alpha) composited over the background
+/// `bg`, as the image stores it: straight colour where the result is partly transparent over a
+/// visible background, the layer's own straight colour over a transparent one.
+inline Color overBackground(const Color& px, const Color& bg) {
+  const float a = px.w();
+  Color c = px;
+  c.head<3>() += (1 - a) * bg.w() * bg.head<3>();
+  c.w() = a + (1 - a) * bg.w();
+  if (bg.w() > 0 && c.w() > 0 && c.w() < 1) c.head<3>() /= c.w();  // straight colour for PNG
+  if (bg.w() == 0 && a > 0) c.head<3>() /= a;
+  return c;
+}
 
 class Z3Tile {
  public:
@@ -142,7 +144,7 @@ class Z3Tile {
   /// Resolves pixel (x, y) (absolute, inside rect()): front-to-back "under" compositing of its
   /// normalised layers (== the thesis's back-to-front merge). Layer colours as stored. The
   /// renderer resolves one-layer pixels in SIMD rows with the same formula for n = 1
-  /// (detail::resolveSingleLayerRow, splat_rows.cpp): a change here goes there too (the test
+  /// (detail::resolveSingleLayerRow, resolve.cpp): a change here goes there too (the test
   /// EwaPoint.SimdResolveMatchesThePixelResolve compares them).
   ResolvedPixel resolve(int x, int y) const {
     return resolve(x, y, [](const Vec3f& c, const Vec3f&, float) { return c; });
@@ -203,7 +205,7 @@ class Z3Tile {
 
   /// Fields of a layer beyond the blended sums: depth, z threshold, opaque flag (1 or 0).
   enum Field { kZ = kAttrs, kThr, kOpaque, kFields };
-  /// Storage view for the SIMD rows (detail/splat_rows.h): field f of layer l of pixel index(x, y)
+  /// Storage view for the SIMD rows (simd_rows-inl.h, Z3Rows): field f of layer l of pixel index(x, y)
   /// is plane(l, f)[index(x, y)], and its layer count counts()[index(x, y)]. The planes are padded
   /// by kPad elements, so a vector load or masked store starting at any pixel of the tile stays
   /// inside the storage.
@@ -263,7 +265,7 @@ class Z3Tile {
     const Vec3f c = shade(Vec3f(B(kR) * iw, B(kG) * iw, B(kB) * iw), Vec3f(B(kNx), B(kNy), B(kNz)), B(kBehindZ) * iw);
     return Color(a * c.x(), a * c.y(), a * c.z(), a);
   }
-  /// Tail layers (beyond the thesis, issue 14; RenderOptions::tailLayers): in an opaque frame
+  /// Tail layers (beyond the thesis, RenderOptions::tailLayers): in an opaque frame
   /// without coverage, a tail fragment (insert's tail: only the screen prefilter put it there,
   /// outside the primitive's own disc or strip, so its depth is the plane's, extrapolated)
   /// occludes nothing. On an empty pixel it opens a tail-only layer (opaque flag -1), which a

@@ -1,5 +1,5 @@
 // Area-weighted vertex normals of a triangle mesh (see mesh_normals.h).
-#include "linesurf/geometry/mesh_normals.h"
+#include "linesurf/core/mesh_normals.h"
 
 #include <string>
 

@@ -1,16 +1,19 @@
 #pragma once
-// Helpers shared by the point (§4.2.2) and segment (§5.2) splat rasterisers.
+/// The rules that every path of the splat pipeline must apply alike: point splats (§4.2.2) and
+/// segment splats (§5.2), each with an exact scalar path and a SIMD path (point_setup.cpp,
+/// segment_setup.cpp, point_rows.cpp, segment_rows.cpp) that must agree. A rule written here once
+/// cannot drift between them: the limits of the resampling filter, the z threshold of a primitive
+/// (Z^3, §6.2.3), the tail test's disc, the flat-shading span of a point splat, the flat weight
+/// scale of a segment piece, the ray/plane set-up and the screen bounds.
 #include <algorithm>
 #include <cmath>
 
 #include "linesurf/core/math.h"
 #include "linesurf/render/camera.h"
-#include "linesurf/render/z3_buffer.h"
+#include "linesurf/render/render_options.h"
+#include "pixel_rect.h"
 
 namespace linesurf::detail {
-
-/// pi, for every splat kind.
-inline constexpr double kPi = 3.14159265358979323846;
 
 /// Limits that point and segment splats share, so that the primitives of one model are cut and
 /// culled alike. Largest stretch of the resampling filter relative to the reconstruction sigma:
@@ -20,6 +23,45 @@ inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr float kMaxStretch = 24.0f;
 /// Primitives seen closer to edge-on than this |cos| (everywhere) are culled: they project to a line.
 inline constexpr float kMinFacing = 2e-3f;
+
+/// A point splat spanning at most this many pixels each way is lit once (flat); a wider one is
+/// Gouraud-shaded when lighting is not deferred (point_splat.h).
+inline constexpr int kPointFlatShadeSpan = 6;
+/// Tail layers (Z3Tile::setTailLayers, RenderOptions::tailLayers): a fragment is a tail where its
+/// ray meets the primitive's plane outside this many times its own disc (a point: radius cutoff
+/// sigma_r) or strip (a segment: half-width cutoff sigma_r). 1.5, not 1: a grazing surface whose
+/// discs leave pixel centres uncovered keeps its fragments (measured, docs/decisions.md).
+inline constexpr float kTailDisc = 1.5f;
+
+/// The z threshold of a primitive (Z^3 merging, §6.2.3; RenderOptions::zThresholdMode), for the
+/// scalar paths (FrameContext::zThreshold) and the SIMD set-ups alike: PerPrimitive, `scale`
+/// times the primitive's depth extent over its footprint (depth units); Fixed, the frame's
+/// `fixed` = zThreshold times the bounding-sphere radius.
+struct ZThresholdRule {
+  bool perPrimitive = true;
+  float scale = 0;  ///< PerPrimitive: the multiple of the depth extent
+  float fixed = 0;  ///< Fixed: the frame's threshold, depth units
+  static ZThresholdRule make(const RenderOptions& options, float sphereRadius) {
+    const float z = zThresholdOf(options);
+    return {options.zThresholdMode == ZThresholdMode::PerPrimitive, z, z * (sphereRadius > 0 ? sphereRadius : 1.0f)};
+  }
+  float operator()(float depthExtent) const { return perPrimitive ? scale * depthExtent : fixed; }
+};
+
+/// A segment sub-segment's weight scale is linear along it, scale0 + slope tau for tau in
+/// [0, len] (§5.2: 1 / (h sqrt(det M)) at its ends). Where it changes by at most kFlatScale of
+/// scale0 over the sub-segment, the kernels take it constant at its mean (beyond the thesis): the
+/// slope term's two extra exps per pixel go (all but ~1% of a contour model's segments), the
+/// weights move by at most kFlatScale / 2 and the blended colours (normalised weighted averages)
+/// by far less. The SIMD kernel, the scalar closed form and their tests all evaluate this.
+inline constexpr float kFlatScale = 1e-2f;
+struct PieceScale {
+  float scale0 = 0, slope = 0;
+};
+inline PieceScale pieceScale(float scale0, float slope, float len) {
+  if (std::abs(slope * len) <= kFlatScale * scale0) return {scale0 + 0.5f * (slope * len), 0.0f};
+  return {scale0, slope};
+}
 
 /// An affine function of the pixel position, f(px, py) = dx px + dy py + c.
 struct Affine2 {

@@ -1,5 +1,6 @@
 #pragma once
-/// The rasteriser extension point of the splatting pipeline (thesis §6.2.2). The pipeline
+/// The rasteriser extension point of the splatting pipeline (thesis §6.2.2), internal to
+/// src/render. The pipeline
 /// (renderer.cpp) runs every primitive kind through the same two stages:
 ///
 ///  1. prepare (per primitive, in parallel, once per frame): back-face culling, model-view
@@ -14,7 +15,7 @@
 ///         void rasterizeK(const PreparedK& prepared, const SplatContext& ctx);
 ///     A rasteriser only writes into ctx.tile, so the image is the same for any thread count.
 ///
-/// Points: src/render/point_splat.h. Line segments: segment_splat.h.
+/// Points: point_splat.h (§4.2.2). Line segments: segment_splat.h (§5).
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -24,7 +25,8 @@
 #include "linesurf/core/math.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/render/render_options.h"
-#include "linesurf/render/z3_buffer.h"
+#include "splat_rules.h"
+#include "z3_buffer.h"
 
 namespace linesurf {
 
@@ -47,8 +49,9 @@ struct FrameContext {
   BoundingSphere sphere;
   /// Unit direction towards the light, camera space.
   Vec3f lightDirCamera = Vec3f(0, 0, 1);
-  /// Frame-wide z threshold in depth units (Fixed mode: zThreshold * sphere.radius).
-  float fixedZThreshold = 0;
+  /// The z threshold of a primitive from its depth extent (RenderOptions::zThresholdMode; the
+  /// rule the SIMD set-ups apply too).
+  detail::ZThresholdRule zRule;
   /// Normalisation of a unit-variance 2D Gaussian weight is not applied: weights are
   /// exp(-q/2) / (r0 r1) with r0 r1 the object-space standard deviations of the resampling
   /// filter (§5.2.3.3 per-vertex weight scaling); the final Z^3 division normalises.
@@ -63,10 +66,10 @@ struct FrameContext {
   /// are interpolated along segments (segment_splat.h).
   bool endpointNormals = false;
   /// Per-point shading normals (HybridModel::pointShadingNormals, by point index; null when the
-  /// model has none): they light the points, whose own normals stay their planes (issue 14).
+  /// model has none): they light the points, whose own normals stay their planes (smooth contour models).
   const Vec3f* pointShadingNormals = nullptr;
   /// Per-point masses (pointMasses(model), by point index; null: every point weighs 1): a
-  /// point's weight scale is multiplied by its mass (issue 14).
+  /// point's weight scale is multiplied by its mass (docs/decisions.md, "Point masses").
   const float* pointMasses = nullptr;
 
   const Camera& cam() const { return *camera; }
@@ -81,12 +84,9 @@ struct FrameContext {
   const RenderOptions& opt() const { return *options; }
 
   /// The z threshold for a primitive whose depth extent over its footprint is `depthExtent`
-  /// (depth units): options.zThreshold * depthExtent in PerPrimitive mode, fixedZThreshold in
-  /// Fixed mode.
-  float zThreshold(float depthExtent) const {
-    return options->zThresholdMode == ZThresholdMode::PerPrimitive ? options->zThreshold * depthExtent
-                                                                   : fixedZThreshold;
-  }
+  /// (depth units): zThresholdOf(options) * depthExtent in PerPrimitive mode, that times the
+  /// bounding radius in Fixed mode (zRule).
+  float zThreshold(float depthExtent) const { return zRule(depthExtent); }
 
   /// Phong shading (Material) of `albedo` at a camera-space surface point with camera-space
   /// unit normal facing the viewer (flip it first for two-sided lighting). Returns linear RGB.
@@ -97,7 +97,7 @@ struct FrameContext {
   std::shared_ptr<const std::vector<float>> specularPow;
   static constexpr int kSpecularTable = 4096;
 
-  /// Builds the context for one frame (normalises the light, computes fixedZThreshold, cutoffQ).
+  /// Builds the context for one frame (normalises the light, computes zRule, cutoffQ).
   static FrameContext make(const Camera& camera, const RenderOptions& options, const BoundingSphere& sphere,
                            bool modelHasColors = true, const Image* texture = nullptr);
 };

@@ -1,4 +1,5 @@
-#include "detail/splat_math.h"
+// The screen bounds of a near/far-clipped primitive (splat_rules.h).
+#include "splat_rules.h"
 
 namespace linesurf::detail {
 

@@ -1,8 +1,9 @@
 #pragma once
-// The three evaluations of the segment filter (thesis §5; linesurf/render/segment_splat.h) and
-// the resampling covariance they share (§5.1.2): ScreenSpace (erf closed form per sub-segment),
-// Reference (quadrature) and Approx (§5.2.3, the thesis's weight-texture quadrilaterals).
-// Internal to segment_splat.cpp (segment_methods.cpp).
+/// The segment filter of thesis §5.1 (segment_splat.h): the resampling covariance along a segment
+/// (§5.1.2), shared by every evaluation, and the two exact evaluations, ScreenSpace (erf closed
+/// form per sub-segment, after §9.3; the SIMD rows evaluate the same sum, segment_rows.h) and
+/// Reference (quadrature). The thesis's approximation is segment_approx.h (§5.2.3).
+/// segment_filter.cpp.
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -10,8 +11,8 @@
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 
-#include "detail/splat_math.h"
-#include "segment_splat.h"
+#include "segment_extra.h"
+#include "splat_rules.h"
 
 namespace linesurf::segment {
 
@@ -74,6 +75,14 @@ inline Sym2 covariance(const double* p, const double* e, const double* s, double
   return clampEigen(M, s2, hi);
 }
 
+/// The inverse of a 2x2 matrix (adjugate over determinant).
+inline Mat2d inverse2(const Mat2d& M) {
+  const double det = M.determinant();
+  Mat2d inv;
+  inv << M(1, 1), -M(0, 1), -M(1, 0), M(0, 0);
+  return inv / det;
+}
+
 /// covariance() as an Eigen matrix.
 Mat2d resamplingCovariance(const Vec3d& p, const Vec3d& e, const Vec3d& s, double sigmaR, double Vh, double f);
 
@@ -91,12 +100,5 @@ float screenSpaceWeight(const SegmentPiece* pieces, int K, float pieceInvLength,
 void referenceNodes(double L, double sigmaR, double h, double R, const Vec3d& c0, const Vec3d& e, const Vec3d& s,
                     double Vh, double f, SegmentExtra& x, double& aMin, double& aMax, double& bMax);
 float referenceWeight(const SegmentExtra& x, float a, float b, float R2);
-
-/// Approx (§5.2.3.1): the 10 (long) or 8 (short) quadrilaterals of a segment of length L with
-/// endpoint covariances M0, M1; false when the construction is unsound (the caller falls back
-/// to ScreenSpace). On success also the footprint box of the quads.
-bool buildApprox(const Mat2d& M0, const Mat2d& M1, double L, double R, double h, SegmentExtra& x, double& aMin,
-                 double& aMax, double& bMax);
-float approxWeight(const SegmentExtra& x, float a, float b);
 
 }  // namespace linesurf::segment

@@ -1,6 +1,7 @@
-// The three evaluations of the segment filter and the covariance they share (thesis §5.1.2,
-// §5.2.3; see segment_methods.h and docs/segment-splatting.md).
-#include "segment_methods.h"
+// The segment splat approximation of thesis §5.2.3 (segment_approx.h): the weight textures T1 and
+// T2 (§5.2.3.2), the bounding quadrilaterals of a segment (§5.2.3.1) and their weights with the
+// interpolated scaling factor (§5.2.3.3). See docs/segment-splatting.md.
+#include "segment_approx.h"
 
 #include <algorithm>
 #include <array>
@@ -8,34 +9,13 @@
 #include <map>
 #include <memory>
 #include <mutex>
-
-#include "detail/splat_math.h"
+#include <numbers>
 
 namespace linesurf {
 
 namespace segment {
 
-using detail::kPi;
-// Reference quadrature: node spacing sigma_r / kNodesPerSigma, at most kMaxNodes nodes.
-constexpr double kNodesPerSigma = 32.0;
-constexpr int kMaxNodes = 1 << 16;
-
-// Behind the eye the prefilter is dropped, as for point splats.
-Mat2d resamplingCovariance(const Vec3d& p, const Vec3d& e, const Vec3d& s, double sigmaR, double Vh, double f) {
-  const Sym2 M = covariance(p.data(), e.data(), s.data(), sigmaR, Vh, f);
-  Mat2d out;
-  out << M.a, M.b, M.b, M.c;
-  return out;
-}
-
 namespace {
-
-Mat2d inverse2(const Mat2d& M) {
-  const double det = M.determinant();
-  Mat2d inv;
-  inv << M(1, 1), -M(0, 1), -M(1, 0), M(0, 0);
-  return inv / det;
-}
 
 // --- weight textures (§5.2.3.2) --------------------------------------------------------------
 
@@ -45,12 +25,12 @@ double t1Exact(double R, double x, double y) {
   if (std::abs(y) >= R) return 0;
   const double w = std::sqrt(R * R - y * y);
   const double xc = std::clamp(x, -w, w);
-  return std::sqrt(kPi / 2) * std::exp(-0.5 * y * y) * (std::erf(w / std::sqrt(2.0)) + std::erf(xc / std::sqrt(2.0)));
+  return std::sqrt(std::numbers::pi / 2) * std::exp(-0.5 * y * y) * (std::erf(w / std::sqrt(2.0)) + std::erf(xc / std::sqrt(2.0)));
 }
 double t2Exact(double R, double y) {
   if (std::abs(y) >= R) return 0;
   const double w = std::sqrt(R * R - y * y);
-  return std::sqrt(2 * kPi) * std::exp(-0.5 * y * y) * std::erf(w / std::sqrt(2.0));
+  return std::sqrt(2 * std::numbers::pi) * std::exp(-0.5 * y * y) * std::erf(w / std::sqrt(2.0));
 }
 
 }  // namespace
@@ -159,11 +139,11 @@ bool buildQuads(const ApproxInput& in, std::vector<SegmentQuad>& quads, bool& lo
     const Vec2dd n(std::cos(phi), std::sin(phi));
     return L * n.x() + support(in.A1, n) - support(in.A0, n);
   };
-  const double f0 = f(0), fpi = f(kPi);
+  const double f0 = f(0), fpi = f(std::numbers::pi);
   // One ellipse reaches past the other at both ends of the axis (nested along the axis).
   if (!(f0 > 1e-9 * L && fpi < -1e-9 * L)) return false;
-  const double phiT = bracketRoot(f, 0.0, kPi, f0, fpi);
-  const double phiB = bracketRoot(f, kPi, 2 * kPi, fpi, f0);
+  const double phiT = bracketRoot(f, 0.0, std::numbers::pi, f0, fpi);
+  const double phiB = bracketRoot(f, std::numbers::pi, 2 * std::numbers::pi, fpi, f0);
   const Vec2dd nT(std::cos(phiT), std::sin(phiT)), nB(std::cos(phiB), std::sin(phiB));
   const double kT = support(in.A0, nT), kB = support(in.A0, nB);
   auto touch = [&](const Mat2d& A, const Vec2dd& c, const Vec2dd& n) -> Vec2dd { return c + A * n / support(A, n); };
@@ -216,10 +196,10 @@ bool buildQuads(const ApproxInput& in, std::vector<SegmentQuad>& quads, bool& lo
     };
     const Vec2dd y6 = M0hi * Vec2dd(a6, 0);
     const double th6 = std::atan2(y6.y(), y6.x());
-    const double g6 = g(th6), g5 = g(th6 + kPi);
+    const double g6 = g(th6), g5 = g(th6 + std::numbers::pi);
     if (!(g6 < 0 && g5 > 0)) return false;
-    const double thT = bracketRoot(g, th6, th6 + kPi, g6, g5);
-    const double thB = bracketRoot(g, th6, th6 - kPi, g6, g5);
+    const double thT = bracketRoot(g, th6, th6 + std::numbers::pi, g6, g5);
+    const double thB = bracketRoot(g, th6, th6 - std::numbers::pi, g6, g5);
     const Vec2dd xT = M0h * Vec2dd(std::cos(thT), std::sin(thT)), xB = M0h * Vec2dd(std::cos(thB), std::sin(thB));
     if (!(xT.y() > 0 && xB.y() < 0)) return false;
     const Vec2dd dir = xT - xB;
@@ -328,126 +308,7 @@ bool inverseBilinear(const SegmentQuad& q, const Vec2f& p, float& alpha, float& 
   return tryV((-k1 - w) * ik2) || tryV((-k1 + w) * ik2);
 }
 
-// erf from a table (4096 intervals over [0, 4], linear: error < 1e-6; erf(4) = 1 - 1.5e-8).
-struct ErfTable {
-  static constexpr int n = 4096;
-  static constexpr float scale = n / 4.0f;
-  float v[n + 2];
-  ErfTable() {
-    for (int i = 0; i <= n + 1; ++i) v[i] = float(std::erf(double(i) / scale));
-  }
-};
-// Built at static initialisation (no guard check per lookup); only read while rendering.
-const ErfTable kErfTable;
-inline float fastErf(float x) {
-  const ErfTable& T = kErfTable;
-  const float ax = std::min(std::abs(x), 4.0f) * ErfTable::scale;
-  const int i = int(ax);
-  const float r = T.v[i] + (ax - float(i)) * (T.v[i + 1] - T.v[i]);
-  return x < 0 ? -r : r;
-}
-
 }  // namespace
-
-SegmentPiece makePiece(double a0, double a1, const Mat2d& M, const Mat2d& M0, const Mat2d& M1, double h, double R) {
-  const Mat2d Mi = inverse2(M);
-  SegmentPiece p;
-  p.a0 = float(a0);
-  p.a1 = float(a1);
-  p.m00 = float(Mi(0, 0));
-  p.m01 = float(Mi(0, 1));
-  p.m11 = float(Mi(1, 1));
-  p.scale0 = float(1 / (h * std::sqrt(M0.determinant())));
-  p.scale1 = float(1 / (h * std::sqrt(M1.determinant())));
-  p.reach = float(R * std::sqrt(M(0, 0)));
-  p.skew = float(Mi(0, 1) / Mi(0, 0));
-  p.across = float(Mi(1, 1) - Mi(0, 1) * Mi(0, 1) / Mi(0, 0));
-  p.invM00 = float(1 / Mi(0, 0));
-  p.k = float(std::sqrt(0.5 * Mi(0, 0)));
-  p.erfScale = float(std::sqrt(kPi) / 2 / std::sqrt(0.5 * Mi(0, 0)));
-  const double slope = (double(p.scale1) - p.scale0) / (a1 - a0);
-  p.slope = std::abs(slope) * (a1 - a0) > 1e-4 * p.scale0 ? float(slope) : 0.0f;
-  return p;
-}
-
-// ScreenSpace: the cut-off Gaussian integrated along each sub-segment in closed form. With
-// x = a - a0 - tau along and b across, q(tau) = m00 (x - tau)^2 + 2 m01 (x - tau) b + m11 b^2
-// = m00 (tau - tau*)^2 + qmin; each kernel counts where q <= R^2, i.e. |tau - tau*| <= delta.
-float screenSpaceWeight(const SegmentPiece* pieces, int K, float pieceInvLength, float pieceMaxReach, float a,
-                        float b, float R2) {
-  using detail::gaussHalf;
-  float w = 0;
-  // Only the pieces whose reach can contain a (with a piece of margin each side against
-  // rounding): the others are skipped by the test below anyway, so the sum is unchanged.
-  int k0 = 0, k1 = K;
-  if (K > 1) {
-    const float lo = std::floor((a - pieceMaxReach) * pieceInvLength);
-    const float hi = std::floor((a + pieceMaxReach) * pieceInvLength);
-    k0 = int(std::clamp(lo - 1.0f, 0.0f, float(K)));
-    k1 = int(std::clamp(hi + 2.0f, 0.0f, float(K)));
-  }
-  for (int k = k0; k < k1; ++k) {
-    const SegmentPiece& p = pieces[k];
-    if (a < p.a0 - p.reach || a > p.a1 + p.reach) continue;
-    const float len = p.a1 - p.a0;
-    const float x = a - p.a0;
-    const float tauStar = x + p.skew * b;
-    const float qmin = b * b * p.across;
-    if (!(qmin < R2)) continue;
-    const float delta = std::sqrt((R2 - qmin) * p.invM00);
-    const float t0 = std::max(0.0f, tauStar - delta), t1 = std::min(len, tauStar + delta);
-    if (!(t1 > t0)) continue;
-    const float u0 = p.k * (t0 - tauStar), u1 = p.k * (t1 - tauStar);
-    // integral of exp(-m00 (tau - tau*)^2 / 2) (= sqrt(pi)/2 / k (erf(u1) - erf(u0))) and of
-    // (tau - tau*) times it
-    // exp(-qmin/2) exp(-u^2) = exp(-q/2) with q = qmin + 2 u^2 in [0, R^2]: table lookups
-    const float i0 = p.erfScale * (fastErf(u1) - fastErf(u0));
-    const detail::PieceScale sc = detail::pieceScale(p.scale0, p.slope, len);  // as the SIMD kernel
-    float sum = (sc.scale0 + sc.slope * tauStar) * i0 * gaussHalf(qmin);
-    if (sc.slope != 0) sum += sc.slope * p.invM00 * (gaussHalf(qmin + 2 * u0 * u0) - gaussHalf(qmin + 2 * u1 * u1));
-    w += sum;
-  }
-  return w;
-}
-
-void referenceNodes(double L, double sigmaR, double h, double R, const Vec3d& c0, const Vec3d& e, const Vec3d& s,
-                    double Vh, double f, SegmentExtra& x, double& aMin, double& aMax, double& bMax) {
-  const double step0 = sigmaR / kNodesPerSigma;
-  const int N = int(std::clamp(std::ceil(L / step0), 1.0, double(kMaxNodes)));
-  const double step = L / N;
-  x.nodes.resize(N);
-  double maxEig = 0;
-  for (int k = 0; k < N; ++k) {
-    const Mat2d M = resamplingCovariance(c0 + (k + 0.5) * step * e, e, s, sigmaR, Vh, f);
-    const Mat2d Mi = inverse2(M);
-    SegmentNode& nd = x.nodes[k];
-    nd.m00 = float(Mi(0, 0));
-    nd.m01 = float(Mi(0, 1));
-    nd.m11 = float(Mi(1, 1));
-    nd.scale = float(step / (h * std::sqrt(M.determinant())));
-    maxEig = std::max(maxEig, 0.5 * (M.trace() + std::sqrt(std::pow(M(0, 0) - M(1, 1), 2) + 4 * M(0, 1) * M(0, 1))));
-    aMin = std::min(aMin, (k + 0.5) * step - R * std::sqrt(M(0, 0)));
-    aMax = std::max(aMax, (k + 0.5) * step + R * std::sqrt(M(0, 0)));
-    bMax = std::max(bMax, R * std::sqrt(M(1, 1)));
-  }
-  x.nodeStep = float(step);
-  x.nodeReach = float(R * std::sqrt(maxEig));
-}
-
-float referenceWeight(const SegmentExtra& x, float a, float b, float R2) {
-  const int N = int(x.nodes.size());
-  const float step = x.nodeStep;
-  const int k0 = std::max(0, int(std::floor((a - x.nodeReach) / step - 0.5f)));
-  const int k1 = std::min(N - 1, int(std::ceil((a + x.nodeReach) / step - 0.5f)));
-  double w = 0;
-  for (int k = k0; k <= k1; ++k) {
-    const SegmentNode& nd = x.nodes[k];
-    const float dx = a - (float(k) + 0.5f) * step;
-    const float q = nd.m00 * dx * dx + 2 * nd.m01 * dx * b + nd.m11 * b * b;
-    if (q <= R2) w += double(std::exp(-0.5f * q) * nd.scale);
-  }
-  return float(w);
-}
 
 bool buildApprox(const Mat2d& M0, const Mat2d& M1, double L, double R, double h, SegmentExtra& x, double& aMin,
                  double& aMax, double& bMax) {
@@ -499,5 +360,6 @@ float approxWeight(const SegmentExtra& x, float a, float b) {
 
 float weightTextureT1(float cutoffRadius, float x, float y) { return segment::weightTextures(cutoffRadius)->lookupT1(x, y); }
 float weightTextureT2(float cutoffRadius, float y) { return segment::weightTextures(cutoffRadius)->lookupT2(y); }
+
 
 }  // namespace linesurf
