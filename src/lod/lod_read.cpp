@@ -46,6 +46,10 @@ Vec3f vec3(const nlohmann::json& j) { return Vec3f(j.at(0).get<float>(), j.at(1)
 }  // namespace
 
 bool isLodFile(const std::filesystem::path& path) {
+  // Only a regular file can be a hierarchy: opening a FIFO or a device to sniff its magic would
+  // block or read for ever; the model readers report those.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   Fd f(path);
   if (f.fd < 0) return false;
   char m[8];
