@@ -9,6 +9,11 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/ooc/ooc_normals.h"
+#include "linesurf/ooc/point_stream.h"
+
+#include <chrono>
+#include <filesystem>
 
 namespace linesurf::cli {
 namespace {
@@ -21,11 +26,110 @@ struct NormalsArgs {
     return g;
   }();
   bool noOrient = false;
+  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
+  bool outOfCore = false;
+  int tiles = 0;
+  std::string tileDir;
+  bool keepTiles = false;
 };
+
+// --- out-of-core path ---------------------------------------------------------------------------
+
+/// The memory budget of a run, bytes: --max-mb. (One place, so that a reworked budget
+/// mechanism changes only this.)
+double memoryBudgetBytes() { return globalOptions().maxMegabytes * 1024.0 * 1024.0; }
+
+/// Estimated bytes of the in-memory path for `in`, from its header (PLY) or size (XYZ).
+double inMemoryEstimate(const std::string& in, int k) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const double size = double(fs::file_size(in, ec));
+  if (ec) return 0;  // the reader reports a missing file
+  double points = size / 12.0;  // binary x y z floats, the densest encoding
+  std::string ext = fs::path(in).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".ply") {
+    try {
+      points = double(ooc::PointReader(in).info().count);
+    } catch (const Error&) {
+      return 0;  // not a file the streaming reader takes: the in-memory reader says why
+    }
+  } else if (ext == ".xyz") {
+    points = size / 24.0;  // ~8 characters per coordinate
+  }
+  return points * ooc::inMemoryNormalsBytesPerPoint(k) + size;
+}
+
+/// "stage  12s left": a time-left estimate for the progress bar (per stage, from its rate so far).
+ProgressFn withTimeLeft(ProgressFn bar) {
+  if (!bar) return {};
+  struct State {
+    std::string stage;
+    std::chrono::steady_clock::time_point start;
+  };
+  auto st = std::make_shared<State>();
+  return [bar, st](std::string_view stage, double f) {
+    const auto now = std::chrono::steady_clock::now();
+    if (stage != st->stage) st->stage = std::string(stage), st->start = now;
+    const double el = std::chrono::duration<double>(now - st->start).count();
+    std::string label(stage);
+    if (f > 0.01 && f < 1 && el > 1) {
+      const int left = int(el * (1 - f) / f + 0.5);
+      label += left >= 60 ? fmt::format(" {}m{:02d}s left", left / 60, left % 60) : fmt::format(" {}s left", left);
+    }
+    bar(label, f);
+  };
+}
+
+void runOutOfCore(const NormalsArgs& args, const std::string& why) {
+  Timer total;
+  if (args.geometry.curvature) throwBadParameter("--curvature", "is not available on the out-of-core path (normals and radii only)");
+  std::string ext = std::filesystem::path(args.out).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".ply") throwBadParameter("--output", "the out-of-core path writes .ply");
+  ooc::OocNormalsOptions o;
+  o.geometry = args.geometry;
+  o.geometry.orientNormals = !args.noOrient;
+  o.workDir = args.tileDir.empty() ? args.out + ".tiles" : args.tileDir;
+  o.memoryBytes = memoryBudgetBytes();
+  o.minTiles = args.tiles;
+  o.keepWorkDir = args.keepTiles;
+  o.progress = withTimeLeft(progressBar());
+  say(fmt::format("{}: out of core ({}), tiles in {}", args.in, why, o.workDir.string()));
+  const ooc::OocNormalsReport r = ooc::computeNormalsOutOfCore(args.in, args.out, o);
+  endProgress();
+  if (r.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
+  say(fmt::format("{}: {} points, k = {}, {} threads, {} tiles (largest {} points with halo){}", args.in, r.points,
+                  args.geometry.k, currentThreadCount(), r.tiles, r.tilePointsMax,
+                  r.tilesReused ? fmt::format(", {} reused from an earlier run", r.tilesReused) : ""));
+  say(fmt::format("halo           {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", r.haloWidenings,
+                  r.inexactPoints));
+  if (r.orientationComponents > 0)
+    say(fmt::format("orientation    {} component(s), {} tile component(s) flipped, {} shared point(s) disagreeing",
+                    r.orientationComponents, r.tileFlips, r.disagreeingVotes));
+  say(fmt::format("average spacing {:.6g}", r.averageSpacing));
+  say(fmt::format("degenerate     {} duplicate, {} with < 3 distinct neighbours, {} collinear/flat, {} isolated", r.duplicate,
+                  r.fewNeighbours, r.flat, r.isolated));
+  say(fmt::format("time (s)       bbox {:.3f}  partition {:.3f}  tiles {:.3f}  orientation {:.3f}  write {:.3f}  total {:.3f}",
+                  r.tBbox, r.tPartition, r.tTiles, r.tOrient, r.tWrite, total.seconds()));
+  say("wrote " + args.out);
+}
 
 void run(const NormalsArgs& args) {
   Timer total;
   checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
+  if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty()) {
+    runOutOfCore(args, args.tiles > 0 ? fmt::format("--tiles {}", args.tiles) : "--out-of-core");
+    return;
+  }
+  if (!args.geometry.curvature) {
+    const double need = inMemoryEstimate(args.in, args.geometry.k);
+    if (need > memoryBudgetBytes()) {
+      runOutOfCore(args, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
+                                     globalOptions().maxMegabytes));
+      return;
+    }
+  }
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();
   if (model.points.empty()) throw Error(Error::Kind::BadInput, args.in, "", "holds no points");
@@ -75,6 +179,12 @@ RegisterCommand reg(20, [](CLI::App& app) {
   bindEnum(sub, "curvatureFit", o.curvatureFit, {{"taubin", CurvatureFit::Taubin}, {"quadric", CurvatureFit::Quadric}},
            "taubin (thesis §6.1.2) or quadric (height-function fit)");
   sub->add_flag("--no-orient", args->noOrient, "Skip the MST orientation of estimated normals");
+  sub->add_flag("--out-of-core", args->outOfCore,
+                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
+  sub->add_option("--tiles", args->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
+  sub->add_option("--tile-dir", args->tileDir,
+                  "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
+  sub->add_flag("--keep-tiles", args->keepTiles, "Keep the tile folder after a successful out-of-core run");
   sub->callback([args] { run(*args); });
 });
 
