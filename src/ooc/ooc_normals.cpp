@@ -41,6 +41,7 @@ constexpr int kFineCells = 64;           // histogram resolution along the longe
 constexpr uint64_t kBlock = 1u << 20;    // write-pass window (points), also the binning's count unit
 constexpr double kHaloStart = 1.0 / 16;  // first halo width, as a fraction of the tile width
 constexpr double kHaloShare = 1.35;      // tile points with halo / interior points, for sizing
+constexpr int kTilesInFlight = 2;        // tiles processed at once (each parallel inside)
 constexpr const char* kFormat = "linesurf tile folder";
 constexpr int kVersion = 1;
 
@@ -348,7 +349,10 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
     reportProgress(progress, "histogram", double(reader.position()) / double(n));
   }
   const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k);
-  const double tileBytes = std::max(1.0, (r.o.memoryBytes - r.ioBytes - 64.0 * 1024 * 1024) / double(r.concurrent));
+  // Sized for kTilesInFlight tiles whatever the thread count, so the tiles (and the output) do
+  // not depend on it.
+  const double base = std::min(64.0 * 1024 * 1024, r.o.memoryBytes / 4);
+  const double tileBytes = std::max(1.0, (r.o.memoryBytes - r.ioBytes - base) / double(kTilesInFlight));
   chooseTiles(r, hist, tileBytes / perPoint);
   for (size_t i = 0; i < r.tileIds.size(); ++i) r.denseOf[r.tileIds[i]] = i;
   r.blocks = size_t((n + kBlock - 1) / kBlock);
@@ -738,7 +742,7 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
   if (o.ranks < 1 || o.rank < 0 || o.rank >= o.ranks) throwBadParameter("rank", "must be in [0, ranks)");
   OocNormalsReport rep;
   Run r{o, in, out, o.workDir};
-  r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), 2)));
+  r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), kTilesInFlight)));
   r.ioBytes = std::clamp(o.memoryBytes / 8, 8.0 * 1024 * 1024, 256.0 * 1024 * 1024);
 
   const FileIdentity id = fileIdentity(in);
@@ -774,15 +778,22 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
       throwBadParameter("workDir", "'" + r.dir.string() + "' is not empty and is not a linesurf tile folder (no manifest.json)");
     }
   }
+  const bool created = !fs::exists(r.dir, ec);
   fs::create_directories(r.dir, ec);
   if (ec) throwIo(r.dir.string(), "cannot create the tile folder: " + ec.message());
   if (!reuse) {
     if (o.rank != 0) throwBadParameter("rank", "the partition is written by rank 0 before the other ranks start");
-    scanAndPartition(r, rep);
-    std::string blocks(r.blockCounts.size() * 4, '\0');
-    std::memcpy(blocks.data(), r.blockCounts.data(), blocks.size());
-    writeWhole(r.dir / "blocks.bin", blocks);
-    writeWhole(manifestPath, manifestJson(r, id).dump(1) + "\n");
+    try {
+      scanAndPartition(r, rep);
+      std::string blocks(r.blockCounts.size() * 4, '\0');
+      std::memcpy(blocks.data(), r.blockCounts.data(), blocks.size());
+      writeWhole(r.dir / "blocks.bin", blocks);
+      writeWhole(manifestPath, manifestJson(r, id).dump(1) + "\n");
+    } catch (...) {
+      // Nothing to resume from a partition that did not finish: leave no folder behind.
+      if (created) fs::remove_all(r.dir, ec);
+      throw;
+    }
   }
   rep.points = r.info.count;
   rep.tiles = r.tileIds.size();
