@@ -13,7 +13,13 @@
 #include "linesurf/ooc/point_stream.h"
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+
+#ifdef LINESURF_HAVE_MPI
+#include <mpi.h>
+#endif
 
 namespace linesurf::cli {
 namespace {
@@ -81,8 +87,54 @@ ProgressFn withTimeLeft(ProgressFn bar) {
   };
 }
 
+/// Processes an MPI launcher started (mpirun sets these), else 1.
+int launchedRanks() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
+  return 1;
+}
+
+/// MPI for the length of one out-of-core run (this process's rank, the barrier between phases).
+struct MpiRun {
+  int rank = 0, ranks = 1;
+#ifdef LINESURF_HAVE_MPI
+  bool active = false;
+  MpiRun() {
+    if (launchedRanks() <= 1) return;
+    int ready = 0;
+    MPI_Initialized(&ready);
+    if (!ready) MPI_Init(nullptr, nullptr);
+    active = true;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  }
+  ~MpiRun() {
+    if (active) MPI_Finalize();
+  }
+  std::function<void()> barrier() const {
+    if (!active) return {};
+    return [] { MPI_Barrier(MPI_COMM_WORLD); };
+  }
+  /// A rank that fails stops the whole job (the others would wait at the next barrier).
+  [[noreturn]] void abort(const std::string& message, int code) const {
+    std::fprintf(stderr, "%s\n", message.c_str());
+    std::fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, code);
+    std::exit(code);
+  }
+#else
+  MpiRun() {
+    if (launchedRanks() > 1)
+      throwBadParameter("mpirun", "this linesurf was built without MPI; install openmpi-bin libopenmpi-dev and rebuild");
+  }
+  std::function<void()> barrier() const { return {}; }
+#endif
+};
+
 void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   Timer total;
+  MpiRun mpi;
+  if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
   if (args.geometry.curvature) throwBadParameter("--curvature", "is not available on the out-of-core path (normals and radii only)");
   std::string ext = std::filesystem::path(args.out).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -95,9 +147,27 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   o.minTiles = args.tiles;
   o.keepWorkDir = args.keepTiles;
   o.progress = withTimeLeft(progressBar());
-  say(fmt::format("{}: out of core ({}), tiles in {}", args.in, why, o.workDir.string()));
-  const ooc::OocNormalsReport r = ooc::computeNormalsOutOfCore(args.in, args.out, o);
+  o.rank = mpi.rank;
+  o.ranks = mpi.ranks;
+  o.barrier = mpi.barrier();
+  say(fmt::format("{}: out of core ({}), tiles in {}{}", args.in, why, o.workDir.string(),
+                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  ooc::OocNormalsReport r;
+#ifdef LINESURF_HAVE_MPI
+  try {
+    r = ooc::computeNormalsOutOfCore(args.in, args.out, o);
+  } catch (const Error& e) {
+    if (!mpi.active) throw;
+    mpi.abort(e.what(), e.kind() == Error::Kind::BadParameter ? 1 : e.kind() == Error::Kind::BadInput ? 2 : 3);
+  } catch (const std::exception& e) {
+    if (!mpi.active) throw;
+    mpi.abort(std::string("linesurf: error: ") + e.what(), 3);
+  }
+#else
+  r = ooc::computeNormalsOutOfCore(args.in, args.out, o);
+#endif
   endProgress();
+  if (mpi.rank != 0) return;
   if (r.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
   say(fmt::format("{}: {} points, k = {}, {} threads, {} tiles (largest {} points with halo){}", args.in, r.points,
                   args.geometry.k, currentThreadCount(), r.tiles, r.tilePointsMax,
@@ -118,8 +188,10 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
 void run(const NormalsArgs& args) {
   Timer total;
   checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
-  if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty()) {
-    runOutOfCore(args, args.tiles > 0 ? fmt::format("--tiles {}", args.tiles) : "--out-of-core");
+  if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty() || launchedRanks() > 1) {
+    runOutOfCore(args, args.tiles > 0            ? fmt::format("--tiles {}", args.tiles)
+                       : launchedRanks() > 1     ? std::string("started by mpirun")
+                                                 : std::string("--out-of-core"));
     return;
   }
   if (!args.geometry.curvature) {

@@ -727,26 +727,7 @@ void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vect
   w.finish();
 }
 
-}  // namespace
-
-double inMemoryNormalsBytesPerPoint(int k) {
-  // Model point (~64 B), neighbour rows (8k), PCA and flags (~40), symmetrised adjacency (8k + 16),
-  // MST heap and keys (~24), Delaunay scratch (8k + 4), spacing and cover radius (8), kd-tree (~8),
-  // plus the reader's copy of the file's rows while the model is built (~24).
-  return 190.0 + 24.0 * double(k);
-}
-
-OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o) {
-  validate(o.geometry);
-  if (o.workDir.empty()) throwBadParameter("workDir", "empty path");
-  if (o.ranks < 1 || o.rank < 0 || o.rank >= o.ranks) throwBadParameter("rank", "must be in [0, ranks)");
-  OocNormalsReport rep;
-  Run r{o, in, out, o.workDir};
-  r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), kTilesInFlight)));
-  r.ioBytes = std::clamp(o.memoryBytes / 8, 8.0 * 1024 * 1024, 256.0 * 1024 * 1024);
-
-  const FileIdentity id = fileIdentity(in);
-  const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o);
+void prepareFolder(Run& r, OocNormalsReport& rep, const FileIdentity& id, const json& wantInput, const json& wantArgs) {
   const fs::path manifestPath = r.dir / "manifest.json";
   bool reuse = false;
   std::error_code ec;
@@ -782,7 +763,6 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
   fs::create_directories(r.dir, ec);
   if (ec) throwIo(r.dir.string(), "cannot create the tile folder: " + ec.message());
   if (!reuse) {
-    if (o.rank != 0) throwBadParameter("rank", "the partition is written by rank 0 before the other ranks start");
     try {
       scanAndPartition(r, rep);
       std::string blocks(r.blockCounts.size() * 4, '\0');
@@ -794,6 +774,46 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
       if (created) fs::remove_all(r.dir, ec);
       throw;
     }
+  }
+}
+
+}  // namespace
+
+double inMemoryNormalsBytesPerPoint(int k) {
+  // Model point (~64 B), neighbour rows (8k), PCA and flags (~40), symmetrised adjacency (8k + 16),
+  // MST heap and keys (~24), Delaunay scratch (8k + 4), spacing and cover radius (8), kd-tree (~8),
+  // plus the reader's copy of the file's rows while the model is built (~24).
+  return 190.0 + 24.0 * double(k);
+}
+
+OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o) {
+  validate(o.geometry);
+  if (o.workDir.empty()) throwBadParameter("workDir", "empty path");
+  if (o.ranks < 1 || o.rank < 0 || o.rank >= o.ranks) throwBadParameter("rank", "must be in [0, ranks)");
+  OocNormalsReport rep;
+  Run r{o, in, out, o.workDir};
+  r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), kTilesInFlight)));
+  r.ioBytes = std::clamp(o.memoryBytes / 8, 8.0 * 1024 * 1024, 256.0 * 1024 * 1024);
+
+  if (o.ranks > 1 && !o.barrier) throwBadParameter("barrier", "needed when ranks > 1");
+  const FileIdentity id = fileIdentity(in);
+  const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o);
+  const fs::path manifestPath = r.dir / "manifest.json";
+  std::error_code ec;
+  if (o.rank == 0) prepareFolder(r, rep, id, wantInput, wantArgs);
+  if (o.barrier) o.barrier();
+  if (o.rank != 0) {
+    // The other ranks take the partition rank 0 has just written (same input, same arguments).
+    json m;
+    try {
+      std::ifstream f(manifestPath);
+      m = json::parse(f);
+    } catch (const std::exception&) {
+      throwIo(manifestPath.string(), "rank " + std::to_string(o.rank) + " cannot read the manifest (is the tile folder shared by all ranks?)");
+    }
+    if (m.at("input") != wantInput || m.at("arguments") != wantArgs)
+      throwIo(manifestPath.string(), "rank " + std::to_string(o.rank) + " sees another input or other arguments than rank 0");
+    loadManifest(r, m);
   }
   rep.points = r.info.count;
   rep.tiles = r.tileIds.size();
@@ -820,6 +840,7 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
     reportProgress(o.progress, "tiles", totalTodo ? double(doneTodo) / double(totalTodo) : 1.0);
   }
   rep.tTiles = t.seconds();
+  if (o.barrier) o.barrier();
   if (o.rank != 0) return rep;  // rank 0 joins the orientations and writes the output
 
   t.reset();

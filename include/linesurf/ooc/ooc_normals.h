@@ -9,6 +9,7 @@
 /// cloud. See docs/file-format.md ("Tile folder") and docs/decisions.md for the design.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "linesurf/core/progress.h"
@@ -29,8 +30,13 @@ struct OocNormalsOptions {
   int minTiles = 0;
   /// Keep the working folder after a successful run (default: removed).
   bool keepWorkDir = false;
-  /// This process's share of the tile jobs: tiles t with t % ranks == rank (MPI); 1 process = 0/1.
+  /// This process's share of the tile jobs (MPI): the non-empty tiles d (in id order) with
+  /// d % ranks == rank. Rank 0 partitions, joins the orientations and writes the output; the
+  /// folder must be shared by all ranks. Output is the same for any number of ranks.
   int rank = 0, ranks = 1;
+  /// Waits for every rank (MPI_Barrier); called by every rank after the partition and after the
+  /// tiles. Needed when ranks > 1.
+  std::function<void()> barrier;
   ProgressFn progress;
 };
 
