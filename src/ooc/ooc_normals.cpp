@@ -430,9 +430,20 @@ void loadManifest(Run& r, const json& m) {
   std::memcpy(r.blockCounts.data(), b.data(), b.size());
 }
 
-/// Processes one tile: interior + halo through computePointGeometryTile; widens the halo until
-/// every interior point's queries stay inside it (or the halo is one tile wide).
-void processTile(const Run& r, uint32_t tile) {
+/// One tile with its halo through computePointGeometryTile: the halo is widened until every
+/// interior point's queries stay inside it (or it is one tile wide).
+struct TileGeometry {
+  Points all;                   ///< interior + halo, in input order
+  std::vector<uint32_t> owner;  ///< tile of each point of `all`
+  std::vector<uint8_t> exact;   ///< per point of `all`: its queries stayed inside the halo
+  HybridModel model;
+  PointGeometry geo;
+  detail::TileGeometryExtras extras;
+  uint64_t inexact = 0;
+  uint32_t widenings = 0;
+};
+
+TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   const Grid& g = r.grid;
   const size_t rs = recordSize(r.normalsIn);
   Points interior;
@@ -454,12 +465,12 @@ void processTile(const Run& r, uint32_t tile) {
   for (int a = 0; a < 3; ++a) openLow[a] = c[size_t(a)] == 0, openHigh[a] = c[size_t(a)] == g.tiles[size_t(a)] - 1;
 
   GeometryOptions go = r.o.geometry;
-  go.delaunayNeighbours = go.curvature = false;
+  go.delaunayNeighbours = delaunay;
+  go.curvature = false;
   go.coverRadius = true;
   go.progress = {};
   double h = g.width() * kHaloStart;
-  TileSummary sum;
-  sum.tile = tile;
+  TileGeometry tg;
   for (;;) {
     // Halo: the neighbours' points inside the box widened by h.
     Points all = interior;
@@ -482,15 +493,19 @@ void processTile(const Run& r, uint32_t tile) {
     std::vector<uint32_t> perm(n);
     std::iota(perm.begin(), perm.end(), 0u);
     std::sort(perm.begin(), perm.end(), [&](uint32_t a, uint32_t b) { return all.idx[a] < all.idx[b]; });
-    HybridModel m;
-    m.points.resize(n);
+    tg.all = Points();
+    tg.owner.resize(n);
+    tg.model = HybridModel();
+    tg.model.points.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      m.points[i].position = all.pos[perm[i]];
-      if (r.normalsIn) m.points[i].normal = all.nrm[perm[i]];
+      tg.all.idx.push_back(all.idx[perm[i]]);
+      tg.all.pos.push_back(all.pos[perm[i]]);
+      tg.owner[i] = owner[perm[i]];
+      tg.model.points[i].position = all.pos[perm[i]];
+      if (r.normalsIn) tg.model.points[i].normal = all.nrm[perm[i]];
     }
-    m.attributes.normals = r.normalsIn;
-    detail::TileGeometryExtras extras;
-    const PointGeometry geo = detail::computePointGeometryTile(m, go, r.dupTol, &extras);
+    tg.model.attributes.normals = r.normalsIn;
+    tg.geo = detail::computePointGeometryTile(tg.model, go, r.dupTol, &tg.extras);
     // Distance from a point to the halo's outer boundary (faces on the grid's border: none).
     auto room = [&](const Vec3f& pf) {
       const Vec3d p = pf.cast<double>();
@@ -501,31 +516,48 @@ void processTile(const Run& r, uint32_t tile) {
       }
       return d;
     };
-    uint64_t inexact = 0;
-    for (size_t i = 0; i < n; ++i)
-      if (owner[perm[i]] == tile && !(double(extras.reach[i]) < room(m.points[i].position))) ++inexact;
-    if (inexact > 0 && h < g.width()) {
+    tg.exact.assign(n, 0);
+    tg.inexact = 0;
+    for (size_t i = 0; i < n; ++i) {
+      tg.exact[i] = double(tg.extras.reach[i]) < room(tg.all.pos[i]);
+      if (tg.owner[i] == tile && !tg.exact[i]) ++tg.inexact;
+    }
+    if (tg.inexact > 0 && h < g.width()) {
       h = std::min(2 * h, g.width());
-      ++sum.widenings;
+      ++tg.widenings;
       continue;
     }
+    return tg;
+  }
+}
+
+/// Processes one tile for the normals: writes its result file.
+void processTile(const Run& r, uint32_t tile) {
+  TileGeometry tg = tileGeometry(r, tile, false);
+  const PointGeometry& geo = tg.geo;
+  const detail::TileGeometryExtras& extras = tg.extras;
+  const size_t n = tg.all.size();
+  TileSummary sum;
+  sum.tile = tile;
+  sum.widenings = tg.widenings;
+  const uint64_t inexact = tg.inexact;
+  {
     // Results of the interior points (in index order = the cell file's order).
     const bool oriented = !extras.component.empty();
     uint32_t comps = 0;
     for (uint32_t cpt : extras.component) comps = std::max(comps, cpt + 1);
     if (!oriented) comps = 1;
     std::vector<InteriorResult> res;
-    res.reserve(interior.size());
+    res.reserve(n);
     std::vector<std::array<Extreme, 6>> ext(comps);
     std::map<uint32_t, std::vector<SharedPoint>> shared;
     for (size_t i = 0; i < n; ++i) {
       const uint32_t comp = oriented ? extras.component[i] : 0;
-      const uint64_t gi = all.idx[perm[i]];
-      if (owner[perm[i]] != tile) {
+      const uint64_t gi = tg.all.idx[i];
+      if (tg.owner[i] != tile) {
         // A shared point: its normal here votes on the orientation of the two tiles when its
         // queries stayed inside this halo (then it is the owner's normal up to sign).
-        if (double(extras.reach[i]) < room(m.points[i].position))
-          shared[owner[perm[i]]].push_back({gi, comp, geo.normals[i]});
+        if (tg.exact[i]) shared[tg.owner[i]].push_back({gi, comp, geo.normals[i]});
         continue;
       }
       InteriorResult x;
@@ -541,7 +573,7 @@ void processTile(const Run& r, uint32_t tile) {
       if (x.flags & kPointFlatNeighbourhood) ++sum.flagCounts[2];
       if (x.flags & kPointIsolated) ++sum.flagCounts[3];
       for (size_t d = 0; d < 6; ++d) {
-        const float v = m.points[i].position.dot(kSeedDirs[d]);
+        const float v = tg.all.pos[i].dot(kSeedDirs[d]);
         Extreme& e = ext[comp][d];
         if (v > e.value || (v == e.value && gi < e.index)) e.value = v, e.index = gi, e.normal = geo.normals[i];
       }
@@ -551,7 +583,6 @@ void processTile(const Run& r, uint32_t tile) {
     sum.inexact = inexact;
     sum.withHalo = uint32_t(n);
     writeWhole(r.resultPath(tile), encodeResult(sum, res, ext, shared));
-    return;
   }
 }
 
