@@ -10,16 +10,9 @@
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/ooc/ooc_normals.h"
-#include "linesurf/ooc/point_stream.h"
+#include "ooc_cli.h"
 
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-
-#ifdef LINESURF_HAVE_MPI
-#include <mpi.h>
-#endif
 
 namespace linesurf::cli {
 namespace {
@@ -37,98 +30,6 @@ struct NormalsArgs {
   int tiles = 0;
   std::string tileDir;
   bool keepTiles = false;
-};
-
-// --- out-of-core path ---------------------------------------------------------------------------
-
-/// The memory budget of a run, bytes: --max-mb. (One place, so that a reworked budget
-/// mechanism changes only this.)
-double memoryBudgetBytes() { return globalOptions().maxMegabytes * 1024.0 * 1024.0; }
-
-/// Estimated bytes of the in-memory path for `in`, from its header (PLY) or size (XYZ).
-double inMemoryEstimate(const std::string& in, int k) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const double size = double(fs::file_size(in, ec));
-  if (ec) return 0;  // the reader reports a missing file
-  double points = size / 12.0;  // binary x y z floats, the densest encoding
-  std::string ext = fs::path(in).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".ply") {
-    try {
-      points = double(ooc::PointReader(in).info().count);
-    } catch (const Error&) {
-      return 0;  // not a file the streaming reader takes: the in-memory reader says why
-    }
-  } else if (ext == ".xyz") {
-    points = size / 24.0;  // ~8 characters per coordinate
-  }
-  return points * ooc::inMemoryNormalsBytesPerPoint(k) + size;
-}
-
-/// "stage  12s left": a time-left estimate for the progress bar (per stage, from its rate so far).
-ProgressFn withTimeLeft(ProgressFn bar) {
-  if (!bar) return {};
-  struct State {
-    std::string stage;
-    std::chrono::steady_clock::time_point start;
-  };
-  auto st = std::make_shared<State>();
-  return [bar, st](std::string_view stage, double f) {
-    const auto now = std::chrono::steady_clock::now();
-    if (stage != st->stage) st->stage = std::string(stage), st->start = now;
-    const double el = std::chrono::duration<double>(now - st->start).count();
-    std::string label(stage);
-    if (f > 0.01 && f < 1 && el > 1) {
-      const int left = int(el * (1 - f) / f + 0.5);
-      label += left >= 60 ? fmt::format(" {}m{:02d}s left", left / 60, left % 60) : fmt::format(" {}s left", left);
-    }
-    bar(label, f);
-  };
-}
-
-/// Processes an MPI launcher started (mpirun sets these), else 1.
-int launchedRanks() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
-    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
-  return 1;
-}
-
-/// MPI for the length of one out-of-core run (this process's rank, the barrier between phases).
-struct MpiRun {
-  int rank = 0, ranks = 1;
-#ifdef LINESURF_HAVE_MPI
-  bool active = false;
-  MpiRun() {
-    if (launchedRanks() <= 1) return;
-    int ready = 0;
-    MPI_Initialized(&ready);
-    if (!ready) MPI_Init(nullptr, nullptr);
-    active = true;
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-  }
-  ~MpiRun() {
-    if (active) MPI_Finalize();
-  }
-  std::function<void()> barrier() const {
-    if (!active) return {};
-    return [] { MPI_Barrier(MPI_COMM_WORLD); };
-  }
-  /// A rank that fails stops the whole job (the others would wait at the next barrier).
-  [[noreturn]] void abort(const std::string& message, int code) const {
-    std::fprintf(stderr, "%s\n", message.c_str());
-    std::fflush(stderr);
-    MPI_Abort(MPI_COMM_WORLD, code);
-    std::exit(code);
-  }
-#else
-  MpiRun() {
-    if (launchedRanks() > 1)
-      throwBadParameter("mpirun", "this linesurf was built without MPI; install openmpi-bin libopenmpi-dev and rebuild");
-  }
-  std::function<void()> barrier() const { return {}; }
-#endif
 };
 
 void runOutOfCore(const NormalsArgs& args, const std::string& why) {
@@ -153,19 +54,7 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   say(fmt::format("{}: out of core ({}), tiles in {}{}", args.in, why, o.workDir.string(),
                   mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
   ooc::OocNormalsReport r;
-#ifdef LINESURF_HAVE_MPI
-  try {
-    r = ooc::computeNormalsOutOfCore(args.in, args.out, o);
-  } catch (const Error& e) {
-    if (!mpi.active) throw;
-    mpi.abort(e.what(), e.kind() == Error::Kind::BadParameter ? 1 : e.kind() == Error::Kind::BadInput ? 2 : 3);
-  } catch (const std::exception& e) {
-    if (!mpi.active) throw;
-    mpi.abort(std::string("linesurf: error: ") + e.what(), 3);
-  }
-#else
-  r = ooc::computeNormalsOutOfCore(args.in, args.out, o);
-#endif
+  mpi.guard([&] { r = ooc::computeNormalsOutOfCore(args.in, args.out, o); });
   endProgress();
   if (mpi.rank != 0) return;
   if (r.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");

@@ -254,6 +254,7 @@ InteriorResult decodeInterior(const char* p) {
 struct Run {
   const OocNormalsOptions& o;
   fs::path in, out, dir;
+  const EpsDeltaOptions* extract = nullptr;  ///< set for the (ε,δ) extraction
   PointFileInfo info;
   bool normalsIn = false;
   Grid grid;
@@ -269,11 +270,17 @@ struct Run {
 
   fs::path cellPath(uint32_t t) const { return dir / "cells" / fmt::format("cell_{:06d}.bin", t); }
   fs::path resultPath(uint32_t t) const { return dir / "results" / fmt::format("tile_{:06d}.res", t); }
+  fs::path extractPath(uint32_t t) const { return dir / "results" / fmt::format("extract_{:06d}.res", t); }
 };
 
-json argumentsJson(const OocNormalsOptions& o) {
+json argumentsJson(const OocNormalsOptions& o, const EpsDeltaOptions* e) {
   const GeometryOptions& g = o.geometry;
-  return json{{"k", g.k},
+  json x = nullptr;
+  if (e)
+    x = json{{"epsilon", e->epsilon}, {"epsilon_relative", e->epsilonRelative}, {"delta", e->delta},
+             {"min_replaced", e->minReplaced}, {"max_replaced", e->maxReplaced}, {"endpoint_normals", e->endpointNormals}};
+  return json{{"extract", x},
+              {"k", g.k},
               {"orientation_penalty_bits", floatBits(g.orientationPenalty)},
               {"orient", g.orientNormals},
               {"recompute", g.recomputeNormals},
@@ -396,7 +403,7 @@ json manifestJson(const Run& r, const FileIdentity& id) {
   return json{{"format", kFormat},
               {"version", kVersion},
               {"input", identityJson(r.in, id)},
-              {"arguments", argumentsJson(r.o)},
+              {"arguments", argumentsJson(r.o, r.extract)},
               {"points", r.info.count},
               {"normals", r.normalsIn},
               {"comments", r.info.comments},
@@ -808,27 +815,232 @@ void prepareFolder(Run& r, OocNormalsReport& rep, const FileIdentity& id, const 
   }
 }
 
-}  // namespace
 
-double inMemoryNormalsBytesPerPoint(int k) {
-  // Model point (~64 B), neighbour rows (8k), PCA and flags (~40), symmetrised adjacency (8k + 16),
-  // MST heap and keys (~24), Delaunay scratch (8k + 4), spacing and cover radius (8), kd-tree (~8),
-  // plus the reader's copy of the file's rows while the model is built (~24).
-  return 190.0 + 24.0 * double(k);
+// --- (ε,δ) extraction per tile (§3.1) ---------------------------------------------------------------
+void writeOrientation(const Run& r, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip, float avg) {
+  std::string b;
+  putRaw(b, uint64_t(nodeOffset.size()));
+  for (size_t v : nodeOffset) putRaw(b, uint64_t(v));
+  b.append(reinterpret_cast<const char*>(flip.data()), flip.size());
+  putRaw(b, avg);
+  writeWhole(r.dir / "orientation.bin", b);
 }
 
-OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o) {
+void readOrientation(const Run& r, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip, float& avg) {
+  const fs::path p = r.dir / "orientation.bin";
+  const std::string b = readRange(p, 0, fs::file_size(p));
+  const char* q = b.data();
+  nodeOffset.resize(size_t(getRaw<uint64_t>(q)));
+  for (size_t& v : nodeOffset) v = size_t(getRaw<uint64_t>(q));
+  flip.assign(q, q + nodeOffset.back());
+  q += nodeOffset.back();
+  avg = getRaw<float>(q);
+}
+
+/// The tile's own points as a cloud of their own, with their (exact) geometry: halo points are
+/// dropped from the neighbour rows and Delaunay stars, so a segment can only take own points.
+void extractTile(const Run& r, uint32_t tile, const EpsDeltaOptions& e, double epsilon, const std::vector<size_t>& nodeOffset,
+                 const std::vector<uint8_t>& flip, float avg) {
+  const TileGeometry tg = tileGeometry(r, tile, true);
+  const PointGeometry& g = tg.geo;
+  const size_t n = tg.all.size(), k = size_t(g.k), d = r.denseOf.at(tile);
+  std::vector<uint32_t> local(n, PointGeometry::kNoNeighbour), own;
+  for (size_t i = 0; i < n; ++i)
+    if (tg.owner[i] == tile) local[i] = uint32_t(own.size()), own.push_back(uint32_t(i));
+  const size_t m = own.size();
+  HybridModel c;
+  c.points.resize(m);
+  c.attributes.normals = true;
+  PointGeometry sg;
+  sg.k = g.k;
+  sg.averageSpacing = avg;
+  sg.neighbours.assign(m * k, PointGeometry::kNoNeighbour);
+  sg.neighbourDistances.assign(m * k, std::numeric_limits<float>::infinity());
+  sg.delaunayOffsets.assign(m + 1, 0);
+  for (size_t j = 0; j < m; ++j) {
+    const size_t i = own[j];
+    const uint32_t comp = tg.extras.component.empty() ? 0 : tg.extras.component[i];
+    const Vec3f nrm = flip[nodeOffset[d] + comp] ? Vec3f(-g.normals[i]) : g.normals[i];
+    c.points[j].position = tg.all.pos[i];
+    c.points[j].normal = nrm;
+    sg.normals.push_back(nrm);
+    sg.eigenvalues.push_back(g.eigenvalues[i]);
+    sg.surfaceVariation.push_back(g.surfaceVariation[i]);
+    sg.spacing.push_back(g.spacing[i]);
+    sg.coverRadius.push_back(g.coverRadius[i]);
+    sg.flags.push_back(g.flags[i]);
+    size_t t = 0;
+    for (size_t a = 0; a < k; ++a) {
+      const uint32_t q = g.neighbours[i * k + a];
+      if (q == PointGeometry::kNoNeighbour) break;
+      if (local[q] == PointGeometry::kNoNeighbour) continue;
+      sg.neighbours[j * k + t] = local[q];
+      sg.neighbourDistances[j * k + t] = g.neighbourDistances[i * k + a];
+      ++t;
+    }
+    const auto ids = g.delaunayOf(i);
+    const auto ws = g.delaunayWeightsOf(i);
+    for (size_t a = 0; a < ids.size(); ++a)
+      if (local[ids[a]] != PointGeometry::kNoNeighbour) sg.delaunayIndices.push_back(local[ids[a]]), sg.delaunayWeights.push_back(ws[a]);
+    sg.delaunayOffsets[j + 1] = uint32_t(sg.delaunayIndices.size());
+  }
+  EpsDeltaOptions eo = e;
+  eo.epsilon = epsilon;
+  eo.provenance = true;
+  eo.progress = {};
+  const HybridModel x = extractEpsDelta(c, sg, eo);
+  std::vector<uint8_t> replaced(m, 0);
+  for (const auto& prov : x.provenance)
+    for (uint32_t j : prov) replaced[j] = 1;
+  // File: counts, kept-per-block counts, kept points, segments with provenance (input indices).
+  std::string b = "LSEXT001";
+  const uint64_t kept = uint64_t(x.points.size());
+  putRaw(b, kept), putRaw(b, uint64_t(x.segments.size()));
+  std::vector<uint32_t> perBlock(r.blocks, 0);
+  for (size_t j = 0; j < m; ++j)
+    if (!replaced[j]) ++perBlock[size_t(tg.all.idx[own[j]] / kBlock)];
+  for (uint32_t v : perBlock) putRaw(b, v);
+  size_t at = 0;
+  for (size_t j = 0; j < m; ++j) {
+    if (replaced[j]) continue;
+    const Point& p = x.points[at++];
+    putRaw(b, tg.all.idx[own[j]]), putRaw(b, p.position), putRaw(b, p.normal), putRaw(b, p.radius);
+  }
+  if (at != x.points.size()) throw std::logic_error("extractTile: kept points do not match the provenance");
+  for (size_t sI = 0; sI < x.segments.size(); ++sI) {
+    const Segment& sgm = x.segments[sI];
+    putRaw(b, sgm.p0), putRaw(b, sgm.p1), putRaw(b, sgm.normal), putRaw(b, sgm.normal0), putRaw(b, sgm.normal1), putRaw(b, sgm.radius);
+    putRaw(b, uint32_t(x.provenance[sI].size()));
+    for (uint32_t j : x.provenance[sI]) putRaw(b, uint32_t(tg.all.idx[own[j]]));
+  }
+  writeWhole(r.extractPath(tile), b);
+}
+
+void extractTiles(const Run& r, const EpsDeltaOptions& e, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip,
+                  float avg, OocEpsDeltaReport& er) {
+  Timer t;
+  const double epsilon = e.epsilon > 0 ? e.epsilon : e.epsilonRelative * double(avg);
+  er.epsilon = epsilon;
+  std::vector<uint32_t> todo;
+  std::error_code ec;
+  for (size_t d = 0; d < r.tileIds.size(); ++d)
+    if (int(d % size_t(r.o.ranks)) == r.o.rank && !fs::exists(r.extractPath(r.tileIds[d]), ec)) todo.push_back(r.tileIds[d]);
+  uint64_t total = 0, done = 0;
+  for (uint32_t tile : todo) total += r.tileCounts[r.denseOf.at(tile)];
+  for (size_t b = 0; b < todo.size(); b += r.concurrent) {
+    const size_t end = std::min(todo.size(), b + r.concurrent);
+    parallelFor(b, end, [&](size_t i) { extractTile(r, todo[i], e, epsilon, nodeOffset, flip, avg); }, 1);
+    for (size_t i = b; i < end; ++i) done += r.tileCounts[r.denseOf.at(todo[i])];
+    reportProgress(r.o.progress, "eps-delta tiles", total ? double(done) / double(total) : 1.0);
+  }
+  er.tExtract = t.seconds();
+}
+
+void writeHybrid(const Run& r, const EpsDeltaOptions& e, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip,
+                 OocEpsDeltaReport& er) {
+  (void)nodeOffset, (void)flip;
+  const size_t T = r.tileIds.size();
+  const size_t headBytes = 8 + 16 + r.blocks * 4;
+  std::vector<uint64_t> kept(T), segs(T);
+  std::vector<std::vector<uint32_t>> perBlock(T);
+  for (size_t d = 0; d < T; ++d) {
+    const fs::path p = r.extractPath(r.tileIds[d]);
+    const std::string h = readRange(p, 0, headBytes);
+    if (h.compare(0, 8, "LSEXT001") != 0) throwIo(p.string(), "not a tile extraction file");
+    const char* q = h.data() + 8;
+    kept[d] = getRaw<uint64_t>(q), segs[d] = getRaw<uint64_t>(q);
+    perBlock[d].resize(r.blocks);
+    for (uint32_t& v : perBlock[d]) v = getRaw<uint32_t>(q);
+    er.keptPoints += kept[d];
+    er.segments += segs[d];
+  }
+  er.replacedPoints = r.info.count - er.keptPoints;
+  std::vector<std::string> comments = r.info.comments;
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "eps-delta: epsilon=%.9g delta=%.9g k=%d", er.epsilon, e.delta, r.o.geometry.k);
+  comments.push_back(buf);
+  comments.push_back(std::string("eps-delta: normals=") + (r.normalsIn && !r.o.geometry.recomputeNormals ? "file" : "computed"));
+  // The segment element as writePlyModel declares it.
+  std::string segHead;
+  if (er.segments > 0) {
+    segHead = "element segment " + std::to_string(er.segments) + "\n";
+    segHead += "property float x0\nproperty float y0\nproperty float z0\nproperty float x1\nproperty float y1\nproperty float z1\n";
+    segHead += "property float nx\nproperty float ny\nproperty float nz\n";
+    segHead += "property float radius\n";
+    if (e.endpointNormals)
+      segHead += "property float nx0\nproperty float ny0\nproperty float nz0\nproperty float nx1\nproperty float ny1\nproperty float nz1\n";
+    if (e.provenance) segHead += "property list uint uint provenance\n";
+  }
+  PlyPointWriter w(r.out, er.keptPoints, comments, true, true, segHead);
+  constexpr size_t kKeptRecord = 8 + 12 + 12 + 4;
+  std::vector<uint64_t> used(T, 0);
+  std::vector<Vec3f> pos, nrm;
+  std::vector<float> rad;
+  std::vector<std::pair<uint64_t, uint32_t>> order;  // (input index, slot) of a block's kept points
+  for (size_t blk = 0; blk < r.blocks; ++blk) {
+    pos.clear(), nrm.clear(), rad.clear(), order.clear();
+    for (size_t d = 0; d < T; ++d) {
+      const uint32_t cnt = perBlock[d][blk];
+      if (!cnt) continue;
+      const std::string rec = readRange(r.extractPath(r.tileIds[d]), headBytes + used[d] * kKeptRecord, uint64_t(cnt) * kKeptRecord);
+      const char* q = rec.data();
+      for (uint32_t i = 0; i < cnt; ++i) {
+        order.emplace_back(getRaw<uint64_t>(q), uint32_t(pos.size()));
+        pos.push_back(getRaw<Vec3f>(q)), nrm.push_back(getRaw<Vec3f>(q)), rad.push_back(getRaw<float>(q));
+      }
+      used[d] += cnt;
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<Vec3f> p2(pos.size()), n2(pos.size());
+    std::vector<float> r2(pos.size());
+    for (size_t i = 0; i < order.size(); ++i) p2[i] = pos[order[i].second], n2[i] = nrm[order[i].second], r2[i] = rad[order[i].second];
+    w.write(p2.data(), n2.data(), r2.data(), p2.size());
+    reportProgress(r.o.progress, "write points", double(blk + 1) / double(r.blocks));
+  }
+  // Segments, tile after tile, streamed in pieces.
+  for (size_t d = 0; d < T; ++d) {
+    if (!segs[d]) continue;
+    const fs::path p = r.extractPath(r.tileIds[d]);
+    const uint64_t start = headBytes + kept[d] * kKeptRecord;
+    const std::string all = readRange(p, start, fs::file_size(p) - start);
+    const char* q = all.data();
+    std::string rows;
+    for (uint64_t sI = 0; sI < segs[d]; ++sI) {
+      Vec3f v[5];
+      for (Vec3f& x : v) x = getRaw<Vec3f>(q);
+      const float radius = getRaw<float>(q);
+      const uint32_t cnt = getRaw<uint32_t>(q);
+      for (int a = 0; a < 3; ++a) putRaw(rows, v[a]);
+      putRaw(rows, radius);
+      if (e.endpointNormals) putRaw(rows, v[3]), putRaw(rows, v[4]);
+      if (e.provenance) putRaw(rows, cnt);
+      for (uint32_t i = 0; i < cnt; ++i) {
+        const uint32_t idx = getRaw<uint32_t>(q);
+        if (e.provenance) putRaw(rows, idx);
+      }
+      if (rows.size() > (8u << 20)) w.writeRaw(rows), rows.clear();
+    }
+    w.writeRaw(rows);
+  }
+  w.finish();
+}
+
+void joinTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip);
+
+OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocNormalsOptions& o, const EpsDeltaOptions* extract,
+                             OocEpsDeltaReport* er) {
   validate(o.geometry);
   if (o.workDir.empty()) throwBadParameter("workDir", "empty path");
   if (o.ranks < 1 || o.rank < 0 || o.rank >= o.ranks) throwBadParameter("rank", "must be in [0, ranks)");
   OocNormalsReport rep;
   Run r{o, in, out, o.workDir};
+  r.extract = extract;
   r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), kTilesInFlight)));
   r.ioBytes = std::clamp(o.memoryBytes / 8, 8.0 * 1024 * 1024, 256.0 * 1024 * 1024);
 
   if (o.ranks > 1 && !o.barrier) throwBadParameter("barrier", "needed when ranks > 1");
   const FileIdentity id = fileIdentity(in);
-  const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o);
+  const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o, extract);
   const fs::path manifestPath = r.dir / "manifest.json";
   std::error_code ec;
   if (o.rank == 0) prepareFolder(r, rep, id, wantInput, wantArgs);
@@ -867,14 +1079,46 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
   for (size_t b = 0; b < todo.size(); b += r.concurrent) {
     const size_t e = std::min(todo.size(), b + r.concurrent);
     parallelFor(b, e, [&](size_t i) { processTile(r, todo[i]); }, 1);
+    // (a tile's normals pass runs without Delaunay lists; the extraction recomputes them per tile)
     for (size_t i = b; i < e; ++i) doneTodo += r.tileCounts[r.denseOf.at(todo[i])];
     reportProgress(o.progress, "tiles", totalTodo ? double(doneTodo) / double(totalTodo) : 1.0);
   }
   rep.tTiles = t.seconds();
   if (o.barrier) o.barrier();
-  if (o.rank != 0) return rep;  // rank 0 joins the orientations and writes the output
+  if (o.rank != 0 && !extract) return rep;  // rank 0 joins the orientations and writes the output
+  std::vector<size_t> nodeOffset;
+  std::vector<uint8_t> flip;
+  if (o.rank != 0) {
+    // The extraction needs rank 0's orientation: wait for it, then read it.
+    o.barrier();
+    readOrientation(r, nodeOffset, flip, rep.averageSpacing);
+  } else {
+    joinTiles(r, rep, nodeOffset, flip);
+    if (extract && o.ranks > 1) {
+      writeOrientation(r, nodeOffset, flip, rep.averageSpacing);
+      o.barrier();
+    }
+  }
+  if (extract) {
+    extractTiles(r, *extract, nodeOffset, flip, rep.averageSpacing, *er);
+    if (o.barrier) o.barrier();
+    if (o.rank != 0) return rep;
+    t.reset();
+    writeHybrid(r, *extract, nodeOffset, flip, *er);
+    er->tWrite = t.seconds();
+  } else {
+    t.reset();
+    writeOutput(r, flip, nodeOffset, rep.averageSpacing);
+    rep.tWrite = t.seconds();
+  }
+  if (!o.keepWorkDir) fs::remove_all(r.dir, ec);
+  return rep;
+}
 
-  t.reset();
+void joinTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip) {
+  const OocNormalsOptions& o = r.o;
+  std::error_code ec;
+  Timer t;
   // Summaries: spacing, flags, halo statistics.
   double spacingSum = 0;
   uint64_t spacingCount = 0;
@@ -882,8 +1126,6 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
     const fs::path p = r.resultPath(tile);
     if (!fs::exists(p, ec)) throwIo(p.string(), "tile result missing (did every rank finish?)");
   }
-  std::vector<size_t> nodeOffset;
-  std::vector<uint8_t> flip;
   const bool orient = o.geometry.orientNormals && !(r.normalsIn && !o.geometry.recomputeNormals);
   {
     // The summaries (read whole: the extremes follow the interior records).
@@ -917,11 +1159,27 @@ OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out
     flip.assign(nodeOffset.back(), 0);
   }
   rep.tOrient = t.seconds();
-  t.reset();
-  writeOutput(r, flip, nodeOffset, rep.averageSpacing);
-  rep.tWrite = t.seconds();
-  if (!o.keepWorkDir) fs::remove_all(r.dir, ec);
-  return rep;
+}
+
+}  // namespace
+
+double inMemoryNormalsBytesPerPoint(int k) {
+  // Model point (~64 B), neighbour rows (8k), PCA and flags (~40), symmetrised adjacency (8k + 16),
+  // MST heap and keys (~24), Delaunay scratch (8k + 4), spacing and cover radius (8), kd-tree (~8),
+  // plus the reader's copy of the file's rows while the model is built (~24).
+  return 190.0 + 24.0 * double(k);
+}
+
+OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o) {
+  return runPipeline(in, out, o, nullptr, nullptr);
+}
+
+OocEpsDeltaReport extractEpsDeltaOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o,
+                                           const EpsDeltaOptions& extract) {
+  validate(extract);
+  OocEpsDeltaReport er;
+  er.geometry = runPipeline(in, out, o, &extract, &er);
+  return er;
 }
 
 }  // namespace linesurf::ooc

@@ -291,7 +291,7 @@ size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
 
 // ---------------------------------------------------------------------------------------------
 PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
-                               bool normals, bool radius)
+                               bool normals, bool radius, const std::string& moreElements)
     : path_(path.string()), count_(count), normals_(normals), radius_(radius) {
   std::filesystem::path dir = path.parent_path();
   if (dir.empty()) dir = ".";
@@ -321,6 +321,7 @@ PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count
   h += "property float x\nproperty float y\nproperty float z\n";
   if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
   if (radius) h += "property float radius\n";
+  h += moreElements;
   h += "end_header\n";
   put(h.data(), h.size());
 }
@@ -350,6 +351,11 @@ void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radi
   }
   put(row_.data(), row_.size());
   written_ += n;
+}
+
+void PlyPointWriter::writeRaw(const std::string& bytes) {
+  if (written_ != count_) throw std::logic_error("PlyPointWriter: element rows before every vertex row");
+  put(bytes.data(), bytes.size());
 }
 
 void PlyPointWriter::finish() {

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "linesurf/core/progress.h"
+#include "linesurf/extract/eps_delta.h"
 #include "linesurf/geometry/point_geometry.h"
 
 namespace linesurf::ooc {
@@ -64,5 +65,21 @@ double inMemoryNormalsBytesPerPoint(int k);
 /// x y z nx ny nz radius), as `linesurf normals` does in memory. Throws linesurf::Error.
 OocNormalsReport computeNormalsOutOfCore(const std::filesystem::path& in, const std::filesystem::path& out,
                                          const OocNormalsOptions& options);
+
+struct OocEpsDeltaReport {
+  OocNormalsReport geometry;
+  uint64_t keptPoints = 0, segments = 0, replacedPoints = 0;
+  double epsilon = 0;
+  double tExtract = 0, tWrite = 0;
+};
+
+/// (ε,δ) extraction (§3.1) out of core: the normals pipeline above (with local Delaunay
+/// neighbours), then extractEpsDelta on each tile's own points with their exact geometry,
+/// epsilon resolved from the whole cloud's average spacing. A segment never crosses a tile
+/// border, so every input point ends as exactly one output point or in exactly one segment.
+/// Output as extractEpsDelta's: kept points in input order, then the segments tile after tile
+/// (with provenance in input indices when `extract.provenance`).
+OocEpsDeltaReport extractEpsDeltaOutOfCore(const std::filesystem::path& in, const std::filesystem::path& out,
+                                           const OocNormalsOptions& options, const EpsDeltaOptions& extract);
 
 }  // namespace linesurf::ooc

@@ -71,13 +71,17 @@ class PointReader {
 /// written; destroying an unfinished writer removes it, so no partial output is ever left.
 class PlyPointWriter {
  public:
+  /// `moreElements`: header lines of elements after the vertices (e.g. "element segment N\n
+  /// property ..."), whose rows follow through writeRaw() once every vertex row is written.
   PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
-                 bool normals, bool radius);
+                 bool normals, bool radius, const std::string& moreElements = "");
   ~PlyPointWriter();
   PlyPointWriter(const PlyPointWriter&) = delete;
   PlyPointWriter& operator=(const PlyPointWriter&) = delete;
   /// Appends n rows (nrm / radius ignored when the file has none).
   void write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n);
+  /// Rows of the further elements, already encoded.
+  void writeRaw(const std::string& bytes);
   void finish();
 
  private:
