@@ -55,6 +55,14 @@ TEST(OocMpi, ThreeRanksWriteWhatOneProcessWrites) {
   EXPECT_TRUE(slurp(d / "three.ply") == slurp(d / "one.ply"));
   EXPECT_FALSE(fs::exists(d / "three.ply.tiles"));
 
+  // The (ε,δ) extraction too.
+  const auto eOne = test::runCli("extract eps-delta " + in + " -o '" + (d / "e1.ply").string() + "' --provenance --tiles 16");
+  ASSERT_EQ(eOne.exitCode, 0) << eOne.out;
+  const auto eThree = shell(mpirun + LINESURF_CLI + " extract eps-delta " + in + " -o '" + (d / "e3.ply").string() +
+                            "' --provenance --tiles 16 -j 1");
+  ASSERT_EQ(eThree.exitCode, 0) << eThree.out;
+  EXPECT_TRUE(slurp(d / "e3.ply") == slurp(d / "e1.ply"));
+
   // A bad input stops every rank with the reader's exit code and leaves no output.
   const std::string bytes = slurp(d / "scan.ply");
   std::ofstream(d / "cut.ply", std::ios::binary) << bytes.substr(0, bytes.size() / 3);
