@@ -300,7 +300,13 @@ json identityJson(const fs::path& in, const FileIdentity& id) {
 void chooseTiles(Run& r, const std::vector<uint64_t>& hist, double tilePoints) {
   Grid& g = r.grid;
   const int longest = *std::max_element(g.dims.begin(), g.dims.end());
-  for (int s = longest; s >= 1; --s) {
+  // Tile sizes from the number of tiles along the longest axis (1, 2, 3, ...): even tiles, not a
+  // large one beside slivers.
+  int previous = 0;
+  for (int along = 1; along <= longest; ++along) {
+    const int s = (longest + along - 1) / along;
+    if (s == previous) continue;
+    previous = s;
     g.s = s;
     for (int a = 0; a < 3; ++a) g.tiles[size_t(a)] = (g.dims[size_t(a)] + s - 1) / s;
     std::map<uint32_t, uint64_t> counts;
@@ -355,7 +361,8 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
     for (const Vec3f& p : pos) ++hist[g.fineOf(p)];
     reportProgress(progress, "histogram", double(reader.position()) / double(n));
   }
-  const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k);
+  // (ε,δ) also holds Delaunay lists and candidates per tile: a quarter more.
+  const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k) * (r.extract ? 1.25 : 1.0);
   // Sized for kTilesInFlight tiles whatever the thread count, so the tiles (and the output) do
   // not depend on it.
   const double base = std::min(64.0 * 1024 * 1024, r.o.memoryBytes / 4);
