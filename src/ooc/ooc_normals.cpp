@@ -41,7 +41,8 @@ constexpr int kFineCells = 64;           // histogram resolution along the longe
 constexpr uint64_t kBlock = 1u << 20;    // write-pass window (points), also the binning's count unit
 constexpr double kHaloStart = 1.0 / 16;  // first halo width, as a fraction of the tile width
 constexpr double kHaloShare = 1.35;      // tile points with halo / interior points, for sizing
-constexpr int kTilesInFlight = 2;        // tiles processed at once (each parallel inside)
+constexpr int kTilesInFlight = 2;
+constexpr uint32_t kVotesPerPair = 1024;  // shared points kept per (neighbour tile, component)        // tiles processed at once (each parallel inside)
 constexpr const char* kFormat = "linesurf tile folder";
 constexpr int kVersion = 1;
 
@@ -565,13 +566,16 @@ void processTile(const Run& r, uint32_t tile) {
     res.reserve(n);
     std::vector<std::array<Extreme, 6>> ext(comps);
     std::map<uint32_t, std::vector<SharedPoint>> shared;
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> votesOf;
     for (size_t i = 0; i < n; ++i) {
       const uint32_t comp = oriented ? extras.component[i] : 0;
       const uint64_t gi = tg.all.idx[i];
       if (tg.owner[i] != tile) {
         // A shared point: its normal here votes on the orientation of the two tiles when its
         // queries stayed inside this halo (then it is the owner's normal up to sign).
-        if (tg.exact[i]) shared[tg.owner[i]].push_back({gi, comp, geo.normals[i]});
+        // At most kVotesPerPair per (owner, component): exact shared normals vote unanimously, and
+        // the cap bounds what the join holds in memory (20% of the points would be shared).
+        if (tg.exact[i] && ++votesOf[{tg.owner[i], comp}] <= kVotesPerPair) shared[tg.owner[i]].push_back({gi, comp, geo.normals[i]});
         continue;
       }
       InteriorResult x;
