@@ -10,6 +10,11 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/eps_delta.h"
 #include "options_bind.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/ooc/ooc_normals.h"
+#include "ooc_cli.h"
+
+#include <filesystem>
 
 namespace linesurf::cli {
 namespace {
@@ -23,7 +28,51 @@ struct EpsDeltaArgs {
   }();
   EpsDeltaOptions extract;
   bool ascii = false;
+  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
+  bool outOfCore = false;
+  int tiles = 0;
+  std::string tileDir;
+  bool keepTiles = false;
 };
+
+void runOutOfCore(EpsDeltaArgs& a, const std::string& why) {
+  Timer total;
+  if (a.ascii) throwBadParameter("--ascii", "the out-of-core path writes binary PLY");
+  MpiRun mpi;
+  if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
+  ooc::OocNormalsOptions o;
+  o.geometry = a.geometry;
+  o.workDir = a.tileDir.empty() ? a.output + ".tiles" : a.tileDir;
+  o.memoryBytes = memoryBudgetBytes();
+  o.minTiles = a.tiles;
+  o.keepWorkDir = a.keepTiles;
+  o.progress = withTimeLeft(progressBar());
+  o.rank = mpi.rank;
+  o.ranks = mpi.ranks;
+  o.barrier = mpi.barrier();
+  say(fmt::format("{}: out of core ({}), tiles in {}{}", a.input, why, o.workDir.string(),
+                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  ooc::OocEpsDeltaReport r;
+  mpi.guard([&] { r = ooc::extractEpsDeltaOutOfCore(a.input, a.output, o, a.extract); });
+  endProgress();
+  if (mpi.rank != 0) return;
+  const ooc::OocNormalsReport& g = r.geometry;
+  if (g.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
+  say(fmt::format("input        {} points ({}), {} tiles (largest {} points with halo){}, {} threads", g.points, a.input, g.tiles,
+                  g.tilePointsMax, g.tilesReused ? fmt::format(", {} reused", g.tilesReused) : "", currentThreadCount()));
+  say(fmt::format("halo         {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", g.haloWidenings,
+                  g.inexactPoints));
+  say(fmt::format("tolerances   epsilon {:.6g}{}  delta {:.6g}", r.epsilon,
+                  a.extract.epsilon > 0 ? std::string() : fmt::format(" ({} x average spacing {:.6g})", a.extract.epsilonRelative, g.averageSpacing),
+                  a.extract.delta));
+  say(fmt::format("output       {} points + {} segments -> {}", r.keptPoints, r.segments, a.output));
+  say(fmt::format("replaced     {} points ({:.2f}%), {:.2f} points per segment", r.replacedPoints,
+                  g.points ? 100.0 * double(r.replacedPoints) / double(g.points) : 0.0,
+                  r.segments ? double(r.replacedPoints) / double(r.segments) : 0.0));
+  say(fmt::format("times        bbox {:.3f} s, partition {:.3f} s, normals tiles {:.3f} s, orientation {:.3f} s, eps-delta tiles {:.3f} s, "
+                  "write {:.3f} s, total {:.3f} s",
+                  g.tBbox, g.tPartition, g.tTiles, g.tOrient, r.tExtract, r.tWrite, total.seconds()));
+}
 
 void run(EpsDeltaArgs& a) {
   Timer total;
@@ -31,6 +80,19 @@ void run(EpsDeltaArgs& a) {
   validate(o);  // before the (long) geometry stage
   validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}});
+  if (a.outOfCore || a.tiles > 0 || !a.tileDir.empty() || launchedRanks() > 1) {
+    runOutOfCore(a, a.tiles > 0 ? fmt::format("--tiles {}", a.tiles) : launchedRanks() > 1 ? "started by mpirun" : "--out-of-core");
+    return;
+  }
+  {
+    // (ε,δ) holds Delaunay lists and candidates besides the normals' data: a quarter more.
+    const double need = 1.25 * inMemoryEstimate(a.input, a.geometry.k);
+    if (need > memoryBudgetBytes()) {
+      runOutOfCore(a, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
+                                  globalOptions().maxMegabytes));
+      return;
+    }
+  }
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const PointGeometry& geo = in.geometry;
   o.progress = progressBar();
@@ -76,6 +138,11 @@ RegisterCommand reg(31, [](CLI::App& app) {
   b.option("epsilon")->excludes(b.option("epsilonRelative"));
   bindGeometryOptions(sub, a->geometry);
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
+  sub->add_flag("--out-of-core", a->outOfCore,
+                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
+  sub->add_option("--tiles", a->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
+  sub->add_option("--tile-dir", a->tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
+  sub->add_flag("--keep-tiles", a->keepTiles, "Keep the tile folder after a successful out-of-core run");
   sub->callback([a] { run(*a); });
 });
 

@@ -9,6 +9,10 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/ooc/ooc_normals.h"
+#include "ooc_cli.h"
+
+#include <filesystem>
 
 namespace linesurf::cli {
 namespace {
@@ -20,12 +24,72 @@ struct NormalsArgs {
     g.delaunayNeighbours = g.curvature = false;  // --curvature turns both on
     return g;
   }();
+  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
+  bool outOfCore = false;
+  int tiles = 0;
+  std::string tileDir;
+  bool keepTiles = false;
 };
+
+void runOutOfCore(const NormalsArgs& args, const std::string& why) {
+  Timer total;
+  MpiRun mpi;
+  if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
+  if (args.geometry.curvature) throwBadParameter("--curvature", "is not available on the out-of-core path (normals and radii only)");
+  std::string ext = std::filesystem::path(args.out).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".ply") throwBadParameter("--output", "the out-of-core path writes .ply");
+  ooc::OocNormalsOptions o;
+  o.geometry = args.geometry;
+  o.workDir = args.tileDir.empty() ? args.out + ".tiles" : args.tileDir;
+  o.memoryBytes = memoryBudgetBytes();
+  o.minTiles = args.tiles;
+  o.keepWorkDir = args.keepTiles;
+  o.progress = withTimeLeft(progressBar());
+  o.rank = mpi.rank;
+  o.ranks = mpi.ranks;
+  o.barrier = mpi.barrier();
+  say(fmt::format("{}: out of core ({}), tiles in {}{}", args.in, why, o.workDir.string(),
+                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  ooc::OocNormalsReport r;
+  mpi.guard([&] { r = ooc::computeNormalsOutOfCore(args.in, args.out, o); });
+  endProgress();
+  if (mpi.rank != 0) return;
+  if (r.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
+  say(fmt::format("{}: {} points, k = {}, {} threads, {} tiles (largest {} points with halo){}", args.in, r.points,
+                  args.geometry.k, currentThreadCount(), r.tiles, r.tilePointsMax,
+                  r.tilesReused ? fmt::format(", {} reused from an earlier run", r.tilesReused) : ""));
+  say(fmt::format("halo           {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", r.haloWidenings,
+                  r.inexactPoints));
+  if (r.orientationComponents > 0)
+    say(fmt::format("orientation    {} component(s), {} tile component(s) flipped, {} shared point(s) disagreeing",
+                    r.orientationComponents, r.tileFlips, r.disagreeingVotes));
+  say(fmt::format("average spacing {:.6g}", r.averageSpacing));
+  say(fmt::format("degenerate     {} duplicate, {} with < 3 distinct neighbours, {} collinear/flat, {} isolated", r.duplicate,
+                  r.fewNeighbours, r.flat, r.isolated));
+  say(fmt::format("time (s)       bbox {:.3f}  partition {:.3f}  tiles {:.3f}  orientation {:.3f}  write {:.3f}  total {:.3f}",
+                  r.tBbox, r.tPartition, r.tTiles, r.tOrient, r.tWrite, total.seconds()));
+  say("wrote " + args.out);
+}
 
 void run(const NormalsArgs& args) {
   Timer total;
   validate(args.geometry);  // before reading the cloud
   checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
+  if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty() || launchedRanks() > 1) {
+    runOutOfCore(args, args.tiles > 0            ? fmt::format("--tiles {}", args.tiles)
+                       : launchedRanks() > 1     ? std::string("started by mpirun")
+                                                 : std::string("--out-of-core"));
+    return;
+  }
+  if (!args.geometry.curvature) {
+    const double need = inMemoryEstimate(args.in, args.geometry.k);
+    if (need > memoryBudgetBytes()) {
+      runOutOfCore(args, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
+                                     globalOptions().maxMegabytes));
+      return;
+    }
+  }
   HybridModel model = readModel(args.in);
   const double readTime = total.seconds();
   if (model.points.empty()) throw Error(Error::Kind::BadInput, args.in, "", "holds no points");
@@ -69,6 +133,12 @@ RegisterCommand reg(20, [](CLI::App& app) {
   GeometryOptions& o = args->geometry;
   // --curvature also writes vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z
   bindOptions(sub, o, {"k", "recomputeNormals", "orientNormals", "orientationPenalty", "curvature", "curvatureFit"});
+  sub->add_flag("--out-of-core", args->outOfCore,
+                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
+  sub->add_option("--tiles", args->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
+  sub->add_option("--tile-dir", args->tileDir,
+                  "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
+  sub->add_flag("--keep-tiles", args->keepTiles, "Keep the tile folder after a successful out-of-core run");
   sub->callback([args] { run(*args); });
 });
 

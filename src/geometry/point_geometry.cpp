@@ -15,6 +15,7 @@
 #include <queue>
 
 #include "geometry/detail/local_delaunay.h"
+#include "geometry/detail/point_geometry_tile.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
@@ -195,7 +196,7 @@ void computeNormals(const HybridModel& cloud, const std::vector<Vec3f>& pos, con
 // Prim's algorithm with a binary heap, one seed per
 // connected component (see docs/decisions.md for the seed rule).
 void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, PointGeometry& g,
-                   const std::vector<uint8_t>& fixedNormal) {
+                   const std::vector<uint8_t>& fixedNormal, std::vector<uint32_t>* componentOut) {
   const size_t n = pos.size();
   // Symmetrised adjacency (CSR): row i = kNN row of i, then every j that lists i.
   std::vector<uint32_t> deg(n + 1, 0);
@@ -242,6 +243,7 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
   }
   compStart.push_back(uint32_t(n));
   g.orientationComponents = compStart.size() - 1;
+  if (componentOut) *componentOut = comp;
 
   using Item = std::tuple<float, uint32_t, uint32_t>;  // weight, node, parent
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
@@ -349,7 +351,7 @@ double starCircumradius(std::span<const Vec2d> q, const detail::LocalStar& star)
 }
 
 void computeDelaunay(const std::vector<Vec3f>& pos, const KdTree* tree, const std::vector<uint32_t>& order, int k, float dupTol,
-                     bool useCgal, PointGeometry& g, const ProgressFn& progress) {
+                     bool useCgal, PointGeometry& g, const ProgressFn& progress, std::vector<float>* reach) {
   const size_t n = pos.size();
   std::vector<uint32_t> tmpIdx(n * size_t(k), kNone);
   std::vector<float> tmpW(n * size_t(k), 0.0f);
@@ -397,6 +399,7 @@ void computeDelaunay(const std::vector<Vec3f>& pos, const KdTree* tree, const st
           nanoflann::KNNResultSet<float, uint32_t> rs(want + 1);  // + the point itself
           rs.init(idx.data(), d2.data());
           tree->findNeighbors(rs, pos[i].data(), nanoflann::SearchParams());
+          if (reach && rs.size() > 0) (*reach)[i] = std::max((*reach)[i], std::sqrt(d2[rs.size() - 1]));
           size_t mg = 0;
           for (size_t t = 0; t < rs.size() && mg < want; ++t) {
             if (idx[t] == i) continue;
@@ -526,6 +529,11 @@ void validate(const GeometryOptions& options) {
 }
 
 PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {
+  return detail::computePointGeometryTile(cloud, options, -1.0f, nullptr);
+}
+
+PointGeometry detail::computePointGeometryTile(const HybridModel& cloud, const GeometryOptions& options, float dupTolOverride,
+                                               TileGeometryExtras* extras) {
   validate(options);
   for (size_t i = 0; i < cloud.points.size(); ++i)
     if (!cloud.points[i].position.allFinite())
@@ -537,7 +545,7 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   g.flags.assign(n, kPointOk);
   const Bounds3f bb = cloud.bounds();
   const float diag = n > 0 ? bb.diagonal().norm() : 0.0f;
-  const float dupTol = 1e-6f * diag;
+  const float dupTol = dupTolOverride >= 0 ? dupTolOverride : 1e-6f * diag;
   const ProgressFn& progress = options.progress;
 
   Timer timer;
@@ -549,6 +557,19 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   if (n >= 2) tree.buildIndex();
   computeNeighbours(pos, tree, k, g, order, progress);
   g.times.neighbours = timer.seconds();
+  if (extras) {
+    // The farthest point any query of point i looked at: its k-th neighbour, widened below by the
+    // cover-radius growth (stage 3). A tile reproduces the in-memory result for i when this ball
+    // lies inside the tile's halo.
+    extras->reach.assign(n, 0.0f);
+    for (size_t i = 0; i < n; ++i)
+      for (int t = k - 1; t >= 0; --t)
+        if (g.neighbours[i * k + t] != kNone) {
+          extras->reach[i] = g.neighbourDistances[i * k + t];
+          break;
+        }
+    extras->component.clear();
+  }
 
   timer.reset();
   const bool keepFile = cloud.attributes.normals && !options.recomputeNormals;
@@ -561,7 +582,7 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
                           std::any_of(fixedNormal.begin(), fixedNormal.end(), [](uint8_t f) { return f == 0; });
   if (needOrient) {
     reportProgress(progress, "orientation", 0.0);
-    orientNormals(pos, k, options.orientationPenalty, g, fixedNormal);
+    orientNormals(pos, k, options.orientationPenalty, g, fixedNormal, extras ? &extras->component : nullptr);
     reportProgress(progress, "orientation", 1.0);
   }
   g.times.orientation = timer.seconds();
@@ -569,7 +590,8 @@ PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptio
   if (options.delaunayNeighbours || options.curvature || options.coverRadius) {
     timer.reset();
     if (options.coverRadius) g.coverRadius.assign(n, 0.0f);
-    computeDelaunay(pos, n >= 2 ? &tree : nullptr, order, k, dupTol, options.cgalDelaunay, g, progress);
+    computeDelaunay(pos, n >= 2 ? &tree : nullptr, order, k, dupTol, options.cgalDelaunay, g, progress,
+                    extras ? &extras->reach : nullptr);
     if (!options.delaunayNeighbours && !options.curvature) {  // stage 3 ran only for the radii
       g.delaunayOffsets.clear();
       g.delaunayIndices.clear();

@@ -1,0 +1,115 @@
+// CLI side of the out-of-core path (see ooc_cli.h).
+#include "ooc_cli.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+
+#ifdef LINESURF_HAVE_MPI
+#include <mpi.h>
+#endif
+
+#include "command.h"
+#include "linesurf/core/error.h"
+#include "linesurf/ooc/ooc_normals.h"
+#include "linesurf/ooc/point_stream.h"
+
+namespace linesurf::cli {
+
+double memoryBudgetBytes() { return globalOptions().maxMegabytes * 1024.0 * 1024.0; }
+
+double inMemoryEstimate(const std::string& in, int k) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const double size = double(fs::file_size(in, ec));
+  if (ec) return 0;  // the reader reports a missing file
+  double points = size / 12.0;  // binary x y z floats, the densest encoding
+  std::string ext = fs::path(in).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".ply") {
+    try {
+      points = double(ooc::PointReader(in).info().count);
+    } catch (const Error&) {
+      return 0;  // not a file the streaming reader takes: the in-memory reader says why
+    }
+  } else if (ext == ".xyz") {
+    points = size / 24.0;  // ~8 characters per coordinate
+  }
+  return points * ooc::inMemoryNormalsBytesPerPoint(k) + size;
+}
+
+ProgressFn withTimeLeft(ProgressFn bar) {
+  if (!bar) return {};
+  struct State {
+    std::string stage;
+    std::chrono::steady_clock::time_point start;
+  };
+  auto st = std::make_shared<State>();
+  return [bar, st](std::string_view stage, double f) {
+    const auto now = std::chrono::steady_clock::now();
+    if (stage != st->stage) st->stage = std::string(stage), st->start = now;
+    const double el = std::chrono::duration<double>(now - st->start).count();
+    std::string label(stage);
+    if (f > 0.01 && f < 1 && el > 1) {
+      const int left = int(el * (1 - f) / f + 0.5);
+      label += left >= 60 ? fmt::format(" {}m{:02d}s left", left / 60, left % 60) : fmt::format(" {}s left", left);
+    }
+    bar(label, f);
+  };
+}
+
+int launchedRanks() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
+  return 1;
+}
+
+#ifdef LINESURF_HAVE_MPI
+MpiRun::MpiRun() {
+  if (launchedRanks() <= 1) return;
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) MPI_Init(nullptr, nullptr);
+  active = true;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+}
+MpiRun::~MpiRun() {
+  if (active) MPI_Finalize();
+}
+std::function<void()> MpiRun::barrier() const {
+  if (!active) return {};
+  return [] { MPI_Barrier(MPI_COMM_WORLD); };
+}
+void MpiRun::guard(const std::function<void()>& f) const {
+  if (!active) return f();
+  auto stop = [](const std::string& message, int code) {
+    std::fprintf(stderr, "%s\n", message.c_str());
+    std::fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, code);
+    std::exit(code);
+  };
+  try {
+    f();
+  } catch (const Error& e) {
+    stop(e.what(), e.kind() == Error::Kind::BadParameter ? 1 : e.kind() == Error::Kind::BadInput ? 2 : 3);
+  } catch (const std::exception& e) {
+    stop(std::string("linesurf: error: ") + e.what(), 3);
+  }
+}
+#else
+MpiRun::MpiRun() {
+  if (launchedRanks() > 1)
+    throwBadParameter("mpirun", "this linesurf was built without MPI; install openmpi-bin libopenmpi-dev and rebuild");
+}
+MpiRun::~MpiRun() = default;
+std::function<void()> MpiRun::barrier() const { return {}; }
+void MpiRun::guard(const std::function<void()>& f) const { f(); }
+#endif
+
+}  // namespace linesurf::cli

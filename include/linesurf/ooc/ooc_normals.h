@@ -1,0 +1,85 @@
+#pragma once
+/// Out-of-core normals (thesis §6.1 on clouds larger than memory): the cloud is streamed from its
+/// file into tiles of a spatial grid written to a working folder; each tile is processed with
+/// its halo (the points of the neighbouring tiles within a margin) by the same code as the
+/// in-memory path (computePointGeometry), so every point whose neighbour queries stay inside the
+/// halo gets exactly the in-memory kNN, PCA normal, spacing and cover radius; the tiles' MST
+/// orientations are then joined by flip votes on the points they share; the output is written
+/// in the input's order by a streaming merge. Memory is bounded by the tile size, not by the
+/// cloud. See docs/file-format.md ("Tile folder") and docs/decisions.md for the design.
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "linesurf/core/progress.h"
+#include "linesurf/extract/eps_delta.h"
+#include "linesurf/geometry/point_geometry.h"
+
+namespace linesurf::ooc {
+
+struct OocNormalsOptions {
+  /// k, orientationPenalty, orientNormals, recomputeNormals are used; curvature and Delaunay
+  /// neighbour lists are not written by this path (cover radii are).
+  GeometryOptions geometry;
+  /// Working folder for the tiles (created; reused by a run with the same input and arguments,
+  /// cleared when it belongs to another input or other arguments).
+  std::filesystem::path workDir;
+  /// Memory budget of the run in bytes (tiles in flight, their halos and the I/O buffers).
+  double memoryBytes = 1024.0 * 1024 * 1024;
+  /// At least this many tiles (0: as few as the budget allows).
+  int minTiles = 0;
+  /// Keep the working folder after a successful run (default: removed).
+  bool keepWorkDir = false;
+  /// This process's share of the tile jobs (MPI): the non-empty tiles d (in id order) with
+  /// d % ranks == rank. Rank 0 partitions, joins the orientations and writes the output; the
+  /// folder must be shared by all ranks. Output is the same for any number of ranks.
+  int rank = 0, ranks = 1;
+  /// Waits for every rank (MPI_Barrier); called by every rank after the partition and after the
+  /// tiles. Needed when ranks > 1.
+  std::function<void()> barrier;
+  ProgressFn progress;
+};
+
+struct OocNormalsReport {
+  uint64_t points = 0;
+  size_t tiles = 0;            ///< non-empty tiles
+  size_t tilesReused = 0;      ///< finished tiles found in the working folder (a resumed run)
+  bool folderCleared = false;  ///< the folder held another input's (or other arguments') tiles
+  size_t tilePointsMax = 0;    ///< largest tile with its halo (points)
+  uint64_t inexactPoints = 0;  ///< interior points whose queries reached past the widest halo
+  size_t haloWidenings = 0;    ///< tiles recomputed with a wider halo
+  size_t orientationComponents = 0;
+  size_t tileFlips = 0;        ///< tile components flipped to agree with their neighbours
+  uint64_t disagreeingVotes = 0;  ///< shared points whose tiles disagree after the flips
+  float averageSpacing = 0;
+  uint64_t duplicate = 0, fewNeighbours = 0, flat = 0, isolated = 0;
+  double tBbox = 0, tPartition = 0, tTiles = 0, tOrient = 0, tWrite = 0;
+};
+
+/// Bytes per point the in-memory `normals` path holds (model, neighbour graph, orientation and
+/// Delaunay scratch), measured: used to decide whether a cloud fits a budget.
+double inMemoryNormalsBytesPerPoint(int k);
+
+/// Reads `in` (binary PLY or XYZ with x y z [nx ny nz]) and writes `out` (binary PLY with
+/// x y z nx ny nz radius), as `linesurf normals` does in memory. Throws linesurf::Error.
+OocNormalsReport computeNormalsOutOfCore(const std::filesystem::path& in, const std::filesystem::path& out,
+                                         const OocNormalsOptions& options);
+
+struct OocEpsDeltaReport {
+  OocNormalsReport geometry;
+  uint64_t keptPoints = 0, segments = 0, replacedPoints = 0;
+  double epsilon = 0;
+  double tExtract = 0, tWrite = 0;
+};
+
+/// (ε,δ) extraction (§3.1) out of core: the normals pipeline above (with local Delaunay
+/// neighbours), then extractEpsDelta on each tile's own points with their exact geometry,
+/// epsilon resolved from the whole cloud's average spacing. A segment never crosses a tile
+/// border, so every input point ends as exactly one output point or in exactly one segment.
+/// Output as extractEpsDelta's: kept points in input order, then the segments tile after tile
+/// (with provenance in input indices when `extract.provenance`).
+OocEpsDeltaReport extractEpsDeltaOutOfCore(const std::filesystem::path& in, const std::filesystem::path& out,
+                                           const OocNormalsOptions& options, const EpsDeltaOptions& extract);
+
+}  // namespace linesurf::ooc

@@ -1,0 +1,110 @@
+#pragma once
+/// Streaming point I/O for clouds larger than memory: a reader that passes a binary PLY or XYZ
+/// file through in chunks, and a binary PLY writer that writes rows as they come and puts the
+/// file in place only when complete. The whole-file readers of io/model_io.h stay for models
+/// that fit; these handle only what the out-of-core pipeline needs: points with x y z and
+/// optionally nx ny nz. Errors are the whole-file readers' (linesurf::Error, `PATH: WHERE: WHAT`).
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "linesurf/core/math.h"
+
+namespace linesurf::ooc {
+
+/// What a streamed point file holds.
+struct PointFileInfo {
+  uint64_t count = 0;                 ///< points
+  bool normals = false;               ///< nx ny nz present
+  std::vector<std::string> comments;  ///< kept like the whole-file reader keeps them
+  std::string header;                 ///< the PLY header bytes (empty for XYZ), for identity hashes
+};
+
+class PointReader {
+ public:
+  /// Opens `path` (.ply binary little-endian, or .xyz) and checks its header and size: a
+  /// truncated binary body is reported here, before any work. An XYZ file is read through once
+  /// to count and validate its points.
+  explicit PointReader(const std::filesystem::path& path);
+  ~PointReader();
+  PointReader(const PointReader&) = delete;
+  PointReader& operator=(const PointReader&) = delete;
+
+  const PointFileInfo& info() const { return info_; }
+  /// Reads up to `max` points from the current position (positions into `pos`, normals into
+  /// `nrm` when the file has them; both resized to the number read). Returns 0 at the end.
+  size_t read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
+  /// Back to the first point.
+  void rewind();
+  /// Index of the next point read().
+  uint64_t position() const { return next_; }
+
+ private:
+  void openBody();
+  size_t readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
+  size_t readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
+
+  std::string path_;
+  std::FILE* f_ = nullptr;
+  PointFileInfo info_;
+  bool ply_ = true;
+  // PLY layout
+  uint64_t bodyOffset_ = 0;
+  size_t rowSize_ = 0;
+  struct Field { size_t offset; int type; const char* name; };
+  std::vector<Field> fields_;  ///< x y z [nx ny nz]
+  std::vector<char> buf_;
+  // XYZ state
+  std::string pending_;
+  uint64_t line_ = 0;
+  int columns_ = 0;
+  bool eof_ = false;
+  bool counted_ = false;  ///< comments are collected on the first (counting) pass only
+  uint64_t next_ = 0;
+};
+
+/// Writes a binary little-endian PLY of points with x y z [nx ny nz] [radius] (floats), row by
+/// row, byte for byte as io/model_io.h's writeModel writes the same points. The rows go to a
+/// temporary file beside `path`; finish() renames it into place once every declared row is
+/// written; destroying an unfinished writer removes it, so no partial output is ever left.
+class PlyPointWriter {
+ public:
+  /// `moreElements`: header lines of elements after the vertices (e.g. "element segment N\n
+  /// property ..."), whose rows follow through writeRaw() once every vertex row is written.
+  PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
+                 bool normals, bool radius, const std::string& moreElements = "");
+  ~PlyPointWriter();
+  PlyPointWriter(const PlyPointWriter&) = delete;
+  PlyPointWriter& operator=(const PlyPointWriter&) = delete;
+  /// Appends n rows (nrm / radius ignored when the file has none).
+  void write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n);
+  /// Rows of the further elements, already encoded.
+  void writeRaw(const std::string& bytes);
+  void finish();
+
+ private:
+  void put(const char* data, size_t n);
+  std::string path_, tmp_;
+  std::FILE* f_ = nullptr;
+  uint64_t count_ = 0, written_ = 0;
+  bool normals_ = false, radius_ = false, done_ = false;
+  std::string row_;
+};
+
+/// Identity of an input for a tile folder: size, modification time and a 64-bit hash of the
+/// header and of 16 evenly spaced 64 KiB chunks (so a rewritten file of the same size is told
+/// apart without reading all of it).
+struct FileIdentity {
+  uint64_t size = 0;
+  int64_t mtimeNs = 0;
+  uint64_t hash = 0;
+  bool operator==(const FileIdentity&) const = default;
+};
+FileIdentity fileIdentity(const std::filesystem::path& path);
+
+/// FNV-1a, 64 bit.
+uint64_t fnv1a(const void* data, size_t n, uint64_t h = 1469598103934665603ull);
+
+}  // namespace linesurf::ooc

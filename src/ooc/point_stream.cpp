@@ -1,0 +1,375 @@
+// Streaming point I/O (see ooc/point_stream.h). The PLY header is parsed by the whole-file
+// reader's parser (io/detail/ply_format.h), so header errors read the same; the body checks
+// (truncation, non-finite values) use the same wording as its body decoder.
+#include "linesurf/ooc/point_stream.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "io/detail/ply_format.h"
+#include "linesurf/core/error.h"
+#include "linesurf/io/atomic_file.h"
+
+namespace linesurf::ooc {
+namespace {
+
+constexpr std::string_view kTextureKey = "TextureFile";
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::FILE* openInput(const std::string& path) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st)) throwBadInput(path, "", "no such file");
+  if (std::filesystem::is_directory(st)) throwBadInput(path, "", "is a directory, not a file");
+  if (!std::filesystem::is_regular_file(st)) throwBadInput(path, "", "is not a regular file (a pipe, device or socket)");
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throwBadInput(path, "", std::string("cannot open: ") + std::strerror(errno));
+  return f;
+}
+
+double decode(const char* p, ply::Type t) {
+  switch (t) {
+    case ply::Type::Int8: { int8_t v; std::memcpy(&v, p, 1); return v; }
+    case ply::Type::UInt8: { uint8_t v; std::memcpy(&v, p, 1); return v; }
+    case ply::Type::Int16: { int16_t v; std::memcpy(&v, p, 2); return v; }
+    case ply::Type::UInt16: { uint16_t v; std::memcpy(&v, p, 2); return v; }
+    case ply::Type::Int32: { int32_t v; std::memcpy(&v, p, 4); return v; }
+    case ply::Type::UInt32: { uint32_t v; std::memcpy(&v, p, 4); return v; }
+    case ply::Type::Float32: { float v; std::memcpy(&v, p, 4); return v; }
+    case ply::Type::Float64: { double v; std::memcpy(&v, p, 8); return v; }
+  }
+  return 0;
+}
+
+}  // namespace
+
+uint64_t fnv1a(const void* data, size_t n, uint64_t h) {
+  const auto* b = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  return h;
+}
+
+FileIdentity fileIdentity(const std::filesystem::path& path) {
+  FileIdentity id;
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) throwBadInput(path.string(), "", "no such file");
+  id.size = uint64_t(st.st_size);
+  id.mtimeNs = int64_t(st.st_mtim.tv_sec) * 1000000000ll + st.st_mtim.tv_nsec;
+  std::FILE* f = openInput(path.string());
+  std::vector<char> buf(65536);
+  uint64_t h = fnv1a(&id.size, sizeof id.size);
+  for (int c = 0; c < 17; ++c) {
+    // chunk 0 is the start of the file (the header), the others evenly spaced up to its end
+    const uint64_t at = c == 0 ? 0 : (id.size > buf.size() ? (id.size - buf.size()) * uint64_t(c) / 16 : 0);
+    if (std::fseek(f, long(at), SEEK_SET) != 0) break;
+    const size_t got = std::fread(buf.data(), 1, buf.size(), f);
+    h = fnv1a(buf.data(), got, h);
+  }
+  std::fclose(f);
+  id.hash = h;
+  return id;
+}
+
+// ---------------------------------------------------------------------------------------------
+PointReader::PointReader(const std::filesystem::path& path) : path_(path.string()) {
+  const std::string ext = lower(path.extension().string());
+  if (ext != ".ply" && ext != ".xyz")
+    throwBadInput(path_, "", "the out-of-core path reads .ply (binary) and .xyz point files");
+  ply_ = ext == ".ply";
+  f_ = openInput(path_);
+  if (!ply_) {
+    // One pass: count and validate (the count goes into the output's header).
+    std::vector<Vec3f> p, n;
+    while (read(p, n, 1 << 20) > 0) info_.count += p.size();
+    counted_ = true;
+    if (info_.count == 0) throwBadInput(path_, "line " + std::to_string(std::max<uint64_t>(line_, 1)), "no points in the file");
+    info_.normals = columns_ == 6;
+    rewind();
+    return;
+  }
+  // Header: read until end_header (a header is small; 16 MiB bounds a malformed one).
+  std::string head;
+  std::vector<char> chunk(65536);
+  size_t endPos = std::string::npos;
+  while (endPos == std::string::npos && head.size() < (16u << 20)) {
+    const size_t got = std::fread(chunk.data(), 1, chunk.size(), f_);
+    if (got == 0) break;
+    head.append(chunk.data(), got);
+    const size_t e = head.find("end_header");
+    if (e != std::string::npos) {
+      const size_t nl = head.find('\n', e);
+      if (nl != std::string::npos) endPos = nl + 1;
+    }
+  }
+  if (endPos != std::string::npos) head.resize(endPos);
+  const ply::Header h = ply::parseHeader(head, path_);
+  info_.header = head.substr(0, h.bodyOffset);
+  if (h.format != ply::Format::BinaryLittleEndian)
+    throwBadInput(path_, "line 2", "the out-of-core path reads binary little-endian PLY (convert the file with 'linesurf convert')");
+  for (const std::string& c : h.comments)
+    if (std::string_view(c).substr(0, kTextureKey.size()) != kTextureKey) info_.comments.push_back(c);
+  const int vi = h.find("vertex");
+  if (vi < 0) throwBadInput(path_, "", "no vertex element (no points)");
+  for (size_t e = 0; e < h.elements.size(); ++e)
+    if (int(e) != vi && h.elements[e].count > 0)
+      throwBadInput(path_, "line " + std::to_string(h.elements[e].line),
+                    "the out-of-core path reads points only, not element '" + h.elements[e].name + "'");
+  const ply::Element& v = h.elements[size_t(vi)];
+  if (vi != 0) throwBadInput(path_, "line " + std::to_string(v.line), "the vertex element must come first");
+  size_t off = 0;
+  int found[6] = {-1, -1, -1, -1, -1, -1};
+  static const char* names[6] = {"x", "y", "z", "nx", "ny", "nz"};
+  std::vector<std::pair<size_t, int>> at;
+  for (const ply::Property& p : v.properties) {
+    if (p.isList) throwBadInput(path_, "line " + std::to_string(p.line), "the out-of-core path reads no list properties ('" + p.name + "')");
+    int which = -1;
+    for (int c = 0; c < 6; ++c)
+      if (p.name == names[c]) which = c;
+    if (which < 0)
+      throwBadInput(path_, "line " + std::to_string(p.line),
+                    "the out-of-core path carries x y z [nx ny nz] only, not property '" + p.name + "'");
+    found[which] = int(fields_.size());
+    fields_.push_back({off, int(p.type), names[which]});
+    off += size_t(ply::typeSize(p.type));
+  }
+  for (int c = 0; c < 3; ++c)
+    if (found[c] < 0) throwBadInput(path_, "line " + std::to_string(v.line), std::string("vertex element has no '") + names[c] + "' property");
+  const bool anyN = found[3] >= 0 || found[4] >= 0 || found[5] >= 0;
+  if (anyN && (found[3] < 0 || found[4] < 0 || found[5] < 0))
+    throwBadInput(path_, "line " + std::to_string(v.line), "nx ny nz must come together");
+  info_.normals = anyN;
+  // fields_ in x y z nx ny nz order
+  std::vector<Field> ordered;
+  for (int c = 0; c < (anyN ? 6 : 3); ++c) ordered.push_back(fields_[size_t(found[c])]);
+  fields_ = ordered;
+  rowSize_ = off;
+  info_.count = v.count;
+  bodyOffset_ = h.bodyOffset;
+  std::error_code ec;
+  const uint64_t size = std::filesystem::file_size(path_, ec);
+  const uint64_t rest = size > bodyOffset_ ? size - bodyOffset_ : 0;
+  if (rowSize_ > 0 && v.count > rest / rowSize_)
+    throwBadInput(path_, "element vertex " + std::to_string(rest / rowSize_),
+                  "truncated binary body: the header declares " + std::to_string(v.count) + " vertex rows of at least " +
+                      std::to_string(rowSize_) + " bytes, but only " + std::to_string(rest) + " bytes are left at byte " +
+                      std::to_string(bodyOffset_));
+  rewind();
+}
+
+PointReader::~PointReader() {
+  if (f_) std::fclose(f_);
+}
+
+void PointReader::rewind() {
+  next_ = 0;
+  line_ = 0;
+  eof_ = false;
+  pending_.clear();
+  if (std::fseek(f_, long(ply_ ? bodyOffset_ : 0), SEEK_SET) != 0) throwBadInput(path_, "", "cannot seek");
+}
+
+size_t PointReader::read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max) {
+  return ply_ ? readPly(pos, nrm, max) : readXyz(pos, nrm, max);
+}
+
+size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max) {
+  const size_t n = size_t(std::min<uint64_t>(max, info_.count - next_));
+  pos.resize(n);
+  nrm.resize(info_.normals ? n : 0);
+  if (n == 0) return 0;
+  buf_.resize(n * rowSize_);
+  const size_t got = std::fread(buf_.data(), 1, buf_.size(), f_);
+  if (got != buf_.size()) {
+    const uint64_t row = next_ + got / rowSize_;
+    throwBadInput(path_, "element vertex " + std::to_string(row),
+                  "truncated binary body: the file ends at byte " + std::to_string(bodyOffset_ + row * rowSize_ + got % rowSize_) +
+                      (std::ferror(f_) ? " (read error)" : ""));
+  }
+  const size_t nf = fields_.size();
+  for (size_t r = 0; r < n; ++r) {
+    const char* row = buf_.data() + r * rowSize_;
+    float v[6];
+    for (size_t c = 0; c < nf; ++c) {
+      const double d = decode(row + fields_[c].offset, ply::Type(fields_[c].type));
+      if (!std::isfinite(d))
+        throwBadInput(path_, "element vertex " + std::to_string(next_ + r),
+                      std::string(std::isnan(d) ? "NaN" : "infinite") + " value in property '" + fields_[c].name + "'");
+      if (std::fabs(d) > double(std::numeric_limits<float>::max()))
+        throwBadInput(path_, "element vertex " + std::to_string(next_ + r),
+                      "value " + fmt::format("{:g}", d) + " in property '" + fields_[c].name + "' is too large for a 32-bit float (|v| > 3.4e38)");
+      v[c] = float(d);
+    }
+    pos[r] = Vec3f(v[0], v[1], v[2]);
+    if (nf == 6) nrm[r] = Vec3f(v[3], v[4], v[5]);
+  }
+  next_ += n;
+  return n;
+}
+
+size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max) {
+  pos.clear();
+  nrm.clear();
+  std::vector<char> chunk(1 << 20);
+  size_t start = 0;  // parse position in pending_
+  while (pos.size() < max) {
+    size_t e = pending_.find('\n', start);
+    if (e == std::string::npos) {
+      if (eof_) {
+        if (start >= pending_.size()) break;
+        e = pending_.size();  // last line without a newline
+      } else {
+        pending_.erase(0, start);
+        start = 0;
+        const size_t got = std::fread(chunk.data(), 1, chunk.size(), f_);
+        if (got == 0) eof_ = true;
+        pending_.append(chunk.data(), got);
+        continue;
+      }
+    }
+    std::string_view text(pending_.data() + start, e - start);
+    start = std::min(pending_.size(), e + 1);
+    ++line_;
+    const std::string where = "line " + std::to_string(line_);
+    const size_t hash = text.find('#');
+    if (hash != std::string_view::npos) {
+      if (!counted_) {
+        std::string_view c = text.substr(hash + 1);
+        while (!c.empty() && (c.front() == ' ' || c.front() == '\t')) c.remove_prefix(1);
+        while (!c.empty() && (c.back() == '\r' || c.back() == ' ')) c.remove_suffix(1);
+        info_.comments.emplace_back(c);
+      }
+      text = text.substr(0, hash);
+    }
+    float v[6];
+    int n = 0;
+    size_t i = 0;
+    for (;;) {
+      while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r' || text[i] == ',')) ++i;
+      if (i >= text.size()) break;
+      const size_t b = i;
+      while (i < text.size() && text[i] != ' ' && text[i] != '\t' && text[i] != '\r' && text[i] != ',') ++i;
+      std::string_view tok = text.substr(b, i - b);
+      if (n == 6) throwBadInput(path_, where, "more than 6 numbers on the line (expected x y z [nx ny nz])");
+      std::string_view s = tok;
+      if (s.size() > 1 && s[0] == '+') s.remove_prefix(1);
+      auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v[n]);
+      if ((ec != std::errc() && ec != std::errc::result_out_of_range) || ptr != s.data() + s.size())
+        throwBadInput(path_, where, "'" + std::string(tok.substr(0, 40)) + "' is not a number");
+      if (ec == std::errc::result_out_of_range || !std::isfinite(v[n]))
+        throwBadInput(path_, where, "non-finite or out-of-range value '" + std::string(tok.substr(0, 40)) + "'");
+      ++n;
+    }
+    if (n == 0) continue;
+    if (n != 3 && n != 6)
+      throwBadInput(path_, where, "expected 3 (x y z) or 6 (x y z nx ny nz) numbers, found " + std::to_string(n));
+    if (columns_ == 0) columns_ = n;
+    if (n != columns_)
+      throwBadInput(path_, where, std::to_string(n) + " numbers, but earlier lines have " + std::to_string(columns_));
+    pos.emplace_back(v[0], v[1], v[2]);
+    if (n == 6) nrm.emplace_back(v[3], v[4], v[5]);
+  }
+  pending_.erase(0, start);
+  if (columns_ == 6 && nrm.size() != pos.size()) nrm.resize(pos.size());
+  if (columns_ != 6) nrm.clear();
+  next_ += pos.size();
+  return pos.size();
+}
+
+// ---------------------------------------------------------------------------------------------
+PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
+                               bool normals, bool radius, const std::string& moreElements)
+    : path_(path.string()), count_(count), normals_(normals), radius_(radius) {
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) throwIo(path_, "output folder does not exist");
+  tmp_ = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  const int fd = ::mkstemp(tmp_.data());
+  if (fd < 0) throwIo(path_, std::string("cannot create file: ") + std::strerror(errno));
+  f_ = ::fdopen(fd, "wb");
+  if (!f_) {
+    ::close(fd);
+    ::unlink(tmp_.c_str());
+    throwIo(path_, "cannot open the temporary file");
+  }
+  // The header exactly as writePlyModel (io/ply_model.cpp) writes it.
+  std::string h = "ply\nformat binary_little_endian 1.0\n";
+  for (const std::string& c : comments) {
+    std::string line = c;
+    std::replace(line.begin(), line.end(), '\n', ' ');
+    std::replace(line.begin(), line.end(), '\r', ' ');
+    const size_t s = line.find_first_not_of(" \t\v\f");
+    if (s != std::string::npos && std::string_view(line).substr(s, kTextureKey.size()) == kTextureKey)
+      line = "(" + line.substr(s) + ")";
+    h += "comment " + line + "\n";
+  }
+  h += "element vertex " + std::to_string(count) + "\n";
+  h += "property float x\nproperty float y\nproperty float z\n";
+  if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (radius) h += "property float radius\n";
+  h += moreElements;
+  h += "end_header\n";
+  put(h.data(), h.size());
+}
+
+PlyPointWriter::~PlyPointWriter() {
+  if (f_) std::fclose(f_);
+  if (!done_) ::unlink(tmp_.c_str());
+}
+
+void PlyPointWriter::put(const char* data, size_t n) {
+  if (std::fwrite(data, 1, n, f_) != n) {
+    const int e = errno;
+    throwIo(path_, std::string("write failed: ") + std::strerror(e));
+  }
+}
+
+void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n) {
+  static_assert(std::endian::native == std::endian::little, "the binary writer assumes a little-endian host");
+  if (written_ + n > count_) throw std::logic_error("PlyPointWriter: more rows than declared");
+  const size_t rowFloats = 3 + (normals_ ? 3 : 0) + (radius_ ? 1 : 0);
+  row_.resize(n * rowFloats * 4);
+  char* o = row_.data();
+  for (size_t i = 0; i < n; ++i) {
+    std::memcpy(o, pos[i].data(), 12), o += 12;
+    if (normals_) std::memcpy(o, nrm[i].data(), 12), o += 12;
+    if (radius_) std::memcpy(o, &radius[i], 4), o += 4;
+  }
+  put(row_.data(), row_.size());
+  written_ += n;
+}
+
+void PlyPointWriter::writeRaw(const std::string& bytes) {
+  if (written_ != count_) throw std::logic_error("PlyPointWriter: element rows before every vertex row");
+  put(bytes.data(), bytes.size());
+}
+
+void PlyPointWriter::finish() {
+  if (written_ != count_) throw std::logic_error("PlyPointWriter: fewer rows than declared");
+  if (std::fflush(f_) != 0 || ::fsync(::fileno(f_)) != 0) {
+    const int e = errno;
+    throwIo(path_, std::string("write failed: ") + std::strerror(e));
+  }
+  const int rc = std::fclose(f_);
+  f_ = nullptr;
+  if (rc != 0) throwIo(path_, "close failed");
+  ::chmod(tmp_.c_str(), 0644);
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0) throwIo(path_, std::string("rename failed: ") + std::strerror(errno));
+  done_ = true;
+}
+
+}  // namespace linesurf::ooc

@@ -1,0 +1,83 @@
+// Synthetic scan (see ooc/synthetic_scan.h).
+#include "linesurf/ooc/synthetic_scan.h"
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "linesurf/core/parallel.h"
+#include "linesurf/ooc/point_stream.h"
+
+namespace linesurf::ooc {
+namespace {
+
+inline uint64_t splitmix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+inline double unit(uint64_t x) { return double(x >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+
+constexpr int kOctaves = 6, kWaves = 3;
+struct Wave {
+  Vec3d dir;
+  double freq, amp, phase;
+};
+
+std::array<Wave, kOctaves * kWaves> waves(uint64_t seed) {
+  std::array<Wave, kOctaves * kWaves> w{};
+  uint64_t s = splitmix(seed ^ 0x5ca1ab1eull);
+  for (int o = 0; o < kOctaves; ++o)
+    for (int j = 0; j < kWaves; ++j) {
+      Wave& v = w[size_t(o * kWaves + j)];
+      const double z = 2 * unit(s = splitmix(s)) - 1, phi = 2 * std::numbers::pi * unit(s = splitmix(s));
+      const double r = std::sqrt(std::max(0.0, 1 - z * z));
+      v.dir = Vec3d(r * std::cos(phi), r * std::sin(phi), z);
+      v.freq = 3.0 * double(1 << o);
+      v.amp = 0.06 / double(1 << o);
+      v.phase = 2 * std::numbers::pi * unit(s = splitmix(s));
+    }
+  return w;
+}
+
+}  // namespace
+
+void syntheticScanPoints(const SyntheticScanOptions& o, uint64_t first, size_t n, std::vector<Vec3f>& out) {
+  const auto w = waves(o.seed);
+  const double sigma = o.noise * std::sqrt(4 * std::numbers::pi / double(std::max<uint64_t>(o.count, 1)));
+  out.resize(n);
+  parallelForRange(0, n, [&](size_t b, size_t e) {
+    for (size_t t = b; t < e; ++t) {
+      const uint64_t i = first + t;
+      const uint64_t h0 = splitmix(o.seed * 0x9e3779b97f4a7c15ull + i);
+      const uint64_t h1 = splitmix(h0), h2 = splitmix(h1), h3 = splitmix(h2);
+      const double z = 2 * unit(h0) - 1, phi = 2 * std::numbers::pi * unit(h1);
+      const double r = std::sqrt(std::max(0.0, 1 - z * z));
+      const Vec3d d(r * std::cos(phi), r * std::sin(phi), z);
+      double radius = 1.0;
+      for (const Wave& v : w) radius += v.amp * std::sin(v.freq * d.dot(v.dir) + v.phase);
+      // Box-Muller normal deviate for the radial sampling noise.
+      const double g = std::sqrt(-2 * std::log(1 - unit(h2))) * std::cos(2 * std::numbers::pi * unit(h3));
+      radius += sigma * g;
+      out[t] = (radius * d).cast<float>();
+    }
+  }, 4096);
+}
+
+void writeSyntheticScan(const std::filesystem::path& path, const SyntheticScanOptions& o) {
+  PlyPointWriter writer(path, o.count,
+                        {"linesurf synthetic scan: count " + std::to_string(o.count) + " seed " + std::to_string(o.seed)},
+                        false, false);
+  std::vector<Vec3f> pts;
+  const uint64_t chunk = 1 << 20;
+  for (uint64_t b = 0; b < o.count; b += chunk) {
+    const size_t n = size_t(std::min(chunk, o.count - b));
+    syntheticScanPoints(o, b, n, pts);
+    writer.write(pts.data(), nullptr, nullptr, n);
+  }
+  writer.finish();
+}
+
+}  // namespace linesurf::ooc
