@@ -43,7 +43,7 @@ void runOutOfCore(EpsDeltaArgs& a, const std::string& why) {
   ooc::OocNormalsOptions o;
   o.geometry = a.geometry;
   o.workDir = a.tileDir.empty() ? a.output + ".tiles" : a.tileDir;
-  o.memoryBytes = memoryBudgetBytes();
+  o.memoryBytes = outOfCoreBudgetBytes();
   o.minTiles = a.tiles;
   o.keepWorkDir = a.keepTiles;
   o.progress = withTimeLeft(progressBar());
@@ -79,7 +79,7 @@ void run(EpsDeltaArgs& a) {
   EpsDeltaOptions& o = a.extract;
   validate(o);  // before the (long) geometry stage
   validate(a.geometry);
-  checkFiles({a.input}, {{"--output", a.output, {".ply"}}});
+  checkFiles({a.input}, {{"--output", a.output, {".ply"}}}, false);
   if (a.outOfCore || a.tiles > 0 || !a.tileDir.empty() || launchedRanks() > 1) {
     runOutOfCore(a, a.tiles > 0 ? fmt::format("--tiles {}", a.tiles) : launchedRanks() > 1 ? "started by mpirun" : "--out-of-core");
     return;

@@ -42,7 +42,7 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   ooc::OocNormalsOptions o;
   o.geometry = args.geometry;
   o.workDir = args.tileDir.empty() ? args.out + ".tiles" : args.tileDir;
-  o.memoryBytes = memoryBudgetBytes();
+  o.memoryBytes = outOfCoreBudgetBytes();
   o.minTiles = args.tiles;
   o.keepWorkDir = args.keepTiles;
   o.progress = withTimeLeft(progressBar());
@@ -75,7 +75,8 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
 void run(const NormalsArgs& args) {
   Timer total;
   validate(args.geometry);  // before reading the cloud
-  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}});
+  // Without curvature the path is chosen below by its own estimate (in memory or out of core).
+  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}}, /*inputsHeldWhole=*/args.geometry.curvature);
   if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty() || launchedRanks() > 1) {
     runOutOfCore(args, args.tiles > 0            ? fmt::format("--tiles {}", args.tiles)
                        : launchedRanks() > 1     ? std::string("started by mpirun")

@@ -97,9 +97,9 @@ std::string lower(std::string s) {
 }
 }  // namespace
 
-void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs) {
+void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs, bool inputsHeldWhole) {
   // Reading holds at least the file's bytes and what they decode to.
-  for (const std::string& in : inputs) {
+  for (const std::string& in : inputsHeldWhole ? inputs : std::vector<std::string>{}) {
     std::error_code ec;
     if (in.empty() || !std::filesystem::is_regular_file(in, ec)) continue;
     const auto bytes = std::filesystem::file_size(in, ec);

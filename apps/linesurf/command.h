@@ -49,7 +49,10 @@ struct OutputSpec {
   std::string option, path;
   std::vector<std::string> extensions;  ///< lower case with the dot; empty = any
 };
-void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs);
+/// inputsHeldWhole: reading an input holds it in memory (checked against the budget); false for
+/// commands that estimate their own path first (normals, eps-delta: in memory or out of core).
+void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs,
+                bool inputsHeldWhole = true);
 
 /// The command's budget (--max-mb): every output and the working memory, estimated before the work.
 Budget budget();

@@ -21,7 +21,15 @@
 
 namespace linesurf::cli {
 
-double memoryBudgetBytes() { return globalOptions().maxMegabytes * 1024.0 * 1024.0; }
+double memoryBudgetBytes() { return budget().bytes(); }
+
+double outOfCoreBudgetBytes() {
+  // The streaming reader's and writer's buffers (8 MiB each at least) and one tile in flight: below
+  // this floor the out-of-core path cannot keep its resident set within the budget.
+  constexpr double kFloor = 16.0 * 1024 * 1024;
+  budget().require("--max-mb", kFloor, "the out-of-core path (its read and write buffers and one tile)");
+  return budget().bytes();
+}
 
 double inMemoryEstimate(const std::string& in, int k) {
   namespace fs = std::filesystem;

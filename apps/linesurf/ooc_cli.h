@@ -11,6 +11,8 @@ namespace linesurf::cli {
 /// The memory budget of a run, bytes: --max-mb. (One place, so that a reworked budget
 /// mechanism changes only this.)
 double memoryBudgetBytes();
+/// The budget of an out-of-core run, bytes; refuses (exit 1) a budget below the path's floor.
+double outOfCoreBudgetBytes();
 
 /// Estimated bytes of the in-memory path for `in`, from its header (PLY) or size (XYZ).
 double inMemoryEstimate(const std::string& in, int k);

@@ -433,10 +433,13 @@ const std::vector<Case> kCases = {
   {"ExperimentHugeViewsAndSize", "experiment expdata -o exp --views 100000 --size 8192", 1, {"--size", "--max-mb"}},
   {"ExperimentViewsOverBudget", "experiment expdata -o exp --views 100000 --size 16 --max-mb 64", 1, {"--views", "--max-mb 64"}},
   {"ExperimentMeshViewsOverBudget", "experiment expdata -o exp --mesh-views 100000 --size 16 --max-mb 64", 1, {"--mesh-views"}},
-  {"NormalsOverBudget", "normals big.ply -o out.ply --max-mb 1", 1, {"big.ply", "geometry", "--max-mb 1"}},
+  // Over the in-memory estimate the commands go out of core by themselves; below that path's floor
+  // they refuse.
+  {"NormalsOverBudget", "normals big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
+  {"NormalsXyzOverBudget", "normals big.ply -o out.xyz --max-mb 1", 1, {"--output", "out-of-core"}},
   {"ViewOverBudget", "view big.ply -o out.html --max-mb 1", 1, {"--output", "page", "--max-mb 1"}},
   {"ConvertXyzOverBudget", "convert big.ply out.xyz --max-mb 1", 1, {"output", "40000 points", "--max-mb 1"}},
-  {"EpsDeltaOverBudget", "extract eps-delta big.ply -o out.ply --max-mb 1", 1, {"big.ply", "--max-mb 1"}},
+  {"EpsDeltaOverBudget", "extract eps-delta big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
   {"ShapeApproxOverBudget", "extract shape-approx big.ply -o out.ply --max-mb 1", 1, {"big.ply", "--max-mb 1"}},
   {"RenderGeometryOverBudget", "render big.ply -o out.png --size 16x16 --max-mb 1", 1, {"big.ply", "geometry"}},
   {"MaxMbNan", "normals raw.ply -o out.ply --max-mb nan", 1, {"--max-mb", "nan"}},
