@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/io/model_io.h"
 

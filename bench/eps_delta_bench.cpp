@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/geometry/point_geometry.h"

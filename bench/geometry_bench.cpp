@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"

@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 
 using namespace linesurf;
 

@@ -11,7 +11,7 @@
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/eval/experiment.h"
 #include "linesurf/io/model_io.h"
 #include "test_util.h"

@@ -7,7 +7,7 @@
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/extract/clustering.h"
 #include "linesurf/geometry/point_geometry.h"
 

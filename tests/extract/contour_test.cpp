@@ -13,7 +13,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/io/model_io.h"
 #include "test_util.h"

@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "linesurf/core/error.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"

@@ -1,7 +1,7 @@
 // The `linesurf normals` subcommand end to end: normals and curvature properties written.
 #include <gtest/gtest.h>
 
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/io/model_io.h"
 #include "test_util.h"
 

@@ -10,7 +10,7 @@
 #include "geometry/detail/local_delaunay.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
 #include "test_util.h"

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <functional>
 
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"

@@ -8,7 +8,7 @@
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/core/mesh_normals.h"
 #include "test_util.h"
 

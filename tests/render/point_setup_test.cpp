@@ -8,7 +8,7 @@
 #include <random>
 #include <thread>
 
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/render/renderer.h"
 #include "render/point_setup.h"
 

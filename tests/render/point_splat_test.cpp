@@ -13,7 +13,7 @@
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/render/renderer.h"
 #include "test_util.h"

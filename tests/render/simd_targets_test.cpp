@@ -8,7 +8,7 @@
 #include <set>
 #include <string>
 
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/render/renderer.h"
 
 namespace linesurf {

@@ -10,7 +10,7 @@
 #include "render/coverage.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 #include "linesurf/render/renderer.h"
 #include "test_util.h"
 

@@ -8,14 +8,10 @@
 #include <string_view>
 
 #include "linesurf/core/model.h"
+#include "linesurf/io/write_options.h"
 
 namespace linesurf {
 
-enum class PlyEncoding { BinaryLittleEndian, Ascii };
-
-struct WriteOptions {
-  PlyEncoding encoding = PlyEncoding::BinaryLittleEndian;
-};
 
 /// Reads a point cloud or hybrid model (.ply with vertex and optional segment elements, .xyz).
 /// A mesh file (.ply with faces, .obj) gives its vertices as points (with their normals and

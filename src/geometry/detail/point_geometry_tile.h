@@ -5,7 +5,14 @@
 #include <cstdint>
 #include <vector>
 
-#include "linesurf/geometry/point_geometry.h"
+#include "linesurf/core/model.h"
+
+namespace linesurf {
+// Declared, not included: point_geometry.cpp defines computePointGeometryTile and includes this
+// header, so including point_geometry.h back would tie the two rooms in a cycle.
+struct GeometryOptions;
+struct PointGeometry;
+}  // namespace linesurf
 
 namespace linesurf::detail {
 

@@ -5,7 +5,7 @@
 #include <string_view>
 
 #include "linesurf/core/model.h"
-#include "linesurf/io/model_io.h"
+#include "linesurf/io/write_options.h"
 
 namespace linesurf::detail {
 

@@ -1,4 +1,4 @@
-#include "linesurf/core/shapes.h"
+#include "shapes.h"
 
 #include <cmath>
 #include <map>
