@@ -1,4 +1,4 @@
-"""Overhead of the Python module (issue 15), figures for docs/decisions.md:
+"""Overhead of the Python module, figures for docs/decisions.md:
   1. rendering igea through Python vs the same call in C++ (build/linesurf_python_overhead);
   2. passing a 1 M-point array in (float32/float64, C- and F-ordered, strided).
 Run: cmake --build build --target linesurf_python linesurf_python_overhead

@@ -43,7 +43,8 @@ float benchSegmentLod() {
   return env ? float(std::atof(env)) : RenderOptions{}.segmentLod;
 }
 
-// RenderOptions::tailLayers for the frame benchmarks: LINESURF_BENCH_TAIL_LAYERS=1 (issue 14, i14disc)
+// RenderOptions::tailLayers for the frame benchmarks: LINESURF_BENCH_TAIL_LAYERS=1
+// (docs/decisions.md "Tail layers")
 bool benchTailLayers() {
   const char* env = std::getenv("LINESURF_BENCH_TAIL_LAYERS");
   return env ? std::atoi(env) != 0 : RenderOptions{}.tailLayers;
@@ -297,7 +298,8 @@ void segmentPrepare(benchmark::State& state, const HybridModel& m, const RenderO
   state.counters["segments"] = double(segs.size());
 }
 
-// segmentPrepare of the contour line model of mesh range(0) (kMeshes) (issue 13, i13turn).
+// segmentPrepare of the contour line model of mesh range(0) (kMeshes)
+// (docs/decisions.md "Segment prepare").
 void BM_ContourSegmentPrepare(benchmark::State& state) {
   std::string error;
   const HybridModel* m = contourModel(int(state.range(0)), 1, error);
@@ -310,7 +312,8 @@ void BM_ContourSegmentPrepare(benchmark::State& state) {
 BENCHMARK(BM_ContourSegmentPrepare)->DenseRange(0, 6)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // segmentPrepare of hybrid model range(0) (kModels) of kind range(1) (1 eps-delta, 2 greedy, 3
-// hierarchical) (issue 13, i13prep3: their long segments with several sub-segments).
+// hierarchical): their long segments with several sub-segments
+// (docs/decisions.md "Segment prepare").
 void BM_HybridSegmentPrepare(benchmark::State& state) {
   std::string error;
   const HybridModel* m = model(int(state.range(0)), int(state.range(1)), error);
@@ -398,7 +401,7 @@ namespace {
 // record prefetches): every tile of the frame in turn (arg 0) or the busiest tile 64 times (arg 1:
 // fewer records to fetch); counters: ns per (segment, tile) pair, pairs per frame, pixels walked
 // and row spans per pair, the share of pairs with several pieces and with lighting stations.
-// What a short segment's fixed cost is (issue 13, i13segraster, i13raster2); under
+// What a short segment's fixed cost is (docs/decisions.md "Segment rows"); under
 // `valgrind --tool=callgrind --toggle-collect='linesurf::rasterizeSegments*'` it counts
 // instructions per pair (AVX2 there: valgrind runs no AVX-512).
 void BM_ContourTileRaster(benchmark::State& state) {

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Rendering throughput against the lean splatting yardstick, in one run (issue 13).
+# Rendering throughput against the lean splatting yardstick, in one run
+# (docs/decisions.md "The renderer's speed").
 #
 # Builds ../shared/yardsticks/splat_limit.cpp (its own flags, -march=native: the yardstick only)
 # and linesurf_bench (the project's default generic x86-64 build, SIMD by runtime dispatch),

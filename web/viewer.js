@@ -130,8 +130,8 @@ layout(location = 1) in vec3 aNrm;
 layout(location = 2) in float aRad;
 layout(location = 3) in vec4 aCol;
 layout(location = 4) in float aCluster;
-layout(location = 5) in vec3 aSNrm;  // shading normal (issue 14), or zero: light by the plane normal
-layout(location = 6) in float aMass; // the point's mass (issue 14; 1 when the model has none)
+layout(location = 5) in vec3 aSNrm;  // shading normal, or zero: light by the plane normal
+layout(location = 6) in float aMass; // the point's mass (1 when the model has none)
 out vec2 vST;          // position in the cut-off ellipse, standard deviations
 out vec3 vP;           // camera-space position
 flat out vec3 vN;      // the lighting normal

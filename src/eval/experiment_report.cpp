@@ -271,7 +271,8 @@ void meshTable(std::string& md, const ExperimentResults& results) {
         "maximum standard deviation 4.45.\n\n";
 }
 
-// Beyond the thesis (issue 14): both models of Table 5 against the mesh rendered itself.
+// Beyond the thesis (docs/decisions.md "Mesh ground truth and the silhouette band"): both models of
+// Table 5 against the mesh rendered itself.
 void truthTable(std::string& md, const ExperimentResults& results) {
   const std::vector<Row> rows = rowsFor(results, ExperimentMethod::Contour);
   if (std::none_of(rows.begin(), rows.end(), [](const Row& r) { return r.method->hasTruth; })) return;

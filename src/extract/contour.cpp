@@ -363,7 +363,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
   // Unit vertex normals: the mesh's own, or area-weighted ones for smooth line models.
   const bool useVertexNormals = options.vertexNormals && mesh.normals.size() == nv && nv > 0;
   const bool smooth = options.endpointNormals && nv > 0;
-  const bool shading = smooth && options.shadingNormals;  // full normals for lighting (issue 14)
+  const bool shading = smooth && options.shadingNormals;  // full normals for lighting
   std::vector<Vec3f> unitVertexNormals;
   if (useVertexNormals || smooth) unitVertexNormals = meshVertexNormals(mesh);
 
@@ -459,7 +459,8 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
     stats.pointFaces.resize(stats.points);
   }
 
-  // Polyline merging (issue 13): the ends' mesh edges and planes, and the vertex normals there.
+  // Polyline merging (docs/decisions.md "Polyline merging"): the ends' mesh edges and planes, and
+  // the vertex normals there.
   const bool merge = options.mergeNormalDeviation > 0 && options.mergeMaxPieces > 1 && stats.segments > 1;
   std::vector<detail::ContourEndKey> endKeys(merge ? 2 * stats.segments : 0);
   std::vector<Vec3f> endNormals(merge && (useVertexNormals || smooth) ? 2 * stats.segments : 0);
@@ -496,7 +497,7 @@ HybridModel extractContour(const TriangleMesh& mesh, const ContourOptions& optio
               }
               if (vn.norm() > 1e-6) p.normal = limitTilt(vn.normalized(), fn.cast<double>()).cast<float>();
             }
-            if (shading) {  // the full interpolated vertex normal lights the point (issue 14)
+            if (shading) {  // the full interpolated vertex normal lights the point
               const Vec3d vn = interp.vertexNormal(f, w);
               model.pointShadingNormals[pi] = vn != Vec3d::Zero() ? Vec3f(vn.cast<float>()) : p.normal;
             }

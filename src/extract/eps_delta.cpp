@@ -1,5 +1,6 @@
 // (epsilon, delta) error-bounded line segment extraction, thesis §3.1.4.
-// Decisions (eager definition, radius rule, tie-breaks): docs/decisions.md "(ε,δ) extraction".
+// Decisions (eager definition, radius rule, tie-breaks): docs/decisions.md
+// "(ε,δ) extraction (§3.1)".
 #include "linesurf/extract/eps_delta.h"
 
 #include <algorithm>
@@ -433,7 +434,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     }
   }
   // Half-widths (§3.1.5 "enlarge the radius by ε", made tight): the strips and the kept discs
-  // cover every replaced point's Voronoi cell; docs/decisions.md "Issue 13 (i13width)".
+  // cover every replaced point's Voronoi cell; docs/decisions.md "Hybrid segment widths".
   {
     std::vector<double> radii(n);
     for (size_t j = 0; j < n; ++j) radii[j] = radiusOf(j);

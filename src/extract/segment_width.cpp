@@ -1,5 +1,5 @@
-// Segment half-widths from the replaced points' Voronoi cells (beyond the thesis, issues 13/14).
-// Decisions: docs/decisions.md "Issue 13 (i13width)".
+// Segment half-widths from the replaced points' Voronoi cells (beyond the thesis).
+// Decisions: docs/decisions.md "Hybrid segment widths".
 #include "detail/segment_width.h"
 
 #include <algorithm>

@@ -257,7 +257,7 @@ ClusterOutput extractCluster(size_t c, const Context& ctx) {
         ++out.degenerateRuns;
         continue;
       }
-      // Beyond the thesis (issue 13, docs/decisions.md "Issue 13 (i13width)"): the line through
+      // Beyond the thesis (docs/decisions.md "Hybrid segment widths"): the line through
       // p_s and p_e moved sideways (in the segment's plane) to the middle of the run's spread
       // across it, so that the farthest member is as close as it can be for this direction.
       const Vec3d across = nseg.normalized().cross(dir);
@@ -383,10 +383,10 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
     ++st.sizeHistogram[bin];
     if (size > 100) ++st.largeClusters, st.largeClusterPoints += size;
   }
-  // Hybrids close where their point models close (issue 14): with point radii, the strips and
+  // Hybrids close where their point models close: with point radii, the strips and
   // the kept discs cover every replaced point's Voronoi cell (the rule of the hole-free point
   // radius), no wider than each member's disc plus its distance (the rule of §3.1.5);
-  // docs/decisions.md "Issue 13 (i13width)". Without radii the slice-width rule stays.
+  // docs/decisions.md "Hybrid segment widths". Without radii the slice-width rule stays.
   if (cloud.attributes.radii) {
     std::vector<double> radii(n);
     for (size_t j = 0; j < n; ++j) radii[j] = cloud.points[j].radius;

@@ -321,7 +321,7 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
 
 // ---------------------------------------------------------------------------------------------
 // Stages 3 and 4.
-// Hole-free radius (issue 14, beyond the thesis) = this x the farthest vertex of the point's
+// Hole-free radius (beyond the thesis) = this x the farthest vertex of the point's
 // Voronoi cell among its nearest neighbours in its tangent plane, i.e. the largest circumradius
 // of its closed Delaunay star: the splat's cut-off reaches the cell's vertices at 1.0; 10% covers
 // the surface's deviation from the plane, normal error and pixel sampling.
@@ -331,7 +331,7 @@ constexpr double kCoverMargin = 1.1;
 // be 5x too small: 12 directions within a half-plane, 0.6% of the points of a uniformly random
 // sampling. So an open star's radius comes from the star of 2k, then 4k nearest neighbours, the
 // first that closes; one still open at 4k is a border of the surface and keeps the k-star's
-// radius (docs/decisions.md, "Issue 14 (i14pf)").
+// radius (docs/decisions.md, "Spacing and the cover radius").
 constexpr int kCoverGrowth = 4;
 
 /// Largest circumradius of the star triangles (0, q_a, q_b), consecutive counter-clockwise

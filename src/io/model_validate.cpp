@@ -54,7 +54,7 @@ void validateModel(const HybridModel& m, const std::string& name, Error::Kind ki
     c.radius(p.radius, "vertex", i);
     anyPointRadius = anyPointRadius || p.radius > 0;
   }
-  if (m.attributes.shadingNormals) {  // issue 14: unit shading normals, one per point
+  if (m.attributes.shadingNormals) {  // unit shading normals, one per point
     if (m.pointShadingNormals.size() != m.points.size())
       c.fail("shading normals", fmt::format("{} shading normals for {} points", m.pointShadingNormals.size(), m.points.size()));
     for (size_t i = 0; i < m.points.size(); ++i) {

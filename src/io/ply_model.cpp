@@ -246,7 +246,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
         m.points[i].radius = float(r[i]);
       }
     }
-    if (vShading) {  // shading normals (issue 14); checked by validateModel
+    if (vShading) {  // shading normals; checked by validateModel
       const double *a = col("snx"), *b = col("sny"), *c = col("snz");
       m.pointShadingNormals.resize(n);
       for (size_t i = 0; i < n; ++i) m.pointShadingNormals[i] = Vec3f(float(a[i]), float(b[i]), float(c[i]));
@@ -299,7 +299,7 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
         m.segments[i].uv1 = Vec2f(float(u1[i]), float(v1[i]));
       }
     }
-    if (sEndNormals) {  // smooth line models (issue 14)
+    if (sEndNormals) {  // smooth line models (endpoint normals)
       const double *a0 = col("nx0"), *b0 = col("ny0"), *c0 = col("nz0"), *a1 = col("nx1"), *b1 = col("ny1"), *c1 = col("nz1");
       for (size_t i = 0; i < n; ++i) {
         m.segments[i].normal0 = Vec3f(float(a0[i]), float(b0[i]), float(c0[i]));

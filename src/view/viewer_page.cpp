@@ -131,9 +131,9 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
   auto local = [&](const Vec3f& p) { return Vec3f((p - centre) * invR); };
   const bool clusters = model.pointProperties.count("cluster") > 0 &&
                         model.pointProperties.at("cluster").size() == model.points.size();
-  // per-point shading normals (issue 14): used exactly when `linesurf render` uses them (Renderer)
+  // per-point shading normals: used exactly when `linesurf render` uses them (Renderer)
   const bool shading = model.attributes.shadingNormals && model.pointShadingNormals.size() == model.points.size();
-  // point masses (issue 14): used exactly when the Renderer uses them
+  // point masses: used exactly when the Renderer uses them
   const std::vector<float>* masses = pointMasses(model);
 
   Blob blob;

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Browser test of `linesurf view` (issue 16): headless Chromium (software GL: SwiftShader) loads
+# Browser test of `linesurf view`: headless Chromium (software GL: SwiftShader) loads
 # the viewer page of a model with a camera in the URL fragment, takes a screenshot, and compares
 # it with `linesurf render` from the same camera by SSIM (igea points and greedy hybrid >= 0.95;
-# the Al contour line and point models, which carry shading normals, >= 0.975: issue 14). Shading
-# normals (issue 14): flat point and segment patches whose shading / endpoint normals lean
+# the Al contour line and point models, which carry shading normals, >= 0.975). Shading
+# normals: flat point and segment patches whose shading / endpoint normals lean
 # (also along the segments) must be as bright in the page as on the CPU and clearly unlike the
 # same patch lit by its plane. Also: a page with damaged data shows a message (never a blank
 # canvas) and a model over the budget is refused.
@@ -70,18 +70,20 @@ check() {
 check igea_points "$SRC/data/igea_points.ply" 0.15,0.1,0.3 0,0,0 0,1,0 30
 check igea_greedy igea_greedy.ply -0.2,0.05,0.25 0,0,0 0,1,0 30
 # contour models carry shading normals (points) and endpoint normals leaning along the segments
-# (issue 14); measured 0.986 (lines) and 0.987 (points; 0.953 with the plane normals lighting)
+# (lit as `linesurf render` lights them); measured 0.986 (lines) and 0.987 (points; 0.953 with the
+# plane normals lighting)
 "$LS" extract contour "$SRC/data/al_mesh.ply" -o al_contour_points.ply --seed 1 --all-points -q
 check al_contour al_contour.ply 2.5,1.5,3 0,0.68,0 0,1,0 30 0.975
 check al_contour_points al_contour_points.ply 2.5,1.5,3 0,0.68,0 0,1,0 30 0.975
 
-# Shading normals (issue 14). A flat square in z = 0 (plane normal +z) that fills the view; its
-# shading normals lean like those of a dome, normalize(0.8 x, 0.8 y, 1) (up to 42 degrees in the
-# view), which the headlight turns into a gradient. A point patch with them as shading normals
-# (snx sny snz), and a line patch (segments along x) with them as endpoint normals, so that they
-# lean along the segment as well as across it. The page must match `linesurf render` (mean
-# |difference| <= MAX_SHADE_DIFF grey levels) and differ from the patch lit by its plane normal
-# (>= MIN_SHADE_CONTRAST levels: a page that ignored the shading normals would fail the first).
+# Shading normals (docs/decisions.md "Smooth contour models"). A flat square in z = 0 (plane normal
+# +z) that fills the view; its shading normals lean like those of a dome, normalize(0.8 x, 0.8 y, 1)
+# (up to 42 degrees in the view), which the headlight turns into a gradient. A point patch with them
+# as shading normals (snx sny snz), and a line patch (segments along x) with them as endpoint
+# normals, so that they lean along the segment as well as across it. The page must match
+# `linesurf render` (mean |difference| <= MAX_SHADE_DIFF grey levels) and differ from the patch lit by its
+# plane normal (>= MIN_SHADE_CONTRAST levels: a page that ignored the shading normals would fail the
+# first).
 MAX_SHADE_DIFF=${MAX_SHADE_DIFF:-2}
 MIN_SHADE_CONTRAST=${MIN_SHADE_CONTRAST:-10}
 # patch KIND(points|segments) TILT(0|1) > FILE.ply: ascii PLY, spacing 0.02 over [-1.2, 1.2]^2
@@ -170,7 +172,7 @@ else
   fail=1
 fi
 
-# The panel says which optional attributes light and weigh the model (issue 14: point shading
+# The panel says which optional attributes light and weigh the model (point shading
 # normals and masses).
 dom=$(chrome al_contour_points.html "" --window-size=512,512 --virtual-time-budget=5000 --dump-dom | tr '\n' ' ')
 if grep -q '<div class="row" id="attributes">model carries: point shading normals, point masses</div>' <<<"$dom"; then

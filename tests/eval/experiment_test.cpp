@@ -94,10 +94,10 @@ TEST(Experiment, SmokeRunOnBundledModels) {
       ASSERT_EQ(mr.views.size(), 2u);
       EXPECT_NEAR(mr.nccm, 1.0, 0.01);
       // 3 grey levels: Al's coarse facets at 128x128 (2.5; 3.2 before the contour points and
-      // strip planes followed the smooth line model's interpolated normals, issue 14)
+      // strip planes followed the smooth line model's interpolated normals)
       EXPECT_LE(mr.meanAbsDiff.mean, 3.0);
       EXPECT_GE(mr.ssim, 0.9);
-      if (m.isMesh) {  // the contour point model's points carry masses by default (issue 14)
+      if (m.isMesh) {  // the contour point model's points carry masses by default
         ASSERT_FALSE(mr.notes.empty());
         EXPECT_NE(mr.notes[0].find("(masses)"), std::string::npos) << mr.notes[0];
       }

@@ -1,4 +1,4 @@
-// Tests of contour polyline merging (beyond the thesis, issue 13; src/extract/detail/contour_merge.cpp).
+// Tests of contour polyline merging (beyond the thesis; src/extract/detail/contour_merge.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -176,7 +176,8 @@ TEST(ContourMerge, SmoothSphereKeepsNormalsAndNeverCrossesPlanes) {
     EXPECT_TRUE(onePlane);
     EXPECT_NEAR(s.normal0.norm(), 1, 1e-5);
     EXPECT_NEAR(s.normal1.norm(), 1, 1e-5);
-    // the vertex normals at the ends, along-segment part kept (issue 14): radial on this mesh
+    // the vertex normals at the ends, along-segment part kept (shading normals): radial on this
+    // mesh
     EXPECT_GT(s.normal0.dot(s.p0.normalized()), 1 - 1e-5);
     EXPECT_GT(s.normal1.dot(s.p1.normalized()), 1 - 1e-5);
   }

@@ -372,7 +372,7 @@ TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
       EXPECT_FLOAT_EQ(pts.points[i + j].radius, s.radius);
     }
     // at the ends: the shading normal is the endpoint normal itself (both the full interpolated
-    // vertex normal, issue 14), and the plane is that normal made perpendicular to the segment
+    // vertex normal), and the plane is that normal made perpendicular to the segment
     // where it leans less than 10 degrees
     ASSERT_TRUE(pts.attributes.shadingNormals);
     EXPECT_LT((pts.pointShadingNormals[i] - s.normal0).norm(), 1e-5f);
@@ -381,8 +381,8 @@ TEST(Contour, AllPointsGivesCeilLOverDPlusOnePointsAtMostDApart) {
     const Vec3f q0 = (s.normal0 - s.normal0.dot(dir) * dir).normalized(), q1 = (s.normal1 - s.normal1.dot(dir) * dir).normalized();
     if (q0.dot(fn) > cos10 + 1e-4f) { EXPECT_LT((pts.points[i].normal - q0).norm(), 1e-5f); }
     if (q1.dot(fn) > cos10 + 1e-4f) { EXPECT_LT((pts.points[i + n - 1].normal - q1).norm(), 1e-5f); }
-    // point masses (issue 14): the length each stands for over the radius, half a spacing at the
-    // ends, so the segment's points weigh l / r together, as the segment does
+    // point masses (docs/decisions.md "Point masses"): the length each stands for over the radius,
+    // half a spacing at the ends, so the segment's points weigh l / r together, as the segment does
     double sum = 0;
     for (size_t j = 0; j < n; ++j) {
       const double spacing = s.length() / double(n - 1), share = j == 0 || j + 1 == n ? 0.5 : 1.0;

@@ -1,6 +1,7 @@
-// Tests of the segment half-width rule of the hybrids (issue 13 "narrow segments", issue 14 "no
-// holes"; src/extract/detail/segment_width.h): bounds, cover of the replaced points' cells, and
-// that the strips are narrower than the disc cover of before. Rendered hole-freeness: Holes.*.
+// Tests of the segment half-width rule of the hybrids (as narrow as the replaced points' cells
+// allow, no holes; src/extract/detail/segment_width.h): bounds, cover of the replaced points'
+// cells, and that the strips are narrower than the disc cover of before. Rendered hole-freeness:
+// Holes.*.
 #include <gtest/gtest.h>
 
 #include <algorithm>

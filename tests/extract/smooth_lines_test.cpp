@@ -1,6 +1,6 @@
-// Smooth line models (issue 14): endpoint normals filled by the three extraction methods, kept
-// through PLY (nx0 ny0 nz0 nx1 ny1 nz1 in `element segment`); point shading normals (snx sny snz
-// in `element vertex`) filled by contour extraction, kept through PLY, bad ones refused.
+// Smooth line models (beyond the thesis): endpoint normals filled by the three extraction methods,
+// kept through PLY (nx0 ny0 nz0 nx1 ny1 nz1 in `element segment`); point shading normals (snx sny
+// snz in `element vertex`) filled by contour extraction, kept through PLY, bad ones refused.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -44,7 +44,7 @@ TEST(SmoothLines, ContourEndpointNormalsFromAreaWeightedVertexNormals) {
   mesh.normals.clear();  // area-weighted normals are computed
   ContourOptions smooth;
   smooth.mergeNormalDeviation = 0;  // one segment per face and plane, as the flat cut below
-  smooth.shadingNormals = false;    // endpoint normals made perpendicular (the i14 model)
+  smooth.shadingNormals = false;    // endpoint normals made perpendicular (no shading normals)
   const HybridModel lines = extractContour(mesh, smooth);
   // the interpolated vertex normal is exactly radial on a chord of the sphere; made
   // perpendicular to the segment it stays within ~11 degrees on a 320-face icosphere, and on

@@ -1,6 +1,6 @@
-// One source of truth for options (issue 15): field -> flag / keyword naming, validate() on every
-// option struct rejecting NaN and out-of-range values, and the CLI's exit code 1 with a one-line
-// message naming the flag the user typed.
+// One source of truth for options (docs/decisions.md "Python module and options"): field -> flag /
+// keyword naming, validate() on every option struct rejecting NaN and out-of-range values, and the
+// CLI's exit code 1 with a one-line message naming the flag the user typed.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -51,7 +51,7 @@ def test_endpoint_normals_through_ply(tmp_path):
     linesurf.write(str(tmp_path / "e.ply"), model)
     back = linesurf.read(str(tmp_path / "e.ply"))
     if back.segment_endpoint_normals is None:
-        pytest.skip("this build's PLY writer does not store endpoint normals yet (issue 14)")
+        pytest.skip("this build's PLY writer does not store endpoint normals")
     np.testing.assert_allclose(back.segment_endpoint_normals, fields["segment_endpoint_normals"], atol=1e-6)
 
 

@@ -48,7 +48,8 @@ def test_contour_counts_equal_cli(cli, tmp_path):
     got = linesurf.extract_contour(linesurf.read_mesh(str(DATA / "al_mesh.ply")), points_below=0.01)
     assert got.stats["segments"] == len(ref.segments) > 0 and got.stats["points"] == len(ref.points)
     np.testing.assert_array_equal(got.model.segments, ref.segments)
-    # the points' masses (issue 14) are the CLI's too, and off on request on both routes
+    # the points' masses (docs/decisions.md "Point masses") are the CLI's too, and off on request on
+    # both routes
     np.testing.assert_array_equal(got.model.point_masses, ref.point_masses)
     assert got.model.point_properties.keys() == {"mass"}
     r = cli("-q", "extract", "contour", DATA / "al_mesh.ply", "-o", out, "--points-below", "0.01", "--no-point-masses")

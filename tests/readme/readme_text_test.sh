@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# README.md is for users: at most 150 lines, and no history of the work ("stop 26", "issue 14",
-# work-item tags such as "i14ptz"): what was measured when belongs in docs/results.md.
+# README.md is for users: at most 150 lines, and no history of the work ("stop" or "issue"
+# and a number, work-item tags: "i1", a digit and letters): what was measured when belongs in
+# docs/results.md.
 set -euo pipefail
 README=${1:?usage: readme_text_test.sh README.md}
 lines=$(wc -l <"$README")

@@ -1,6 +1,7 @@
-// Reliability suite (issue 17): malformed and hostile files, absurd parameters and outputs that
-// cannot be written, across every command. Each case runs the CLI in a fresh folder holding good
-// fixtures, hostile files and sentinel files at every output path, and asserts
+// Reliability suite (docs/decisions.md "CLI and reliability"): malformed and hostile files, absurd
+// parameters and outputs that cannot be written, across every command. Each case runs the CLI in a
+// fresh folder holding good fixtures, hostile files and sentinel files at every output path, and
+// asserts
 //   - the exit code (1 usage/bad parameter, 2 bad input file, 3 failure to write / other),
 //   - exactly one line of output (-q), naming the file or option at fault,
 //   - every file that existed before is unchanged byte for byte, and no file was added (no

@@ -1,8 +1,8 @@
-// Scale-free geometry and rendering (issue 17): the same model scaled by 1e-12, 1 and 1e12
-// renders images within 1 grey level of each other from the auto-framed camera (points with
-// normals and radii, raw points whose normals and radii the geometry stage estimates, and line
-// segments without radius), and `normals --curvature` output reads back with finite values that
-// scale as they should (spacing x s, curvature / s).
+// Scale-free geometry and rendering (docs/decisions.md "CLI and reliability"): the same model
+// scaled by 1e-12, 1 and 1e12 renders images within 1 grey level of each other from the auto-framed
+// camera (points with normals and radii, raw points whose normals and radii the geometry stage
+// estimates, and line segments without radius), and `normals --curvature` output reads back with
+// finite values that scale as they should (spacing x s, curvature / s).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Coverage alpha (RenderOptions::coverageGain; beyond the thesis, issue 14): interiors stay opaque,
+// Coverage alpha (RenderOptions::coverageGain; beyond the thesis): interiors stay opaque,
 // silhouettes get the soft edge of a box-filtered surface instead of the normalised alpha's fringe,
 // a partly covered layer keeps what lies behind it, and the SIMD rows agree with the pixel resolve.
 #include <gtest/gtest.h>

@@ -1,7 +1,8 @@
-// No holes (issue 14): uniformly random samples of a sphere and a torus, normals and radii from
-// the geometry stage (as `linesurf normals` computes them), rendered at 512^2 and 1024^2 from a
-// few views: no background pixel inside the analytic silhouette (shrunk by 1.5 pixels), for the
-// point models and for the (eps, delta) and shape-approximation hybrids extracted from them.
+// No holes (docs/decisions.md "Spacing and the cover radius"): uniformly random samples of a sphere
+// and a torus, normals and radii from the geometry stage (as `linesurf normals` computes them),
+// rendered at 512^2 and 1024^2 from a few views: no background pixel inside the analytic silhouette
+// (shrunk by 1.5 pixels), for the point models and for the (eps, delta) and shape-approximation
+// hybrids extracted from them.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -107,7 +108,8 @@ TEST(Holes, RandomSphere200k) {
 // The radius rule alone closes the point models: no screen prefilter to widen the splats, the
 // discs of 1.1 x the farthest vertex of each point's Voronoi cell (an open 12-neighbour star
 // regrown until it closes) still leave no pixel open. The open stars of before left 1 (sphere
-// 200k) and 1 + 2 (torus) pixels at 1024^2 here ("Issue 14 (i14pf)").
+// 200k) and 1 + 2 (torus) pixels at 1024^2 here
+// (docs/decisions.md, "Spacing and the cover radius").
 TEST(Holes, PointModelsCloseWithoutPrefilter) {
   RenderOptions o;
   o.prefilterVariance = 0;
@@ -123,7 +125,7 @@ TEST(Holes, PointModelsCloseWithoutPrefilter) {
 // as for contour models): the gaps between random samples stay opaque, no pixel 3 pixels inside
 // the silhouette has alpha <= 1/2. Measured over the 6 renders of the 200k sphere | torus, coverage
 // everywhere -> at silhouettes: points 462 -> 0 | 174 -> 0, (eps, delta) 1,636 -> 0 | 782 -> 0,
-// shape approximation 45,416 -> 11 | 14,418 -> 4 (docs/decisions.md, "Issue 14 (i14sil)").
+// shape approximation 45,416 -> 11 | 14,418 -> 4 (docs/decisions.md, "Coverage alpha (opt-in)").
 TEST(Holes, CoverageAtSilhouettesKeepsRandomSpheresOpaque) {
   const Sdf sdf = [](const Vec3f& p) { return p.norm() - 1; };
   PointGeometry geo;

@@ -1,4 +1,4 @@
-// Point masses (pointMasses, the "mass" point property; beyond the thesis, issue 14): a splat of
+// Point masses (pointMasses, the "mass" point property; beyond the thesis): a splat of
 // mass m weighs as m coincident ones, masses of 1 change nothing, rows of points of unequal
 // spacing weighted by the length they stand for render as the segments through them do, and bad
 // masses are refused by the renderer and by the model reader.

@@ -103,7 +103,8 @@ TEST(PointSetup, BatchesGiveTheReferenceStatusOfEveryPoint) {
 
 // The SIMD set-up (closed form, and the thesis's construction for splats stretched past
 // kMaxStretch) computes what preparePoint computes, up to float rounding.
-// With shading normals (issue 14) both light with them and put them in the normal buffer.
+// With shading normals (docs/decisions.md "Smooth contour models") both light with them and put
+// them in the normal buffer.
 TEST(PointSetup, SimdLanesMatchTheScalarReference) {
   for (int variant = 0; variant < 4; ++variant) {
     const float radiusScale = variant % 2 ? 0.03f : 1.0f;  // small radii: the prefilter stretches grazing splats

@@ -1,4 +1,4 @@
-// Point shading normals (beyond the thesis, issue 14; HybridModel::pointShadingNormals): they
+// Point shading normals (beyond the thesis; HybridModel::pointShadingNormals): they
 // light a point while its own normal stays its splat plane and its back-face test.
 #include <gtest/gtest.h>
 

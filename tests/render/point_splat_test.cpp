@@ -167,7 +167,8 @@ TEST(EwaPoint, PrefilterAntiAliasesCheckerboardAtGrazingAngle) {
   EXPECT_LT(errEwa, 0.06);
 }
 
-// The thesis's identity prefilter (issue 13's criterion: at least 3x lower error than without).
+// The thesis's identity prefilter (the checkerboard criterion: at least 3x lower error than
+// without; docs/decisions.md "Screen prefilter").
 TEST(EwaPoint, IdentityPrefilterAntiAliasesCheckerboardThreeTimesBetter) {
   const auto [errEwa, errPlain] = checkerboardErrors(1.0f, "_identity");
   EXPECT_LT(3 * errEwa, errPlain);  // measured: 3.4x
@@ -205,10 +206,11 @@ TEST(EwaPoint, TransparencyIsOrderIndependent) {
   EXPECT_LT(maxAbsDiff(base, renderImage(shuffled, cam, o).color), 1e-4);
 }
 
-// Tail layers (RenderOptions::tailLayers, beyond the thesis, issue 14): a grazing splat in front
-// of a facing plane hides it only where its rays meet its own disc, not where only its screen
-// prefilter's tail reaches (there the tail's depth is its plane's, extrapolated: the fold
-// speckles); alone over the background its tails still anti-alias its silhouette.
+// Tail layers (RenderOptions::tailLayers, beyond the thesis; docs/decisions.md "Tail layers"): a
+// grazing splat in front of a facing plane hides it only where its rays meet its own disc, not
+// where only its screen prefilter's tail reaches (there the tail's depth is its plane's,
+// extrapolated: the fold speckles); alone over the background its tails still anti-alias its
+// silhouette.
 TEST(EwaPoint, TailLayersKeepAGrazingSplatsTailFromHidingThePlaneBehind) {
   HybridModel plane = shapes::plane(2, 2, 61, 61);
   for (Point& q : plane.points) q.color = Color(0, 1, 0, 1), q.position.z() = -0.5f;  // beyond its z threshold

@@ -51,8 +51,8 @@ TEST(RenderZ3, OpaqueFrontFragmentHidesSurfacesBehindInAnyOrder) {
   }
 }
 
-// Tail layers (Z3Tile::setTailLayers, beyond the thesis, issue 14): a prefilter tail occludes
-// nothing. attr: colour c, alpha 1, weight 1, normal +z.
+// Tail layers (Z3Tile::setTailLayers, beyond the thesis; docs/decisions.md "Tail layers"): a
+// prefilter tail occludes nothing. attr: colour c, alpha 1, weight 1, normal +z.
 void insertTail(Z3Tile& t, float depth, Vec3f c, float w, bool tail, float thr = 0.1f) {
   const float attr[Z3Tile::kAttrs] = {c.x(), c.y(), c.z(), 1, 1, 0, 0, 1};
   t.insert(0, 0, depth, thr, w, attr, tail);

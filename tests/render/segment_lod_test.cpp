@@ -1,4 +1,4 @@
-// Segment level of detail (RenderOptions::segmentLod, beyond the thesis, issue 13): a short
+// Segment level of detail (RenderOptions::segmentLod, beyond the thesis): a short
 // ScreenSpace segment drawn as its moment-matched elliptical point splat. The ellipse against the
 // exact segment kernel (segmentWeightAt) as a function of the length in kernel sigmas; images with
 // the level of detail on and off; thread counts.

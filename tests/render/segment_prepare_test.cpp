@@ -233,12 +233,13 @@ TEST(SegmentPrepare, BatchesAgreeWithTheExactPath) {
               tally.segments, tally.scalar, tally.visible, tally.compared, tally.pieces, tally.edge);
 }
 
-// Smooth segments whose shading normals turn by 0.1 .. 1.3 rad along them (contour line models:
-// issue 14 made most of Al's turn by more than 0.1 rad) stay in the SIMD batches, with the exact
-// path's lighting stations (Gouraud; none when lighting is deferred), shade and normals: the same
-// segments with normals that do not turn go to the exact path (for their other reasons: near
-// grazing, clamped covariance) as often, up to 1% of them (the lanes whose station count or turn
-// test the float turn cannot decide), where every visible turning one did before (issue 13, i13turn).
+// Smooth segments whose shading normals turn by 0.1 .. 1.3 rad along them (contour line models
+// keep their normals' along-segment part, so most of Al's turn by more than 0.1 rad) stay in the
+// SIMD batches, with the exact path's lighting stations (Gouraud; none when lighting is deferred),
+// shade and normals: the same segments with normals that do not turn go to the exact path (for
+// their other reasons: near grazing, clamped covariance) as often, up to 1% of them (the lanes
+// whose station count or turn test the float turn cannot decide), where every visible turning one
+// did before (docs/decisions.md "Segment prepare").
 TEST(SegmentPrepare, TurningSegmentsStayInTheBatches) {
   for (bool deferred : {false, true}) {
     Tally tally;

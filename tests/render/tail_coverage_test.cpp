@@ -1,4 +1,4 @@
-// Tail coverage (RenderOptions::tailCoverage; beyond the thesis, issue 14): a pixel reached only by
+// Tail coverage (RenderOptions::tailCoverage; beyond the thesis): a pixel reached only by
 // prefilter tails with nothing behind it fades towards the background, as a box-filtered surface's
 // edge does; nothing inside a surface changes, alpha only falls, the SIMD rows agree with the pixel
 // resolve and the image does not depend on the thread count.

@@ -1,4 +1,4 @@
-// The viewer page of `linesurf view` (issue 16): what it embeds and what it refuses. The page's
+// The viewer page of `linesurf view`: what it embeds and what it refuses. The page's
 // drawing is tested in a browser (tests/browser/viewer_test.sh).
 #include <gtest/gtest.h>
 
@@ -151,7 +151,7 @@ TEST(ViewerPage, CarriesEndpointNormalsAndClusterIds) {
   EXPECT_TRUE(meta["points"].contains("cluster"));
 }
 
-// Issue 14: points' shading normals go into the page (unit, int16) beside their plane normals, in
+// Points' shading normals go into the page (unit, int16) beside their plane normals, in
 // the order of the points drawn (skipped points leave theirs out), and only when the model has them.
 TEST(ViewerPage, CarriesPointShadingNormals) {
   HybridModel m = smallHybrid();

@@ -59,12 +59,12 @@ struct HybridModel {
   Attributes attributes;
   /// Texture image sampled by segment uv (§5.2.4); null when untextured.
   std::shared_ptr<const Image> texture;
-  /// Optional per-point shading normals (beyond the thesis, issue 14), used when
+  /// Optional per-point shading normals (beyond the thesis), used when
   /// attributes.shadingNormals: unit, one per point, in point order. A point's `normal` stays
   /// its splat plane and its back-face test; the shading normal only lights it (flat and
   /// Gouraud shading, the deferred normal buffer). Contour point models carry the interpolated
   /// vertex normal here while their planes keep near their triangle (docs/decisions.md,
-  /// "Issue 14 (i14shade)"). Kept beside `points`, not in Point (the renderer's hot data).
+  /// "Smooth contour models"). Kept beside `points`, not in Point (the renderer's hot data).
   std::vector<Vec3f> pointShadingNormals;
   /// Extra per-point scalar properties (e.g. curvature "k_min"), each of points.size().
   /// One is read by the renderer: kPointMassProperty ("mass", see pointMasses()).
@@ -78,12 +78,13 @@ struct HybridModel {
   Bounds3f bounds() const;
 };
 
-/// The point property that scales a point splat's kernel (beyond the thesis, issue 14): finite,
-/// > 0, in units of the thesis's splat (1). A splat of mass m weighs as m coincident ones, so a
-/// model whose points stand for unequal parts of the surface reconstructs it without leaning
-/// towards its denser places. Contour point models carry the contour length each point stands
-/// for over its radius, which is what a segment weighs per length (a segment of length l weighs
-/// as l / radius points; render/segment_splat.h). Absent: every point weighs 1 (the thesis).
+/// The point property that scales a point splat's kernel (beyond the thesis; docs/decisions.md
+/// "Point masses"): finite, > 0, in units of the thesis's splat (1). A splat of mass m weighs as m
+/// coincident ones, so a model whose points stand for unequal parts of the surface reconstructs it
+/// without leaning towards its denser places. Contour point models carry the contour length each
+/// point stands for over its radius, which is what a segment weighs per length (a segment of
+/// length l weighs as l / radius points; render/segment_splat.h). Absent: every point weighs 1
+/// (the thesis).
 inline constexpr const char* kPointMassProperty = "mass";
 
 /// The largest point mass a model may carry (a larger one is garbage or a unit error).

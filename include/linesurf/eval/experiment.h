@@ -69,7 +69,8 @@ struct ExperimentOptions {
     return r;
   }();
   /// Meshes: also render the mesh itself (render/mesh_render.h, the ground truth) from the same
-  /// views and compare the line model and the point model with it (issue 14).
+  /// views and compare the line model and the point model with it (beyond the thesis;
+  /// docs/decisions.md "Mesh ground truth and the silhouette band").
   bool groundTruth = true;
   int groundTruthSupersampling = 4;  ///< samples per pixel side of the mesh image, [1, 16]
 
@@ -108,7 +109,7 @@ struct ExperimentView {
   uint64_t coveredInSilhouetteBand = 0;  ///< of coveredPixels, those within the band
 };
 
-/// Agreement of a model's images with the mesh images over the views (ground truth, issue 14).
+/// Agreement of a model's images with the mesh images over the views (ground truth).
 struct TruthSummary {
   double psnr = 0;        ///< 10 log10(1 / mean mse) over the views
   double ssim = 0;        ///< mean over the views

@@ -27,13 +27,14 @@ ImageMetrics compareImages(const Image& a, const Image& b);
 /// to white at `saturate` grey levels and above).
 Image differenceHeatmap(const Image& a, const Image& b, double saturate = 32);
 
-/// Beyond the thesis (issue 14): the pixels within `reach` pixels (a (2 reach + 1)^2 square) of a
-/// silhouette of a rendered surface, 1 in the returned mask (width * height, row-major). A
-/// silhouette lies between two 4-neighbours of which one is covered (alpha > 0) and the other not,
-/// between two covered ones whose depths differ by more than `jump` times the nearer depth (an
-/// inner silhouette: a surface in front of another), and on every partly covered pixel
-/// (0 < alpha < 1). `alpha` and `depth` as a renderer writes them (R channel; depth linear).
-/// Throws linesurf::Error BadParameter on sizes that differ or reach < 0, jump <= 0.
+/// Beyond the thesis (docs/decisions.md "Mesh ground truth and the silhouette band"): the pixels
+/// within `reach` pixels (a (2 reach + 1)^2 square) of a silhouette of a rendered surface, 1 in the
+/// returned mask (width * height, row-major). A silhouette lies between two 4-neighbours of which
+/// one is covered (alpha > 0) and the other not, between two covered ones whose depths differ by
+/// more than `jump` times the nearer depth (an inner silhouette: a surface in front of another),
+/// and on every partly covered pixel (0 < alpha < 1). `alpha` and `depth` as a renderer writes them
+/// (R channel; depth linear). Throws linesurf::Error BadParameter on sizes that differ or
+/// reach < 0, jump <= 0.
 std::vector<uint8_t> silhouetteBand(const Image& alpha, const Image& depth, int reach = 2, double jump = 0.02);
 
 }  // namespace linesurf

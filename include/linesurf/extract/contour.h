@@ -38,11 +38,11 @@ struct ContourOptions {
   /// radius of the rendering kernel (§3.3); the output radius below is derived from it.
   float spacing = 0;
   float spacingScale = 1.0f;  ///< used when spacing == 0; > 0
-  /// Cap on the default d (beyond the thesis, issue 14): when spacing == 0, d = spacingScale ×
-  /// min(mean edge length, bounding-box diagonal / diagonalDivisions). The mean edge alone makes a
-  /// coarse mesh's model coarser than the thesis's own (Al, 7k faces: mean edge = diagonal / 52,
-  /// 27,625 contour points; the thesis's Al has 163,205; at the cap 163,909), and its splats blur
-  /// every feature the size of an edge. 0 = no cap. See contourSpacing.
+  /// Cap on the default d (beyond the thesis; docs/decisions.md "Spacing and radius"): when spacing
+  /// == 0, d = spacingScale × min(mean edge length, bounding-box diagonal / diagonalDivisions). The
+  /// mean edge alone makes a coarse mesh's model coarser than the thesis's own (Al, 7k faces: mean
+  /// edge = diagonal / 52, 27,625 contour points; the thesis's Al has 163,205; at the cap 163,909),
+  /// and its splats blur every feature the size of an edge. 0 = no cap. See contourSpacing.
   float diagonalDivisions = 200;
   uint64_t seed = 1;          ///< orientation and offsets of the planes
   std::optional<ContourPlanes> planes;  ///< explicit plane families (overrides seed)
@@ -52,8 +52,9 @@ struct ContourOptions {
   float familySwitchSine = 1.0f;
   /// Radius of every output segment and point = radiusScale × d. The thesis's constraint
   /// d < 2R (R: kernel cutoff radius) needs radiusScale > 0.5 for a hole-free rendering. 0.55
-  /// (issue 14, was 0.75): strips reach beyond the surface by their radius at silhouettes and
-  /// creases; 0.55 d cut the pixels off the mesh image by > 64 levels on Al from 14.4% to 11.1%.
+  /// (was 0.75; docs/decisions.md "Spacing and radius"): strips reach beyond the surface by their
+  /// radius at silhouettes and creases; 0.55 d cut the pixels off the mesh image by > 64 levels on
+  /// Al from 14.4% to 11.1%.
   float radiusScale = 0.55f;
   /// Segment normal from the vertex normals interpolated at the midpoint (made perpendicular to
   /// the segment) instead of the triangle's normal (thesis). Ignored when the mesh has none.
@@ -64,27 +65,27 @@ struct ContourOptions {
   /// `normal` (its strip's plane, culling) and every point's normal are then the vertex normals
   /// interpolated there (made perpendicular to the segment), leaning at most 10 degrees from the
   /// triangle's normal (further, back-face culling opens holes at creases), so that the line
-  /// model and the point model cut from it shade and cover alike (issue 14: Table 5's mean
-  /// absolute difference on Al 2.95 -> 1.97). false: the thesis's one-normal model (the
-  /// triangle's normal, or as vertexNormals says).
+  /// model and the point model cut from it shade and cover alike (Table 5's mean
+  /// absolute difference on Al 2.95 -> 1.97; docs/decisions.md "Smooth contour models"). false: the
+  /// thesis's one-normal model (the triangle's normal, or as vertexNormals says).
   bool endpointNormals = true;
-  /// Shading normals for smooth models (beyond the thesis, issue 14; only with endpointNormals):
+  /// Shading normals for smooth models (beyond the thesis; only with endpointNormals):
   /// every point carries the interpolated vertex normal, full and unit, as its shading normal
   /// (HybridModel::pointShadingNormals; its `normal` stays the plane above), and the segments'
   /// endpoint normals keep their component along the segment (the interpolated vertex normals
   /// themselves), so that lines and points both shade with the mesh's smooth normal. false: the
   /// endpoint normals are made perpendicular to the segment and points carry no shading normal
-  /// (the model of "Issue 14 (i14)"). Measured in docs/decisions.md, "Issue 14 (i14shade)".
+  /// (the first smooth model). Measured in docs/decisions.md, "Smooth contour models".
   bool shadingNormals = true;
-  /// Point masses (beyond the thesis, issue 14): every point made from a segment carries the
+  /// Point masses (beyond the thesis): every point made from a segment carries the
   /// length of that segment it stands for over its radius as its mass (pointMasses; half a spacing
   /// at either end, so the two points where neighbouring faces' segments meet add up to one), the
   /// weight a segment of that length has. Without them the points weigh 1 each and their unequal
   /// spacing along the contours (the faces' segments are cut at every mesh edge) shows as streaks
-  /// along the contours; measured in docs/decisions.md, "Issue 14 (lead, stop 29)". Only when
+  /// along the contours; measured in docs/decisions.md, "Point masses". Only when
   /// points are made (allPoints, pointsBelow).
   bool pointMasses = true;
-  /// Polyline merging (beyond the thesis, issue 13): consecutive segments of one contour polyline
+  /// Polyline merging (beyond the thesis): consecutive segments of one contour polyline
   /// (one plane, chained through shared mesh edges; never across a break, a family or a plane)
   /// become one segment while every original vertex in between stays within
   /// mergeNormalDeviation × d of it along the surface normal there and within
@@ -97,22 +98,22 @@ struct ContourOptions {
   /// (the point model of Table 5 is cut from the unmerged segments). Every merge moved Table 5's
   /// line-vs-point difference up a little, in proportion to how much was merged (whichever limit
   /// binds), while the line model's difference from the mesh itself stays unchanged (SSIM, PSNR
-  /// and the > 64 share within 0.0002 / 0.01 dB / 0.01 points). 2 degrees (the default since
-  /// stop 22): 3-37% fewer segments than 0.5, Table 5 +0.009 to +0.046 on the seven shared meshes
-  /// (docs/decisions.md, "Issue 13 (lead, stop 22)"; 0.5, 1 and 5 degrees measured in "Issue 13
-  /// (i13merge)"). The tangent deviation 0.05 d = radiusScale - 0.5: neighbouring strips (d
-  /// apart, half-width 0.55 d) still overlap.
+  /// and the > 64 share within 0.0002 / 0.01 dB / 0.01 points). 2 degrees (the
+  /// default): 3-37% fewer segments than 0.5, Table 5 +0.009 to +0.046 on the seven shared meshes
+  /// (docs/decisions.md, "Polyline merging", with the 0.5, 1 and 5 degrees measured). The tangent
+  /// deviation 0.05 d = radiusScale - 0.5: neighbouring strips (d apart, half-width 0.55 d) still
+  /// overlap.
   float mergeNormalDeviation = 0.01f;
   float mergeTangentDeviation = 0.05f;
   float mergeAngle = 2.0f;
   /// Smooth models (endpointNormals): largest angle between a merged segment's strip plane and
-  /// the planes of the pieces it replaces, degrees [0, 90) (beyond the thesis, issue 13). The
+  /// the planes of the pieces it replaces, degrees [0, 90) (beyond the thesis). The
   /// strip plane only places the strip (its edges move by half-width × sin of the tilt: 0.019 d
   /// at 2 degrees) and culls it; the shading comes from the endpoint normals, which mergeAngle
-  /// still bounds at every interior vertex. 4 (stop 23; was mergeAngle): 4-18% fewer segments on
+  /// still bounds at every interior vertex. 4 (was mergeAngle): 4-18% fewer segments on
   /// bunny, horse, gargoyle, dragon, line frames 8-13 points faster against their point models,
-  /// the line-vs-mesh SSIM within 0.0001, Table 5 +0.003 to +0.022 (docs/decisions.md, "Issue 13
-  /// (lead, stop 23)"). Flat models use mergeAngle for the strip (it is their shading normal).
+  /// the line-vs-mesh SSIM within 0.0001, Table 5 +0.003 to +0.022 (docs/decisions.md,
+  /// "Polyline merging"). Flat models use mergeAngle for the strip (it is their shading normal).
   float mergeStripAngle = 4.0f;
   int mergeMaxPieces = 32;
   /// Segments shorter than this (object units) become ⌈l/d⌉+1 points: hybrid model. 0 = none.

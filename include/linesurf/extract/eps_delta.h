@@ -88,7 +88,7 @@ void validate(const EpsDeltaOptions& options);
 /// thinnest member's radius up) at which the strips cover every replaced point's Voronoi cell
 /// (local Delaunay star) together with the neighbouring segments, at most
 /// max_j (r_j + dist(q_j, segment)) <= max r_j + epsilon, the cover of every replaced disc
-/// (§3.1.5's "radius + ε" made tight; docs/decisions.md "Issue 13 (i13width)").
+/// (§3.1.5's "radius + ε" made tight; docs/decisions.md "Hybrid segment widths").
 /// A comment "eps-delta: epsilon=E delta=D k=K" records the tolerances.
 /// Deterministic for any thread count. Throws linesurf::Error (BadParameter) for absurd options
 /// or geometry that does not match the cloud.

@@ -40,7 +40,7 @@ struct ShapeApproxOptions {
   float curvatureCoherence = 0.5f;
   /// Without point radii in the cloud: segment half-width as a multiple of the cluster's average
   /// spacing across the segments (d_avg,x); > 0. With radii the strips cover the replaced points'
-  /// Voronoi cells instead (docs/decisions.md "Issue 13 (i13width)") and this is not used.
+  /// Voronoi cells instead (docs/decisions.md "Hybrid segment widths") and this is not used.
   float radiusScale = 1.0f;
   bool provenance = false;  ///< fill HybridModel::provenance with the points each segment replaced
   /// Smooth line models (beyond the thesis): each segment also carries the normals of the

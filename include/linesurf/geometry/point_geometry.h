@@ -39,8 +39,9 @@ struct GeometryOptions {
   float orientationPenalty = 0.5f;
   bool delaunayNeighbours = true;  ///< stage 3
   bool curvature = true;           ///< stage 4 (needs stage 3)
-  /// Hole-free radii (issue 14): PointGeometry::coverRadius from the local Delaunay star (runs
-  /// stage 3 even when delaunayNeighbours is off; its neighbour lists are then not kept).
+  /// Hole-free radii (docs/decisions.md "Spacing and the cover radius"): PointGeometry::coverRadius
+  /// from the local Delaunay star (runs stage 3 even when delaunayNeighbours is off; its neighbour
+  /// lists are then not kept).
   bool coverRadius = true;
   CurvatureFit curvatureFit = CurvatureFit::Taubin;  ///< stage 4 formula
   /// Stage 3 with CGAL::Delaunay_triangulation_2 per point instead of the default star by
@@ -105,7 +106,7 @@ struct PointGeometry {
   std::vector<float> spacing;
   float averageSpacing = 0;
 
-  /// Hole-free radius per point (beyond the thesis, issue 14): 1.1 x the largest circumradius of the
+  /// Hole-free radius per point (beyond the thesis): 1.1 x the largest circumradius of the
   /// triangles of its local Delaunay star (tangent plane), capped at 3 x spacing. The Voronoi
   /// cell of a point is the polygon of its star triangles' circumcentres, so a disc of this
   /// radius covers the cell, and the discs of all points cover the surface. 0 where the point

@@ -10,8 +10,8 @@
 /// normalisation (the two-pass visibility + accumulation of Botsch et al. 2005 standing in for
 /// Z^3, §6.2.3), per-pixel Phong lighting (§6.2.2). Points with shading normals
 /// (HybridModel::pointShadingNormals) are lit by them, segments with endpoint normals by
-/// normalize(n0 + u (n1 - n0)), as `linesurf render` does (issue 14). See docs/decisions.md
-/// (issue 16, "Issue 14 (i14view)").
+/// normalize(n0 + u (n1 - n0)), as `linesurf render` does. See docs/decisions.md
+/// "Viewer (`linesurf view`)".
 #include <cstddef>
 #include <filesystem>
 #include <string>

@@ -1,4 +1,4 @@
-// Merging of contour polylines, beyond the thesis (issue 13). See contour_merge.h.
+// Merging of contour polylines, beyond the thesis. See contour_merge.h.
 #include "contour_merge.h"
 
 #include <algorithm>

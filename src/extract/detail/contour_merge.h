@@ -1,8 +1,8 @@
 #pragma once
-// Merging of contour polylines (beyond the thesis; issue 13): consecutive segments of one contour
+// Merging of contour polylines (beyond the thesis): consecutive segments of one contour
 // polyline (same plane family and plane, chained through shared mesh edges) become one segment
 // when that segment stays on the surface. Used by extractContour (src/extract/contour.cpp); the
-// rules and the measured tolerances are in docs/decisions.md, "Issue 13 (i13merge)".
+// rules and the measured tolerances are in docs/decisions.md, "Polyline merging".
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -35,7 +35,7 @@ struct ContourMergeLimits {
   double uvTolerance = 0;       ///< textured models: largest uv deviation from linear (0: no texture)
   float colorTolerance = 0;     ///< largest colour channel deviation from the merged colour
   bool smooth = false;          ///< segments carry normal0/normal1
-  bool alongNormals = false;    ///< normal0/normal1 keep their component along the segment (issue 14)
+  bool alongNormals = false;    ///< normal0/normal1 keep their component along the segment
 };
 
 struct ContourMergeCounts {

@@ -1,7 +1,7 @@
 #pragma once
-// Half-widths of the segments of a hybrid (beyond the thesis; issue 13 "narrow segments where
-// they can be", issue 14 "no holes"). Shared by the (ε,δ) (§3.1.5) and shape-approximation
-// (§3.2.4.5) extractions. Rule and measurements: docs/decisions.md "Issue 13 (i13width)".
+// Half-widths of the segments of a hybrid (beyond the thesis: narrow segments where
+// they can be, and no holes). Shared by the (ε,δ) (§3.1.5) and shape-approximation
+// (§3.2.4.5) extractions. Rule and measurements: docs/decisions.md "Hybrid segment widths".
 #include <cstdint>
 #include <span>
 
@@ -18,7 +18,7 @@ inline constexpr uint32_t kKeptPoint = UINT32_MAX;
 
 /// Sets segments[s].radius for every segment of a hybrid extracted from `cloud`:
 /// owner[j] = the segment that replaced input point j, or kKeptPoint; radii[j] = the disc radius
-/// point j has (or had) in the point model. The rule (docs/decisions.md "Issue 13 (i13width)"):
+/// point j has (or had) in the point model. The rule (docs/decisions.md "Hybrid segment widths"):
 ///  - cover, as the hole-free point radius does (geometry stage 3: 1.1 x the farthest Voronoi
 ///    vertex): the Voronoi cell of every replaced point j (the circumcentres of its local
 ///    Delaunay star's triangles, in j's tangent plane) is covered by strips, each point of it
