@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/error.h"
 #include "linesurf/eval/image_metrics.h"
 #include "linesurf/io/image_io.h"
@@ -18,6 +19,7 @@ struct CompareArgs {
 };
 
 void run(const CompareArgs& args) {
+  requireRange("saturate", args.saturate, 1e-3, 1e6, "grey levels");  // CLI11's Range lets NaN through
   checkFiles({args.a, args.b}, {{"--diff", args.diff, {".png"}}});
   // Sizes from the headers before decoding: a small file may declare a huge image.
   const ImageInfo ia = readImageInfo(args.a), ib = readImageInfo(args.b);

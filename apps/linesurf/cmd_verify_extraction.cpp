@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "command.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/pipeline/verify_job.h"
@@ -56,9 +57,9 @@ RegisterCommand reg(35, [](CLI::App& app) {
   sub->add_option("INPUT", args->input, "The point cloud the model was extracted from")->required();
   sub->add_option("HYBRID", args->hybrid, "The hybrid model written by `extract eps-delta --provenance`")->required();
   auto& v = args->verify;
-  sub->add_option_function<double>("--epsilon", [&v](double e) { v.epsilon = e; },
+  sub->add_option_function<double>("--epsilon", [&v](double e) { requireRange("epsilon", e, 0, 1e30), v.epsilon = e; },
                                    "Distance tolerance, >= 0 (default: as recorded in HYBRID)");
-  sub->add_option_function<double>("--delta", [&v](double d) { v.delta = d; },
+  sub->add_option_function<double>("--delta", [&v](double d) { requireRange("delta", d, 0, 2), v.delta = d; },
                                    "Normal tolerance in [0, 2] (default: as recorded in HYBRID)");
   sub->add_option_function<int>("-k,--k,--neighbours", [&v](int k) { v.k = k; },
                                 "Neighbours for computed normals, [3, 256] (default: as recorded)");

@@ -72,8 +72,7 @@ RegisterCommand reg(45, [](CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "view", "Write a self-contained HTML page that draws the model with WebGL2 splats (orbit, zoom, pan)");
   sub->add_option("MODEL", a->model, "Point cloud, hybrid or line model (.ply, .xyz); a mesh shows its vertices")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();  // a missing file is reported after the options are checked, as render does
   sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
   // The page's defaults: the option tables' viewer fields (pipeline/option_tables.h).
   bindOptions(sub, a->page.view, {}, kUseViewer);

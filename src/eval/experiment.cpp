@@ -117,7 +117,7 @@ bool isModelFile(const fs::path& p) {
 std::vector<fs::path> listModels(const ExperimentOptions& o) {
   std::error_code ec;
   if (!fs::is_directory(o.dataDir, ec))
-    throw Error(Error::Kind::Io, o.dataDir.string(), "", "not a folder (expected a folder of .ply/.obj/.xyz models)");
+    throw Error(Error::Kind::BadInput, o.dataDir.string(), "", "not a folder (expected a folder of .ply/.obj/.xyz models)");
   std::vector<fs::path> files;
   for (fs::directory_iterator it(o.dataDir, ec), end; !ec && it != end; it.increment(ec)) {
     if (!it->is_regular_file(ec) || !isModelFile(it->path())) continue;
@@ -129,7 +129,7 @@ std::vector<fs::path> listModels(const ExperimentOptions& o) {
   }
   if (ec) throw Error(Error::Kind::Io, o.dataDir.string(), "", "cannot list the folder: " + ec.message());
   if (files.empty())
-    throw Error(Error::Kind::Io, o.dataDir.string(), "",
+    throw Error(Error::Kind::BadInput, o.dataDir.string(), "",
                 o.only.empty() ? "holds no model file (.ply, .obj, .xyz)" : "no model file matches --only");
   std::sort(files.begin(), files.end());
   return files;

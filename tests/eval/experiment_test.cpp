@@ -213,7 +213,7 @@ TEST(Experiment, RejectsAbsurdOptionsAndEmptyFolders) {
     runExperiment(o);
     FAIL() << "empty folder accepted";
   } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), Error::Kind::Io);
+    EXPECT_EQ(e.kind(), Error::Kind::BadInput);
   }
   EXPECT_THROW(parseExperimentMethod("fastest"), Error);
   EXPECT_EQ(parseExperimentMethod("greedy"), ExperimentMethod::ShapeGreedy);
