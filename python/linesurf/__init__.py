@@ -28,6 +28,7 @@ from ._linesurf import (  # noqa: F401
     read_mesh,
     set_threads,
     thread_count,
+    lod_build,
     verify,
     write,
     write_png,
@@ -67,7 +68,7 @@ def _keyword_function(name, positional, extras=()):
     return function
 
 
-render = _keyword_function("render", ["model"], [("depth", False), ("alpha", False), ("normal", False)])
+render = _keyword_function("render", ["model"], [("depth", False), ("alpha", False), ("normal", False), ("budget", None)])
 prepare = _keyword_function("prepare", ["model"])
 extract_eps_delta = _keyword_function("extract_eps_delta", ["cloud"])
 extract_shape_approx = _keyword_function("extract_shape_approx", ["cloud"])

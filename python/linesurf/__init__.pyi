@@ -144,7 +144,7 @@ def verify(cloud: PointsLike, hybrid: Model, *, epsilon: Optional[float] = None,
            k: Optional[int] = None) -> Dict[str, Any]: ...
 
 def render(
-    model: PointsLike,
+    model: Union[PointsLike, str],
     *,
     size: Tuple[int, int] = ...,
     azimuth: float = ...,
@@ -186,7 +186,9 @@ def render(
     depth: bool = ...,
     alpha: bool = ...,
     normal: bool = ...,
+    budget: Optional[int] = ...,
 ) -> Union[npt.NDArray[np.uint8], Dict[str, npt.NDArray[Any]]]: ...
+def lod_build(model: PointsLike, path: str, *, leaf_size: int = ..., grid: int = ..., k: int = ...) -> Dict[str, int]: ...
 
 def compare(a: ImageLike, b: ImageLike) -> Dict[str, float]: ...
 def difference_heatmap(a: ImageLike, b: ImageLike, *, saturate: float = 32.0) -> npt.NDArray[np.uint8]: ...

@@ -15,7 +15,9 @@
 #include "linesurf/extract/verify.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_frame.h"
+#include "linesurf/io/atomic_file.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/pipeline/verify_job.h"
 #include "linesurf/render/renderer.h"
@@ -393,7 +395,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
   }, "The keywords of render() from the option tables: [{keyword, field, default, help}].");
   m.def(
       "_render",
-      [](py::object model, py::dict options, bool depth, bool alpha, bool normal) -> py::object {
+      [](py::object model, py::dict options, bool depth, bool alpha, bool normal, py::object budget) -> py::object {
         py::dict kw = options;  // the tables take their keywords out of a copy
         kw = py::dict(kw);
         ViewOptions v;
@@ -408,9 +410,42 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         validate(v);
         validate(p);
 
+        RenderResult r;
+        // A str or PathLike naming a .lod file is a hierarchy; anything else goes to modelArg (so a
+        // stray string is still the TypeError of a bad model).
+        bool isPath = false;
+        if (py::isinstance<py::str>(model) || py::hasattr(model, "__fspath__")) {
+          const std::string name = py::str(py::module_::import("os").attr("fspath")(model));
+          isPath = name.size() >= 4 && name.compare(name.size() - 4, 4, ".lod") == 0;
+        }
+        if (isPath) {
+          // A level-of-detail hierarchy (lod_build): the nodes chosen for the view within `budget`
+          // splats (None: every leaf, the whole model's picture), as `linesurf render M.lod --budget`.
+          const std::string path = py::str(py::module_::import("os").attr("fspath")(model));
+          uint64_t b = UINT64_MAX;  // every leaf
+          if (!budget.is_none()) {
+            const long long n = budget.cast<long long>();
+            if (n < 1) throwBadOption("budget", "must be >= 1 splats (None: every leaf)");
+            b = uint64_t(n);
+          }
+          std::vector<std::string> failures;
+          {
+            py::gil_scoped_release release;
+            if (!lod::isLodFile(path))
+              throw Error(Error::Kind::BadInput, path, "", "not a level-of-detail hierarchy (.lod; see lod_build)");
+            const lod::LodFile file(path);
+            const lod::LodRenderer renderer(file, o, b, p.radiusScale);
+            lod::LodFrameResult f = renderer.render(viewCameras(renderer.sphere(), v, file.header().frame).front());
+            r = std::move(f.render);
+            failures = std::move(f.failures);
+          }
+          // A node that failed leaves its part of the picture empty, as in the CLI: say which.
+          for (const std::string& e : failures)
+            PyErr_WarnEx(PyExc_RuntimeWarning, (e + " (not drawn)").c_str(), 1);
+        } else {
+        if (!budget.is_none()) throwBadOption("budget", "needs a level-of-detail hierarchy (a .lod path; see lod_build)");
         ModelArg a = modelArg(model);
         if (a.model->empty()) throwBadOption("model", "holds no points and no segments");
-        RenderResult r;
         {
           py::gil_scoped_release release;
           // What `linesurf render` does to a model before drawing it; a copy only when it changes it.
@@ -419,6 +454,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
           if (needsPreparation(*a.model, p.radiusScale)) prepareForRendering(a.mutableCopy(), p);
           Renderer renderer(*a.model, o);
           r = renderer.render(viewCameras(renderer.sphere(), v, frame).front());
+        }
         }
         py::array_t<uint8_t> color = rgba8(r.color);
         if (!depth && !alpha && !normal) return color;
@@ -435,8 +471,9 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         return d;
       },
       py::arg("model"), py::arg("options") = py::dict(), py::arg("depth") = false, py::arg("alpha") = false,
-      py::arg("normal") = false,
+      py::arg("normal") = false, py::arg("budget") = py::none(),
       R"doc(Renders a point or hybrid model by EWA splatting (thesis §4-§6.2) = `linesurf render`.
+A path to a level-of-detail hierarchy (lod_build) draws at most `budget` splats a view.
 
 Returns an (H, W, 4) uint8 RGBA array, or, when depth/alpha/normal is requested, a dict with
 'color' and the requested (H, W) float32 'depth' (linear depth, 0 where empty), (H, W) 'alpha',
@@ -445,6 +482,44 @@ up_axis) auto-framed on the bounding sphere, or look-at (eye, target, up). Raw s
 and radii from the §6.1 geometry (k) on every call; prepare() once for repeated renders. The
 keywords are the fields of ViewOptions, RenderOptions and PrepareOptions (the option tables,
 pipeline/option_tables.h); size = (width, height). The GIL is released.)doc");
+
+  m.def(
+      "lod_build",
+      [](py::object model, const std::string& path, int leaf_size, int grid, int k) -> py::dict {
+        lod::BuildOptions b;
+        b.leafSize = leaf_size, b.grid = grid;
+        lod::validate(b);
+        PrepareOptions p;
+        p.k = k;
+        validate(p);
+        ModelArg a = modelArg(model);
+        if (a.model->empty()) throwBadOption("model", "holds no points and no segments");
+        if (a.model->texture) throw Error(Error::Kind::BadInput, path, "", "textured models have no level-of-detail form yet");
+        lod::BuildReport rep;
+        {
+          py::gil_scoped_release release;
+          // The model as render() draws it: in its normalising frame, prepared; then the octree.
+          HybridModel m = *a.model;
+          const ModelFrame frame = normalizingFrame(m.bounds());
+          toFrame(m, frame);
+          prepareForRendering(m, p);
+          writeFileAtomically(path, lod::buildLod(m, frame, b, &rep));
+        }
+        py::dict d;
+        d["primitives"] = rep.primitives;
+        d["representatives"] = rep.representatives;
+        d["nodes"] = rep.nodes;
+        d["leaves"] = rep.leaves;
+        d["depth"] = rep.depth;
+        d["bytes"] = rep.bytes;
+        d["hierarchy"] = rep.hierarchyId;
+        return d;
+      },
+      py::arg("model"), py::arg("path"), py::kw_only(), py::arg("leaf_size") = lod::BuildOptions{}.leafSize,
+      py::arg("grid") = lod::BuildOptions{}.grid, py::arg("k") = PrepareOptions{}.k,
+      "Writes the level-of-detail hierarchy of a point or hybrid model to `path` (.lod) =\n"
+      "`linesurf lod build`: an octree whose leaves hold the originals and whose inner nodes hold\n"
+      "merged splats; render(path, budget=N) draws at most N splats a view. Returns a dict of counts.");
 
   // --- images (§7) ----------------------------------------------------------------------------
   m.def(

@@ -1,0 +1,61 @@
+"""Level-of-detail hierarchies from Python: lod_build and render(path, budget=) against the CLI and
+against the plain model."""
+import warnings
+
+import numpy as np
+import pytest
+
+import linesurf
+
+
+@pytest.fixture(scope="module")
+def hybrid(igea):
+    cloud = linesurf.prepare(igea)
+    return linesurf.extract_eps_delta(cloud, delta=0.004).model
+
+
+def test_full_budget_draws_the_model_and_half_stays_close(hybrid, tmp_path):
+    path = tmp_path / "igea.lod"
+    rep = linesurf.lod_build(hybrid, str(path))
+    assert rep["primitives"] == len(hybrid)
+    assert rep["nodes"] >= rep["leaves"] >= 1 and path.stat().st_size == rep["bytes"]
+    plain = linesurf.render(hybrid, size=(256, 256))
+    full = linesurf.render(path, size=(256, 256))  # a PathLike; no budget: every leaf
+    assert np.array_equal(full, plain)
+    assert np.array_equal(linesurf.render(str(path), size=(256, 256), budget=len(hybrid)), plain)
+    half = linesurf.render(str(path), size=(256, 256), budget=len(hybrid) // 2)
+    assert linesurf.compare(plain, half)["ssim"] >= 0.95
+    assert not np.array_equal(half, plain)
+
+
+def test_same_bytes_as_the_cli(hybrid, tmp_path, cli):
+    model = tmp_path / "h.ply"
+    linesurf.write(str(model), hybrid)
+    assert cli("lod", "build", str(model), "-o", str(tmp_path / "cli.lod")).returncode == 0
+    linesurf.lod_build(linesurf.read(str(model)), str(tmp_path / "py.lod"))
+    assert (tmp_path / "cli.lod").read_bytes() == (tmp_path / "py.lod").read_bytes()
+
+
+def test_bad_arguments(hybrid, tmp_path):
+    with pytest.raises(ValueError, match="budget"):
+        linesurf.render(hybrid, budget=1000)  # a budget needs a hierarchy
+    with pytest.raises(ValueError, match="leaf"):
+        linesurf.lod_build(hybrid, str(tmp_path / "x.lod"), leaf_size=1)
+    assert not (tmp_path / "x.lod").exists()
+    plain = tmp_path / "plain.lod"
+    linesurf.write(str(tmp_path / "plain.ply"), hybrid)
+    plain.write_bytes((tmp_path / "plain.ply").read_bytes())  # a PLY named .lod
+    with pytest.raises(linesurf.FileFormatError, match="level-of-detail"):
+        linesurf.render(str(plain))
+
+
+def test_a_truncated_hierarchy_draws_the_rest_and_warns(hybrid, tmp_path):
+    path = tmp_path / "t.lod"
+    linesurf.lod_build(hybrid, str(path), leaf_size=1024)
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) - 4096])  # the last blocks (the coarsest nodes, the root last) are cut
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        img = linesurf.render(str(path), size=(128, 128), budget=1000)  # the coarse nodes are drawn
+    assert any("node" in str(w.message) for w in caught)
+    assert img.shape == (128, 128, 4)
