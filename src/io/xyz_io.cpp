@@ -23,6 +23,39 @@ bool parseReal(std::string_view s, double& v) {
   return true;
 }
 
+int parseXyzLine(std::string_view text, const std::string& name, const std::string& where,
+                 std::vector<std::string>* comments, float v[6]) {
+  const size_t hash = text.find('#');
+  if (hash != std::string_view::npos) {
+    if (comments) {
+      std::string_view c = text.substr(hash + 1);
+      while (!c.empty() && (c.front() == ' ' || c.front() == '\t')) c.remove_prefix(1);
+      while (!c.empty() && (c.back() == '\r' || c.back() == ' ')) c.remove_suffix(1);
+      comments->emplace_back(c);
+    }
+    text = text.substr(0, hash);
+  }
+  int n = 0;
+  size_t i = 0;
+  for (;;) {
+    while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r' || text[i] == ',')) ++i;
+    if (i >= text.size()) break;
+    size_t b = i;
+    while (i < text.size() && text[i] != ' ' && text[i] != '\t' && text[i] != '\r' && text[i] != ',') ++i;
+    std::string_view tok = text.substr(b, i - b);
+    if (n == 6) throwBadInput(name, where, "more than 6 numbers on the line (expected x y z [nx ny nz])");
+    std::string_view s = tok;
+    if (s.size() > 1 && s[0] == '+') s.remove_prefix(1);
+    double d = 0;
+    if (!parseReal(s, d)) throwBadInput(name, where, "'" + std::string(tok.substr(0, 40)) + "' is not a number");
+    v[n] = float(d);  // a value below float's range reads as 0, as in an ASCII PLY
+    if (!std::isfinite(v[n]))
+      throwBadInput(name, where, "non-finite or out-of-range value '" + std::string(tok.substr(0, 40)) + "'");
+    ++n;
+  }
+  return n;
+}
+
 HybridModel xyzToModel(std::string_view bytes, const std::string& name) {
   HybridModel m;
   int line = 0, columns = 0;
@@ -34,33 +67,8 @@ HybridModel xyzToModel(std::string_view bytes, const std::string& name) {
     pos = e + 1;
     ++line;
     const std::string where = "line " + std::to_string(line);
-    size_t hash = text.find('#');
-    if (hash != std::string_view::npos) {
-      std::string_view c = text.substr(hash + 1);
-      while (!c.empty() && (c.front() == ' ' || c.front() == '\t')) c.remove_prefix(1);
-      while (!c.empty() && (c.back() == '\r' || c.back() == ' ')) c.remove_suffix(1);
-      m.comments.emplace_back(c);
-      text = text.substr(0, hash);
-    }
     float v[6];
-    int n = 0;
-    size_t i = 0;
-    for (;;) {
-      while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r' || text[i] == ',')) ++i;
-      if (i >= text.size()) break;
-      size_t b = i;
-      while (i < text.size() && text[i] != ' ' && text[i] != '\t' && text[i] != '\r' && text[i] != ',') ++i;
-      std::string_view tok = text.substr(b, i - b);
-      if (n == 6) throwBadInput(name, where, "more than 6 numbers on the line (expected x y z [nx ny nz])");
-      std::string_view s = tok;
-      if (s.size() > 1 && s[0] == '+') s.remove_prefix(1);
-      double d = 0;
-      if (!parseReal(s, d)) throwBadInput(name, where, "'" + std::string(tok.substr(0, 40)) + "' is not a number");
-      v[n] = float(d);  // a value below float's range reads as 0, as in an ASCII PLY
-      if (!std::isfinite(v[n]))
-        throwBadInput(name, where, "non-finite or out-of-range value '" + std::string(tok.substr(0, 40)) + "'");
-      ++n;
-    }
+    const int n = parseXyzLine(text, name, where, &m.comments, v);
     if (n == 0) continue;
     if (n != 3 && n != 6)
       throwBadInput(name, where, "expected 3 (x y z) or 6 (x y z nx ny nz) numbers, found " + std::to_string(n));

@@ -17,6 +17,7 @@
 #include <limits>
 
 #include "io/detail/ply_format.h"
+#include "io/detail/readers.h"
 #include "linesurf/core/error.h"
 #include "linesurf/io/atomic_file.h"
 
@@ -244,35 +245,8 @@ size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
     start = std::min(pending_.size(), e + 1);
     ++line_;
     const std::string where = "line " + std::to_string(line_);
-    const size_t hash = text.find('#');
-    if (hash != std::string_view::npos) {
-      if (!counted_) {
-        std::string_view c = text.substr(hash + 1);
-        while (!c.empty() && (c.front() == ' ' || c.front() == '\t')) c.remove_prefix(1);
-        while (!c.empty() && (c.back() == '\r' || c.back() == ' ')) c.remove_suffix(1);
-        info_.comments.emplace_back(c);
-      }
-      text = text.substr(0, hash);
-    }
     float v[6];
-    int n = 0;
-    size_t i = 0;
-    for (;;) {
-      while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r' || text[i] == ',')) ++i;
-      if (i >= text.size()) break;
-      const size_t b = i;
-      while (i < text.size() && text[i] != ' ' && text[i] != '\t' && text[i] != '\r' && text[i] != ',') ++i;
-      std::string_view tok = text.substr(b, i - b);
-      if (n == 6) throwBadInput(path_, where, "more than 6 numbers on the line (expected x y z [nx ny nz])");
-      std::string_view s = tok;
-      if (s.size() > 1 && s[0] == '+') s.remove_prefix(1);
-      auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v[n]);
-      if ((ec != std::errc() && ec != std::errc::result_out_of_range) || ptr != s.data() + s.size())
-        throwBadInput(path_, where, "'" + std::string(tok.substr(0, 40)) + "' is not a number");
-      if (ec == std::errc::result_out_of_range || !std::isfinite(v[n]))
-        throwBadInput(path_, where, "non-finite or out-of-range value '" + std::string(tok.substr(0, 40)) + "'");
-      ++n;
-    }
+    const int n = detail::parseXyzLine(text, path_, where, counted_ ? nullptr : &info_.comments, v);
     if (n == 0) continue;
     if (n != 3 && n != 6)
       throwBadInput(path_, where, "expected 3 (x y z) or 6 (x y z nx ny nz) numbers, found " + std::to_string(n));

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "linesurf/core/model.h"
 #include "linesurf/io/write_options.h"
@@ -33,6 +34,11 @@ bool objHasFaces(std::string_view bytes);
 TriangleMesh objToMesh(std::string_view bytes, const std::string& name, const std::filesystem::path* mtlDir);
 void writeObj(const std::filesystem::path& path, const TriangleMesh& mesh);
 
+/// One line of an XYZ file, shared by the whole-file and the streaming (ooc) readers so that they
+/// accept the same numbers: strips a '#' comment (kept in `comments` when not null), reads up to 6
+/// numbers into v and returns how many. Throws BadInput naming `name` and `where`.
+int parseXyzLine(std::string_view text, const std::string& name, const std::string& where,
+                 std::vector<std::string>* comments, float v[6]);
 HybridModel xyzToModel(std::string_view bytes, const std::string& name);
 void writeXyz(const std::filesystem::path& path, const HybridModel& model);
 
