@@ -100,7 +100,20 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   auto progress = [&](std::string_view stage, double f) { reportProgress(so.progress, stage, f); };
 
   // Pass 1: the raw bounds (the frame), and what `linesurf render` would have to estimate.
-  Bounds3f raw;
+  Bounds3f raw, kb, sb;
+  float maxRadius = 0, maxPointRadius = 0;
+  auto frameStats = [&](const HybridModel& m) {
+    for (const Point& p : m.points) {
+      if (p.position.allFinite()) kb.extend(p.position), sb.extend(p.position);
+      if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius), maxPointRadius = std::max(maxPointRadius, p.radius);
+    }
+    for (const Segment& s : m.segments) {
+      const Vec3f mid = Vec3f(0.5f * (s.p0 + s.p1));
+      if (mid.allFinite()) kb.extend(mid);
+      if (s.p0.allFinite() && s.p1.allFinite()) sb.extend(s.p0), sb.extend(s.p1);
+      if (std::isfinite(s.radius)) maxRadius = std::max(maxRadius, s.radius);
+    }
+  };
   Attributes attributes;
   bool shading = false, masses = false, first = true, pointNormals = true, segmentNormals = true;
   HybridModel c;
@@ -128,26 +141,21 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
     }
     const Bounds3f b = c.bounds();
     if (!b.empty()) raw.extend(b.min), raw.extend(b.max);
+    frameStats(c);
   }
   attributes.normals = pointNormals && segmentNormals;
   const ModelFrame frame = normalizingFrame(raw);
 
-  // Pass 2: in the frame, the key bounds (root cube), the sphere's box and the largest radius.
-  Bounds3f kb, sb;
-  float maxRadius = 0, maxPointRadius = 0;
-  reader.rewind();
-  while (reader.next(c, kRowsPerRead)) {
-    progress("reading", (1 + double(reader.pointsRead() + reader.segmentsRead()) / double(N)) / 3);
-    toFrame(c, frame);
-    for (const Point& p : c.points) {
-      if (p.position.allFinite()) kb.extend(p.position), sb.extend(p.position);
-      if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius), maxPointRadius = std::max(maxPointRadius, p.radius);
-    }
-    for (const Segment& s : c.segments) {
-      const Vec3f mid = Vec3f(0.5f * (s.p0 + s.p1));
-      if (mid.allFinite()) kb.extend(mid);
-      if (s.p0.allFinite() && s.p1.allFinite()) sb.extend(s.p0), sb.extend(s.p1);
-      if (std::isfinite(s.radius)) maxRadius = std::max(maxRadius, s.radius);
+  // Pass 2: in the frame, the key bounds (root cube), the sphere's box and the largest radius
+  // (gathered in pass 1 already, for a model that needs no frame).
+  if (!frame.identity()) {
+    kb = sb = Bounds3f();
+    maxRadius = maxPointRadius = 0;
+    reader.rewind();
+    while (reader.next(c, kRowsPerRead)) {
+      progress("reading", (1 + double(reader.pointsRead() + reader.segmentsRead()) / double(N)) / 3);
+      toFrame(c, frame);
+      frameStats(c);
     }
   }
   const auto [rootMin, side] = rootCube(kb);
@@ -258,35 +266,32 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   std::vector<uint32_t>().swap(cellChunk);
   c = HybridModel();
 
-  auto loadChunk = [&](Chunk& ch) {
+  // A chunk's records and their order by (key, record position): records are in model order
+  // within each kind (spooled in reading order, points before segments), so this is buildLod's
+  // order by (key, model-wide index). Phase A sorts and saves the order; phase B reads it back.
+  auto orderPath = [&](const Chunk& ch) { return fs::path(ch.points.path).replace_extension(".o"); };
+  auto loadChunk = [&](Chunk& ch, bool sorted) {
     ChunkData d;
     d.points = readWhole(ch.points.path, ch.points.records * format::kPointBytes);
     d.segments = readWhole(ch.segments.path, ch.segments.records * format::kSegmentBytes);
     const size_t np = ch.points.records, ns = ch.segments.records;
     d.keys.resize(np + ns);
+    if (sorted) {
+      const std::string o = readWhole(orderPath(ch), (np + ns) * 4);
+      for (size_t k = 0; k < np + ns; ++k) d.keys[k] = {0, format::get<uint32_t>(o.data() + 4 * k)};
+      return d;
+    }
     parallelFor(0, np + ns, [&](size_t k) {
       if (k < np) {
-        const char* r = d.points.data() + k * format::kPointBytes;
-        d.keys[k] = {mortonKey(format::getVec(r), rootMin, side), format::get<uint32_t>(r + 60)};
+        d.keys[k] = {mortonKey(format::getVec(d.points.data() + k * format::kPointBytes), rootMin, side), uint32_t(k)};
       } else {
         const char* r = d.segments.data() + (k - np) * format::kSegmentBytes;
         const Vec3f p0 = format::getVec(r), p1 = format::getVec(r + 12);
-        d.keys[k] = {mortonKey(Vec3f(0.5f * (p0 + p1)), rootMin, side), uint32_t(P + format::get<uint32_t>(r + 96))};
+        d.keys[k] = {mortonKey(Vec3f(0.5f * (p0 + p1)), rootMin, side), uint32_t(k)};
       }
     }, 4096);
     std::sort(d.keys.begin(), d.keys.end());
     return d;
-  };
-  // Where a primitive's record is in its chunk's data: by model-wide index j.
-  auto recordOf = [&](const Chunk& ch, const ChunkData& d, std::vector<uint32_t>& slot) {
-    // slot maps key position -> record position: records are in model order within a chunk
-    // (spooled in reading order), so a record's position is its rank by j among its kind.
-    const size_t np = ch.points.records;
-    std::vector<uint32_t> order(d.keys.size());
-    std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return d.keys[a].second < d.keys[b].second; });
-    slot.assign(d.keys.size(), 0);
-    for (size_t r = 0; r < order.size(); ++r) slot[order[r]] = uint32_t(r < np ? r : r - np);
   };
 
   // Phase A: each chunk's subtree topology.
@@ -303,7 +308,12 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
       ch.localPoints = {uint32_t(ch.points.records)};
       ch.localSegments = {uint32_t(ch.segments.records)};
     } else {
-      const ChunkData d = loadChunk(ch);
+      const ChunkData d = loadChunk(ch, false);
+      {
+        Spool order{orderPath(ch)};
+        for (const auto& kv : d.keys) format::put(order.buf, kv.second);
+        order.flush();
+      }
       ch.local = {root};
       splitBreadthFirst(ch.local, 0, d.keys, options.leafSize);
       ch.localPoints.assign(ch.local.size(), 0);
@@ -311,7 +321,7 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
       for (size_t i = 0; i < ch.local.size(); ++i)
         if (ch.local[i].leaf) {
           uint32_t pts = 0;
-          for (size_t k = ch.local[i].begin; k < ch.local[i].end; ++k) pts += d.keys[k].second < P;
+          for (size_t k = ch.local[i].begin; k < ch.local[i].end; ++k) pts += d.keys[k].second < ch.points.records;
           ch.localPoints[i] = pts;
           ch.localSegments[i] = uint32_t(ch.local[i].end - ch.local[i].begin - pts);
         }
@@ -401,32 +411,31 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   done = 0;
   for (size_t ci = 0; ci < chunks.size(); ++ci) {
     Chunk& ch = chunks[ci];
-    const ChunkData d = loadChunk(ch);
-    std::vector<uint32_t> slot;
-    recordOf(ch, d, slot);
+    const ChunkData d = loadChunk(ch, ch.local.size() > 1);
+    const size_t np = ch.points.records;
     // The chunk root spans every key; locals' ranges are into d.keys.
     if (ch.local.size() == 1) ch.local[0].begin = 0, ch.local[0].end = d.keys.size();
-    auto leafIndices = [&](const BNode& l) {
-      std::vector<std::pair<uint32_t, uint32_t>> idx;  // (j, key position)
-      for (size_t k = l.begin; k < l.end; ++k) idx.push_back({d.keys[k].second, uint32_t(k)});
+    auto leafIndices = [&](const BNode& l) {  // its records in model order
+      std::vector<uint32_t> idx;
+      for (size_t k = l.begin; k < l.end; ++k) idx.push_back(d.keys[k].second);
       std::sort(idx.begin(), idx.end());
       return idx;
     };
     auto leafData = [&](const BNode& l) {
       NodeData nd;
-      for (auto [j, k] : leafIndices(l)) {
-        if (j < P) {
+      for (uint32_t k : leafIndices(l)) {
+        if (k < np) {
           Point pt;
           Vec3f sn;
           float m;
           uint32_t index;
-          format::getPoint(d.points.data() + size_t(slot[k]) * format::kPointBytes, pt, sn, m, index);
+          format::getPoint(d.points.data() + size_t(k) * format::kPointBytes, pt, sn, m, index);
           nd.points.push_back(pt), nd.masses.push_back(m), nd.pointIndex.push_back(index);
           if (shading) nd.shadingNormals.push_back(sn);
         } else {
           Segment s;
           uint32_t index;
-          format::getSegment(d.segments.data() + size_t(slot[k]) * format::kSegmentBytes, s, index);
+          format::getSegment(d.segments.data() + size_t(k - np) * format::kSegmentBytes, s, index);
           nd.segments.push_back(s), nd.segmentIndex.push_back(index);
         }
       }
@@ -441,13 +450,13 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
       std::string b = blockHeader(g, nPoints[g], nSegments[g]);
       b.reserve(sizes[g]);
       Bounds3f bounds;
-      for (auto [j, kp] : leafIndices(lb)) {
-        if (j < P) {
-          const char* r = d.points.data() + size_t(slot[kp]) * format::kPointBytes;
+      for (uint32_t kp : leafIndices(lb)) {
+        if (kp < np) {
+          const char* r = d.points.data() + size_t(kp) * format::kPointBytes;
           b.append(r, format::kPointBytes);
           extendPoint(bounds, format::getVec(r), format::get<float>(r + 52));
         } else {
-          const char* r = d.segments.data() + size_t(slot[kp]) * format::kSegmentBytes;
+          const char* r = d.segments.data() + size_t(kp - np) * format::kSegmentBytes;
           b.append(r, format::kSegmentBytes);
           const float rad = format::get<float>(r + 76);
           extendPoint(bounds, format::getVec(r), rad), extendPoint(bounds, format::getVec(r + 12), rad);
