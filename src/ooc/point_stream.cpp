@@ -140,9 +140,16 @@ PointReader::PointReader(const std::filesystem::path& path) : path_(path.string(
     int which = -1;
     for (int c = 0; c < 6; ++c)
       if (p.name == names[c]) which = c;
+    if (which < 0 && p.name == "radius") {
+      // Skipped: `normals` and `extract` give every point its radius from the §6.1 geometry
+      // (applyGeometry's rule) whatever the file holds, in memory as out of core; so the output
+      // of `normals` goes on to `extract eps-delta` out of core.
+      off += size_t(ply::typeSize(p.type));
+      continue;
+    }
     if (which < 0)
       throwBadInput(path_, "line " + std::to_string(p.line),
-                    "the out-of-core path carries x y z [nx ny nz] only, not property '" + p.name + "'");
+                    "the out-of-core path carries x y z [nx ny nz] [radius] only, not property '" + p.name + "'");
     found[which] = int(fields_.size());
     fields_.push_back({off, int(p.type), names[which]});
     off += size_t(ply::typeSize(p.type));
