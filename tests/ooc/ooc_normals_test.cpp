@@ -207,6 +207,13 @@ TEST(OocNormals, CliPicksTheOutOfCorePathWhenTheInputDoesNotFit) {
   EXPECT_NE(small.out.find("out of core"), std::string::npos) << small.out;
   EXPECT_TRUE(slurp(d / "ooc.ply") == slurp(d / "mem.ply"));
   EXPECT_FALSE(fs::exists(d / "ooc.ply.tiles"));  // removed after success
+  // The output of `normals` (x y z nx ny nz radius) goes on out of core: eps-delta on it picks
+  // the out-of-core path by itself under a small budget (the radius is skipped, as in memory
+  // every radius is set again).
+  const auto next = test::runCli("extract eps-delta '" + (d / "ooc.ply").string() + "' -o '" + (d / "hybrid.ply").string() +
+                                 "' --max-mb 20");
+  ASSERT_EQ(next.exitCode, 0) << next.out;
+  EXPECT_NE(next.out.find("out of core"), std::string::npos) << next.out;
 }
 
 }  // namespace
