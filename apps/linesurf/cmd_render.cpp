@@ -60,8 +60,11 @@ void run(RenderArgs& a) {
   validate(a.mesh);
 
   const int w = a.view.width, h = a.view.height;
+  // A hierarchy is read a view's nodes at a time: its budget is checked once its size is known.
+  const bool isLod = lod::isLodFile(a.model);
   checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},
-                         {"--alpha-out", a.alphaOut, {".png"}}, {"--normal-out", a.normalOut, {".png"}}});
+                         {"--alpha-out", a.alphaOut, {".png"}}, {"--normal-out", a.normalOut, {".png"}}},
+             /*inputsHeldWhole=*/!isLod);
   // Colour, depth, alpha, normal images (16 bytes a pixel each) and the Z3 fragment layers.
   checkSize("--size", renderViewBytes(w, h, o.layers), fmt::format("a {}x{} image", w, h));
   {  // every image written, before the first one
@@ -75,7 +78,14 @@ void run(RenderArgs& a) {
   // A level-of-detail hierarchy (.lod) is already in its frame and prepared: each view draws the
   // nodes chosen for it within --budget.
   std::optional<lod::LodFile> lodFile;
-  if (lod::isLodFile(a.model)) lodFile.emplace(a.model);
+  if (isLod) {
+    lodFile.emplace(a.model);
+    // One view holds its splats as a model (~100 bytes each with the renderer's setup).
+    const uint64_t all = lodFile->header().points + lodFile->header().segments;
+    const uint64_t drawn = a.budget > 0 ? std::min(a.budget, all) : all;
+    checkSize(a.budget > 0 ? "--budget" : a.model, 100.0 * double(drawn),
+              fmt::format("drawing {} splats a view{}", drawn, a.budget > 0 ? "" : " (every leaf; set --budget)"));
+  }
   else if (a.budget > 0) throwBadOption("budget", "needs a level-of-detail hierarchy (linesurf lod build), got " + a.model);
   if (lodFile && a.primitive != "auto") throwBadOption("primitive", "does not apply to a .lod hierarchy");
   const bool isMesh = !lodFile && fileHoldsMesh(a.model);

@@ -1,6 +1,7 @@
 // The level-of-detail hierarchy (include/linesurf/lod/lod.h): every original in exactly one leaf,
 // merged splats that cover their children, budgets respected, a full budget giving today's
 // picture, half of it close to it, failed and foreign nodes reported, any thread count alike.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -295,6 +296,24 @@ TEST(Lod, CliRendersAHierarchyWithABudget) {
   r = test::runCli("-q render " + q + "s.ply' -o " + q + "d.png' --budget 1000");
   EXPECT_EQ(r.exitCode, 1) << r.out;  // a budget needs a hierarchy
   EXPECT_FALSE(std::filesystem::exists(dir / "d.png"));
+}
+
+// A hierarchy larger than --max-mb renders with a budget that fits (only the view's nodes are
+// read); without a budget every leaf would be held, which the budget refuses up front.
+TEST(Lod, CliBudgetBoundsWhatAViewHolds) {
+  const auto dir = test::scratchDir("lod_cli_maxmb");
+  writeModel(dir / "s.ply", sphereHybrid(60000));  // ~45 k primitives: 4.5 MB of splats
+  const std::string q = "'" + dir.string() + "/";
+  ASSERT_EQ(test::runCli("-q lod build " + q + "s.ply' -o " + q + "s.lod' --leaf-size 256").exitCode, 0);
+  const double mb = double(std::filesystem::file_size(dir / "s.lod")) / (1024.0 * 1024.0);
+  ASSERT_GT(mb, 2.0);  // and every leaf, 100 bytes a splat, over 1 MiB
+  const std::string maxMb = fmt::format(" --max-mb {:.2f}", 0.9 * mb);  // under the file, over 2000 splats
+  auto r = test::runCli("-q render " + q + "s.lod' -o " + q + "a.png' --size 64x64 --budget 2000" + maxMb);
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  r = test::runCli("-q render " + q + "s.lod' -o " + q + "b.png' --size 64x64 --max-mb 1");
+  EXPECT_EQ(r.exitCode, 1) << r.out;
+  EXPECT_NE(r.out.find("set --budget"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "b.png"));
 }
 
 // A model far from unit size is drawn in its normalising frame: the hierarchy keeps that frame.
