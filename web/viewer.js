@@ -814,7 +814,7 @@ void main() {
         self.ready = true;
       }
       self.start = () => {
-        loadHeader().then(requestDraw, (e) => fail(e && e.message ? e.message : String(e)));
+        loadHeader().then(drawSoon, (e) => fail(e && e.message ? e.message : String(e)));
       };
 
       // lod::selectNodes (src/lod/lod_read.cpp) for the page's camera: a cut refined coarse to
@@ -990,7 +990,7 @@ void main() {
         }
         --self.inFlight;
         pump();
-        requestDraw();
+        drawSoon();
       }
       function pump() {
         while (self.inFlight < MAX_IN_FLIGHT && self.queue.length) load(self.queue.shift());
@@ -1281,6 +1281,16 @@ void main() {
         ` at ${canvas.width}x${canvas.height}` + (gpuName ? ' on ' + gpuName : '') +
         (floatBlend ? '' : ' (half-float accumulation)');
       describeCamera();
+    }
+
+    // After a node arrives: a task, not an animation frame, so that a headless browser under
+    // virtual time (which runs animation frames only as its clock advances) draws the complete cut
+    // before its budget ends; arrivals in one burst share a frame.
+    let drawQueued = false;
+    function drawSoon() {
+      if (drawQueued) return;
+      drawQueued = true;
+      setTimeout(() => { drawQueued = false; try { draw(); } catch (e) { fail(e.message); } }, 0);
     }
 
     let pending = false;
