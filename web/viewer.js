@@ -741,7 +741,7 @@ void main() {
       const MIN_BUDGET = Math.min(total, 10000);
       const L0 = {
         budget: 0, adaptive: params.adaptive === '1',
-        targetMs: Math.min(1000, Math.max(5, Number(params.target) || 33)),
+        targetMs: Math.min(1000, Math.max(5, Number(params.frameMs) || 33)),
         cacheLimit: Math.max(64, Number(params.cache) || 1024) * 1048576,  // GPU bytes of cached nodes
         ready: false, nodes: null, parent: null, leaves: null, idHex: '',
         cache: new Map(),  // node -> batch, least recently drawn first
@@ -995,8 +995,9 @@ void main() {
       function pump() {
         while (self.inFlight < MAX_IN_FLIGHT && self.queue.length) load(self.queue.shift());
       }
-      // The missing nodes in file order (coarse first: the table is breadth first), adjacent
-      // blocks coalesced into one request of at most MAX_REQUEST_BYTES.
+      // The missing nodes' blocks, those lying back to back in the file coalesced into one request
+      // of at most MAX_REQUEST_BYTES; the requests coarse first (the table is breadth first, so
+      // by their lowest node number), whatever order the writer put the blocks in.
       function request(missing) {
         const nodes = self.nodes;
         missing.sort((a, b) => nodes[a].offset - nodes[b].offset);
@@ -1014,6 +1015,8 @@ void main() {
             runEnd = n.offset + n.size;
           }
         }
+        const first = new Map(runs.map((r) => [r, r.reduce((m, i) => Math.min(m, i), Infinity)]));
+        runs.sort((a, b) => first.get(a) - first.get(b));
         self.queue = runs;  // what this view needs: requests queued for an older view are dropped
         pump();
       }

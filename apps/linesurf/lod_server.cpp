@@ -13,6 +13,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -50,6 +51,28 @@ struct BlockStopSignals {
   ~BlockStopSignals() { pthread_sigmask(SIG_SETMASK, &old, nullptr); }
 };
 
+// cpp-httplib 0.11 applies a request's ranges to a content provider without checking them: a
+// range past the end announced an absurd Content-Length and one reaching past it a length never
+// sent. Clamps each range to the file (RFC 9110: the last byte at most size - 1; a suffix range of
+// more than the file is the whole file); false when one cannot be satisfied (416). The request is
+// the server's own non-const object, handed to handlers as const: adjusting it here is what lets
+// the provider see valid offsets.
+bool satisfiableRanges(httplib::Ranges& ranges, uint64_t size) {
+  for (auto& r : ranges) {
+    int64_t first = r.first, last = r.second;
+    if (first < 0) {  // bytes=-N: the last N bytes
+      if (last <= 0) return false;
+      first = std::max<int64_t>(0, int64_t(size) - last);
+      last = int64_t(size) - 1;
+    } else {
+      if (uint64_t(first) >= size || (last >= 0 && last < first)) return false;
+      if (last < 0 || uint64_t(last) >= size) last = int64_t(size) - 1;
+    }
+    r = {first, last};
+  }
+  return true;
+}
+
 }  // namespace
 
 void serveLod(const LodServeOptions& o) {
@@ -67,9 +90,14 @@ void serveLod(const LodServeOptions& o) {
     res.set_header("Cache-Control", "no-store");
     res.set_content(o.page, "text/html; charset=utf-8");
   });
-  server.Get("/model.lod", [file, size](const httplib::Request&, httplib::Response& res) {
+  server.Get("/model.lod", [file, size](const httplib::Request& req, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     res.set_header("Accept-Ranges", "bytes");
+    if (!satisfiableRanges(const_cast<httplib::Request&>(req).ranges, size)) {
+      res.status = 416;
+      res.set_header("Content-Range", fmt::format("bytes */{}", size));
+      return;
+    }
     // cpp-httplib applies the request's Range to the provider: it asks for [offset, offset + length).
     res.set_content_provider(size, "application/octet-stream",
                              [file](size_t offset, size_t length, httplib::DataSink& sink) {
