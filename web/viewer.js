@@ -739,7 +739,7 @@ void main() {
       const RECORD = 88, BLOCK_HEADER = 32, POINT_WORDS = 16, SEGMENT_WORDS = 25;
       const MAX_REQUEST_BYTES = 16 << 20, MAX_IN_FLIGHT = 4;
       const MIN_BUDGET = Math.min(total, 10000);
-      const L0 = {
+      const self = {
         budget: 0, adaptive: params.adaptive === '1',
         targetMs: Math.min(1000, Math.max(5, Number(params.frameMs) || 33)),
         cacheLimit: Math.max(64, Number(params.cache) || 1024) * 1048576,  // GPU bytes of cached nodes
@@ -748,7 +748,6 @@ void main() {
         cachedBytes: 0, loading: new Set(), failed: new Map(), queue: [], inFlight: 0, bytesFetched: 0,
         selection: null, complete: false, splats: 0, drawnNodes: 0, firstFrameMs: null, emaMs: 0, lastAdapt: 0,
       };
-      const self = L0;
       const hex8 = (v) => (v >>> 0).toString(16).padStart(8, '0');
       const magic = (dv, at, text) => { for (let k = 0; k < 8; ++k) if (dv.getUint8(at + k) !== text.charCodeAt(k)) return false; return true; };
       self.setBudget = (n) => {

@@ -110,8 +110,11 @@ void run(const ViewArgs& a) {
 RegisterCommand reg(45, [](CLI::App& app) {
   auto a = std::make_shared<ViewArgs>();
   CLI::App* sub = app.add_subcommand(
-      "view", "Write a self-contained HTML page that draws the model with WebGL2 splats (orbit, zoom, pan)");
-  sub->add_option("MODEL", a->model, "Point cloud, hybrid or line model (.ply, .xyz); a mesh shows its vertices")
+      "view", "Write a self-contained HTML page that draws the model with WebGL2 splats (orbit, zoom, pan); "
+              "serve a .lod hierarchy's viewer from localhost, streaming its nodes within a splat budget");
+  sub->add_option("MODEL", a->model,
+                  "Point cloud, hybrid or line model (.ply, .xyz; a mesh shows its vertices), or a .lod hierarchy "
+                  "(linesurf lod build)")
       ->required();  // a missing file is reported after the options are checked, as render does
   a->outputOption = sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
   // The page's defaults: the option tables' viewer fields (pipeline/option_tables.h).
