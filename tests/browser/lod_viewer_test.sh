@@ -6,7 +6,8 @@
 #  - fetch, with a budget of half the model, well under the file (bytes fetched <= MAX_FETCH_SHARE
 #    of its size): only the selected nodes' blocks, the preamble and the table;
 #  - with a budget of the whole model, draw the plain model's picture (`linesurf render MODEL.ply`);
-#  - draw the rest of a hierarchy one of whose node blocks is damaged, naming the node in the DOM;
+#  - draw the rest of a hierarchy one of whose node blocks is damaged, naming the node in the DOM
+#    (and draw what `linesurf render` draws of it);
 #  - refuse a node block copied from another hierarchy (another hierarchy id), naming the node.
 # Also: `linesurf view` refuses a damaged hierarchy in one line (exit 2) before serving.
 # The page's state is read from document.body's attributes (data-state="drawn" once the selected
@@ -182,7 +183,7 @@ if shot full "$CAM&budget=$total"; then
   compare full full_render.png "$MIN_SSIM" "page of every leaf vs linesurf render of the plain model"
 fi
 
-# node_block FILE.lod LEAF_RANK: "NODE OFFSET SIZE" of the LEAF_RANK-th leaf (file order).
+# node_block FILE.lod LEAF_RANK: "NODE OFFSET SIZE PRIMITIVES" of the LEAF_RANK-th leaf (table order).
 node_block() {
   python3 - "$1" "$2" <<'PY'
 import json, struct, sys
@@ -194,40 +195,46 @@ leaves = []
 for i in range(count):
     r = table + 88 * i
     off, size = struct.unpack_from('<QQ', data, r + 8)
+    points, segments = struct.unpack_from('<II', data, r + 72)
     if data[r + 86]:
-        leaves.append((i, off, size))
-i, off, size = leaves[int(sys.argv[2]) % len(leaves)]
-print(i, off, size)
+        leaves.append((i, off, size, points + segments))
+print(*leaves[int(sys.argv[2]) % len(leaves)])
 PY
 }
 # patch DST OFFSET SRC SRC_OFFSET BYTES: copies bytes of SRC over DST in place.
 patch() { dd if="$3" of="$1" bs=1 skip="$4" seek="$2" count="$5" conv=notrunc status=none; }
 
-# 3. one leaf's block damaged (its header overwritten): the rest is drawn, the node named.
+# 3. one leaf's block damaged (its header overwritten): the rest is drawn (every primitive but
+# the node's), the node named.
 cp igea.lod damaged.lod
-read -r dnode doff _ < <(node_block damaged.lod 300)
-head -c 64 /dev/urandom >noise.bin
+read -r dnode doff _ dcount < <(node_block damaged.lod 300)
+printf 'damaged block header....' >noise.bin
 patch damaged.lod "$doff" noise.bin 0 24
 serve damaged.lod
 if shot damaged "$CAM&budget=$total"; then
-  if [ "$(attr "$DOM" failed-nodes)" = "$dnode" ] && grep -q "node $dnode failed: " <<<"$DOM"; then
+  if [ "$(attr "$DOM" failed-nodes)" = "$dnode" ] && grep -q "node $dnode failed: " <<<"$DOM" &&
+     [ "$(attr "$DOM" splats)" -eq $((total - dcount)) ]; then
     echo "ok   damaged block: the page draws $(attr "$DOM" splats) splats and says '$(grep -o "node $dnode failed: [^<]*" <<<"$DOM" | head -1)'"
   else
-    echo "FAIL damaged block: node $dnode not named (failed nodes '$(attr "$DOM" failed-nodes)')"
+    echo "FAIL damaged block: node $dnode not named (failed nodes '$(attr "$DOM" failed-nodes)'), or not $((total - dcount)) splats ($(attr "$DOM" splats))"
     fail=1
   fi
+  # `linesurf render` leaves the node out as well (with a warning): the same picture
+  render damaged.lod damaged_render.png --budget "$total" 2>/dev/null
+  compare damaged damaged_render.png "$MIN_SSIM" "page vs linesurf render of the damaged hierarchy"
 fi
 
 # 4. a block of another hierarchy (same model, another grid: another hierarchy id) copied over a
 # leaf's block: refused as foreign, named.
 "$LS" lod build igea.ply -o other.lod --leaf-size 256 --grid 16 -q
 cp igea.lod foreign.lod
-read -r fnode foff fsize < <(node_block foreign.lod 100)
-read -r _ ooff osize < <(node_block other.lod 100)
+read -r fnode foff fsize fcount < <(node_block foreign.lod 100)
+read -r _ ooff osize _ < <(node_block other.lod 100)
 patch foreign.lod "$foff" other.lod "$ooff" $((fsize < osize ? fsize : osize))
 serve foreign.lod
 if shot foreign "$CAM&budget=$total"; then
-  if [ "$(attr "$DOM" failed-nodes)" = "$fnode" ] && grep -q "node $fnode failed: its block belongs to another hierarchy" <<<"$DOM"; then
+  if [ "$(attr "$DOM" failed-nodes)" = "$fnode" ] && grep -q "node $fnode failed: its block belongs to another hierarchy" <<<"$DOM" &&
+     [ "$(attr "$DOM" splats)" -eq $((total - fcount)) ]; then
     echo "ok   foreign block: $(attr "$DOM" splats) splats drawn, '$(grep -o "node $fnode failed: [^<]*" <<<"$DOM" | head -1)'"
   else
     echo "FAIL foreign block: node $fnode not refused as foreign (failed nodes '$(attr "$DOM" failed-nodes)'; $(grep -o 'node [0-9]* failed: [^<]*' <<<"$DOM" | head -1))"
