@@ -11,25 +11,72 @@
 #include "linesurf/io/atomic_file.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/io/model_stream.h"
 #include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
 #include "drawable_model.h"
+#include "ooc_cli.h"
 #include "options_bind.h"
 
 namespace linesurf::cli {
 namespace {
 
 struct LodArgs {
-  std::string model, output;
+  std::string model, output, workDir;
   lod::BuildOptions build;
   PrepareOptions prepare;
+  bool outOfCore = false;
 };
+
+// The model's size in memory as the in-memory build holds it (model, keys, the file's bytes):
+// about 260 bytes a primitive; 0 when the header cannot tell (not a binary PLY).
+double inMemoryLodEstimate(const std::string& path, uint64_t& primitives) {
+  try {
+    ModelChunkReader r(path);
+    primitives = r.points() + r.segments();
+    return 260.0 * double(primitives);
+  } catch (const Error&) {
+    return 0;
+  }
+}
+
+void runStreaming(const LodArgs& a, const std::string& why) {
+  Timer total;
+  lod::StreamBuildOptions so;
+  so.memoryBytes = outOfCoreBudgetBytes();
+  so.workDir = a.workDir;
+  so.progress = withTimeLeft(progressBar());
+  say(fmt::format("{}: building out of core ({}), in subtrees sized for --max-mb {:g}", a.model, why,
+                  so.memoryBytes / (1024.0 * 1024.0)));
+  const lod::BuildReport rep = lod::buildLodStreaming(a.model, a.output, a.build, so);
+  endProgress();
+  const double seconds = total.seconds();
+  say(fmt::format("{}: {} primitives; {} threads", a.model, rep.primitives, currentThreadCount()));
+  say(fmt::format("hierarchy {:016x}: {} nodes ({} leaves), depth {}, {} representatives in the inner nodes ({:.1f}% of "
+                  "the model), {:.1f} MB, {} subtrees",
+                  rep.hierarchyId, rep.nodes, rep.leaves, rep.depth, rep.representatives,
+                  100.0 * double(rep.representatives) / double(rep.primitives), double(rep.bytes) / 1e6, rep.chunks));
+  say(fmt::format("time (s): total {:.3f} ({:.2f} M primitives/s)", seconds,
+                  double(rep.primitives) / std::max(seconds, 1e-9) / 1e6));
+  say("wrote " + a.output);
+}
 
 void run(LodArgs& a) {
   Timer total;
   lod::validate(a.build);
   validate(a.prepare);
-  checkFiles({a.model}, {{"--output", a.output, {".lod"}}});
+  checkFiles({a.model}, {{"--output", a.output, {".lod"}}}, /*inputsHeldWhole=*/false);
+  if (a.outOfCore || !a.workDir.empty()) {
+    runStreaming(a, a.outOfCore ? "--out-of-core" : "--work-dir");
+    return;
+  }
+  uint64_t primitives = 0;
+  if (const double need = inMemoryLodEstimate(a.model, primitives); need > memoryBudgetBytes()) {
+    runStreaming(a, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
+                                globalOptions().maxMegabytes));
+    return;
+  }
+  checkFiles({a.model}, {}, /*inputsHeldWhole=*/true);
   // The model as `linesurf render` draws it: read, moved into its normalising frame, prepared.
   HybridModel model = fileHoldsMesh(a.model) ? meshVerticesAsPoints(readMesh(a.model)) : readModel(a.model);
   if (model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
@@ -71,6 +118,11 @@ RegisterCommand reg(42, [](CLI::App& app) {
   bind(sub, "leafSize", a->build.leafSize, "A node of at most this many primitives is a leaf, [16, 1048576]");
   bind(sub, "grid", a->build.grid, "Inner nodes keep at most one merged splat per cell of a GRID^3 grid, [2, 256]");
   bind(sub, "k", a->prepare.k, "Neighbours for normals/radii of raw scans (§6.1), [3, 256]");
+  sub->add_flag("--out-of-core", a->outOfCore,
+                "Build from the file in bounded memory (--max-mb; chosen by itself when the model would not fit). "
+                "Binary PLY whose points carry normals and radii");
+  sub->add_option("--work-dir", a->workDir,
+                  "Folder for the out-of-core build's working files (about the model's size; default: the output's)");
   sub->callback([a] { run(*a); });
 });
 

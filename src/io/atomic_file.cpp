@@ -383,11 +383,33 @@ void makeOutputFolder(const std::filesystem::path& path, bool replace) {
   }
 }
 
-void writeFileAtomically(const std::filesystem::path& path, std::string_view bytes) {
-  const std::string target = path.string();
-  std::error_code ec;
-  std::filesystem::path where = path;  // where the bytes go: inside a staged folder's copy, or path
+struct AtomicFileWriter::Impl {
+  std::string target, tmp;
+  std::filesystem::path path, where;  // where the file goes: inside a staged folder's copy, or path
   bool inStagedFolder = false;
+  TempSlot* slot = nullptr;
+  int fd = -1;
+  bool done = false;
+  void drop() {
+    if (fd >= 0) ::close(fd);
+    fd = -1;
+    ::unlink(tmp.c_str());
+    releaseSlot(slot);
+    slot = nullptr;
+  }
+  [[noreturn]] void failWith(const char* what, int e) {
+    drop();
+    done = true;
+    throw Error(Error::Kind::Io, target, "", std::string(what) + std::strerror(e));
+  }
+};
+
+AtomicFileWriter::AtomicFileWriter(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.target = path.string();
+  m.path = path;
+  m.where = path;
+  std::error_code ec;
   {
     // Refuse before writing anything: an output onto an input, or one output twice.
     std::lock_guard<std::mutex> lock(activeMutex);
@@ -396,57 +418,91 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view byt
       const FileId id = fileId(path);
       for (auto& [in, name] : active->inputs)
         if (id.exists() && id == in)
-          throw Error(Error::Kind::BadParameter, target, "", "is also an input of this command (not overwritten)");
+          throw Error(Error::Kind::BadParameter, m.target, "", "is also an input of this command (not overwritten)");
       const std::filesystem::path c = canonicalTarget(path);
       for (const auto& s : active->stagedCanonical)
-        if (s == c) throw Error(Error::Kind::BadParameter, target, "", "written twice by this command (two outputs with one path)");
+        if (s == c)
+          throw Error(Error::Kind::BadParameter, m.target, "", "written twice by this command (two outputs with one path)");
       if (std::filesystem::path r = resolveLocked(*active, path); !r.empty()) {
-        where = r;
-        inStagedFolder = true;
+        m.where = r;
+        m.inStagedFolder = true;
       }
     }
   }
-  std::filesystem::path dir = where.parent_path();
+  std::filesystem::path dir = m.where.parent_path();
   if (dir.empty()) dir = ".";
-  if (!std::filesystem::is_directory(dir, ec))
-    throw Error(Error::Kind::Io, target, "", "output folder does not exist");
-  if (std::filesystem::is_directory(where, ec)) throw Error(Error::Kind::Io, target, "", "is a directory");
-  std::string tmp;
-  TempSlot* slot = nullptr;
-  const int fd = makeTemporary(dir, target, tmp, slot);
-  auto drop = [&] {
-    ::unlink(tmp.c_str());
-    releaseSlot(slot);
-  };
+  if (!std::filesystem::is_directory(dir, ec)) throw Error(Error::Kind::Io, m.target, "", "output folder does not exist");
+  if (std::filesystem::is_directory(m.where, ec)) throw Error(Error::Kind::Io, m.target, "", "is a directory");
+  m.fd = makeTemporary(dir, m.target, m.tmp, m.slot);
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (impl_ && !impl_->done) impl_->drop();
+}
+
+void AtomicFileWriter::write(const void* data, size_t bytes) {
+  Impl& m = *impl_;
+  const char* p = static_cast<const char*>(data);
   size_t done = 0;
-  while (done < bytes.size()) {
-    ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+  while (done < bytes) {
+    ssize_t n = ::write(m.fd, p + done, bytes - done);
     if (n < 0) {
       if (errno == EINTR) continue;
-      int e = errno;
-      ::close(fd);
-      drop();
-      throw Error(Error::Kind::Io, target, "", std::string("write failed: ") + std::strerror(e));
+      m.failWith("write failed: ", errno);
     }
     done += size_t(n);
   }
+}
+
+void AtomicFileWriter::writeAt(uint64_t offset, const void* data, size_t bytes) {
+  Impl& m = *impl_;
+  const char* p = static_cast<const char*>(data);
+  size_t done = 0;
+  while (done < bytes) {
+    ssize_t n = ::pwrite(m.fd, p + done, bytes - done, off_t(offset + done));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      m.failWith("write failed: ", errno);
+    }
+    done += size_t(n);
+  }
+}
+
+void AtomicFileWriter::readAt(uint64_t offset, void* data, size_t bytes) {
+  Impl& m = *impl_;
+  char* p = static_cast<char*>(data);
+  size_t done = 0;
+  while (done < bytes) {
+    ssize_t n = ::pread(m.fd, p + done, bytes - done, off_t(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) m.failWith("read back failed: ", n < 0 ? errno : EIO);
+    done += size_t(n);
+  }
+}
+
+void AtomicFileWriter::commit() {
+  Impl& m = *impl_;
+  if (m.done) throw std::logic_error("AtomicFileWriter::commit twice");
+  m.done = true;
+  const int fd = m.fd;
+  m.fd = -1;
   if (::close(fd) != 0) {
     const int e = errno;
-    drop();
-    throw Error(Error::Kind::Io, target, "", std::string("close failed: ") + std::strerror(e));
+    m.drop();
+    throw Error(Error::Kind::Io, m.target, "", std::string("close failed: ") + std::strerror(e));
   }
-  ::chmod(tmp.c_str(), 0644);
-  if (!inStagedFolder) {
+  ::chmod(m.tmp.c_str(), 0644);
+  if (!m.inStagedFolder) {
     std::lock_guard<std::mutex> lock(activeMutex);
     if (active) {
       std::lock_guard<std::mutex> l2(active->mutex);
-      const std::filesystem::path c = canonicalTarget(path);
+      const std::filesystem::path c = canonicalTarget(m.path);
       for (const auto& s : active->stagedCanonical)
         if (s == c) {
-          drop();
-          throw Error(Error::Kind::BadParameter, target, "", "written twice by this command (two outputs with one path)");
+          m.drop();
+          throw Error(Error::Kind::BadParameter, m.target, "", "written twice by this command (two outputs with one path)");
         }
-      active->staged.push_back({tmp, target, slot});
+      active->staged.push_back({m.tmp, m.target, m.slot});
       active->stagedCanonical.push_back(c);
       return;
     }
@@ -455,15 +511,41 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view byt
     std::lock_guard<std::mutex> lock(activeMutex);
     if (active) {
       std::lock_guard<std::mutex> l2(active->mutex);
-      active->stagedCanonical.push_back(canonicalTarget(path));
+      active->stagedCanonical.push_back(canonicalTarget(m.path));
     }
   }
-  if (std::rename(tmp.c_str(), where.c_str()) != 0) {
-    int e = errno;
-    drop();
-    throw Error(Error::Kind::Io, target, "", std::string("rename failed: ") + std::strerror(e));
+  if (std::rename(m.tmp.c_str(), m.where.c_str()) != 0) {
+    const int e = errno;
+    m.drop();
+    throw Error(Error::Kind::Io, m.target, "", std::string("rename failed: ") + std::strerror(e));
   }
-  releaseSlot(slot);
+  releaseSlot(m.slot);
+  m.slot = nullptr;
+}
+
+TemporaryFolder::TemporaryFolder(const std::filesystem::path& parent) {
+  std::filesystem::path dir = parent.empty() ? std::filesystem::path(".") : parent;
+  std::string tmp = absoluteString(dir / ".ls-XXXXXX");
+  TempSlot* slot = claimSlot(tmp, TempSlot::Folder);
+  char* made = slot ? ::mkdtemp(slot->path) : ::mkdtemp(tmp.data());
+  if (!made) {
+    const int e = errno;
+    releaseSlot(slot);
+    throw Error(Error::Kind::Io, dir.string(), "", std::string("cannot create a working folder: ") + std::strerror(e));
+  }
+  path_ = made;
+  slot_ = slot;
+}
+
+TemporaryFolder::~TemporaryFolder() {
+  removeTree(path_.string());
+  releaseSlot(static_cast<TempSlot*>(slot_));
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view bytes) {
+  AtomicFileWriter w(path);
+  w.write(bytes.data(), bytes.size());
+  w.commit();
 }
 
 }  // namespace linesurf

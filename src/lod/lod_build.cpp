@@ -12,12 +12,12 @@
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/lod/lod.h"
+#include "lod_build_parts.h"
 #include "lod_format.h"
 
 namespace linesurf::lod {
+namespace detail {
 namespace {
-
-constexpr int kMaxLevel = 21;  // 21 bits per axis in the 63-bit Morton key
 
 uint64_t spread3(uint32_t v) {  // bit i of v to bit 3 i
   uint64_t x = v & 0x1fffff;
@@ -29,16 +29,56 @@ uint64_t spread3(uint32_t v) {  // bit i of v to bit 3 i
   return x;
 }
 
-struct BNode {
-  size_t begin = 0, end = 0;  // range of the sorted keys
-  int level = 0;
-  Vec3f cubeMin = Vec3f::Zero();
-  float side = 0;
-  uint32_t firstChild = 0;
-  uint8_t childCount = 0;
-  bool leaf = false;
-  Bounds3f bounds;
-};
+}  // namespace
+
+uint64_t mortonKey(const Vec3f& p, const Vec3f& rootMin, float side) {
+  uint64_t m = 0;
+  for (int k = 0; k < 3; ++k) {
+    double f = (double(p[k]) - rootMin[k]) / side * double(1 << kMaxLevel);
+    uint32_t q = std::isfinite(f) ? uint32_t(std::clamp(f, 0.0, double((1 << kMaxLevel) - 1))) : 0;
+    m |= spread3(q) << k;
+  }
+  return m;
+}
+
+std::pair<Vec3f, float> rootCube(Bounds3f kb) {
+  if (kb.empty()) kb.extend(Vec3f::Zero());
+  float side = kb.diagonal().maxCoeff();
+  side = side > 0 ? side * (1 + 1e-5f) : 1.0f;
+  return {kb.min, side};
+}
+
+BNode childCube(const BNode& nd, uint32_t o) {
+  BNode c;
+  c.level = nd.level + 1, c.side = 0.5f * nd.side;
+  c.cubeMin = nd.cubeMin + c.side * Vec3f(float(o & 1), float((o >> 1) & 1), float((o >> 2) & 1));
+  return c;
+}
+
+void splitBreadthFirst(std::vector<BNode>& nodes, size_t from, const std::vector<std::pair<uint64_t, uint32_t>>& keys,
+                       int leafSize) {
+  for (size_t i = from; i < nodes.size(); ++i) {
+    BNode nd = nodes[i];
+    if (nd.end - nd.begin <= size_t(leafSize) || nd.level >= kMaxLevel) {
+      nodes[i].leaf = true;
+      continue;
+    }
+    const int shift = 3 * (kMaxLevel - 1 - nd.level);
+    nodes[i].firstChild = uint32_t(nodes.size());
+    size_t b = nd.begin;
+    for (uint32_t o = 0; o < 8 && b < nd.end; ++o) {
+      size_t e = b;
+      while (e < nd.end && ((keys[e].first >> shift) & 7) == o) ++e;
+      if (e == b) continue;
+      BNode c = childCube(nd, o);
+      c.begin = b, c.end = e;
+      nodes.push_back(c);
+      ++nodes[i].childCount;
+      b = e;
+    }
+  }
+}
+
 
 void extendPoint(Bounds3f& b, const Vec3f& p, float r) {
   if (!p.allFinite()) return;
@@ -136,16 +176,22 @@ NodeData mergeChildren(const std::vector<const NodeData*>& children, const Vec3f
   return out;
 }
 
-std::string serializeBlock(const NodeData& d, uint32_t node, bool shading) {
+std::string blockHeader(uint32_t node, uint32_t points, uint32_t segments) {
   using namespace format;
   std::string out;
-  out.reserve(kBlockHeaderBytes + kPointBytes * d.points.size() + kSegmentBytes * d.segments.size());
   put(out, kBlockMagic, 8);
   put(out, uint64_t(0));  // hierarchy id, patched once every block is known
   put(out, node);
-  put(out, uint32_t(d.points.size()));
-  put(out, uint32_t(d.segments.size()));
+  put(out, points);
+  put(out, segments);
   put(out, uint32_t(0));
+  return out;
+}
+
+std::string serializeBlock(const NodeData& d, uint32_t node, bool shading) {
+  using namespace format;
+  std::string out = blockHeader(node, uint32_t(d.points.size()), uint32_t(d.segments.size()));
+  out.reserve(kBlockHeaderBytes + kPointBytes * d.points.size() + kSegmentBytes * d.segments.size());
   for (size_t i = 0; i < d.points.size(); ++i)
     putPoint(out, d.points[i], shading ? d.shadingNormals[i] : Vec3f(Vec3f::Zero()), d.masses[i], d.pointIndex[i]);
   for (size_t i = 0; i < d.segments.size(); ++i) putSegment(out, d.segments[i], d.segmentIndex[i]);
@@ -164,7 +210,84 @@ Bounds3f unite(Bounds3f a, const Bounds3f& b) {
   return a;
 }
 
-}  // namespace
+HeaderJson headerJson(const HeaderFacts& f, const BuildOptions& options) {
+  const Attributes& a = f.attributes;
+  const std::string placeholder(16, '0');
+  const Vec3f& c = f.sphere.center;
+  nlohmann::json j = {
+      {"format", "linesurf-lod"},
+      {"version", format::kVersion},
+      {"hierarchy", placeholder},
+      {"points", f.points},
+      {"segments", f.segments},
+      {"nodes", f.nodes},
+      {"depth", f.depth},
+      {"leafSize", options.leafSize},
+      {"grid", options.grid},
+      {"frame", {{"centre", {f.frame.centre.x(), f.frame.centre.y(), f.frame.centre.z()}}, {"scale", f.frame.scale}}},
+      {"sphere", {{"center", {c.x(), c.y(), c.z()}}, {"radius", f.sphere.radius}}},
+      {"maxRadius", f.maxRadius},
+      {"attributes",
+       {{"normals", a.normals}, {"colors", a.colors}, {"radii", a.radii}, {"texcoords", a.texcoords},
+        {"endpointNormals", a.endpointNormals}, {"shadingNormals", f.shading}}},
+      {"pointMasses", f.masses},
+      {"recordBytes", {{"node", format::kRecordBytes}, {"point", format::kPointBytes}, {"segment", format::kSegmentBytes},
+                       {"blockHeader", format::kBlockHeaderBytes}}},
+  };
+  HeaderJson hj;
+  hj.json = j.dump();
+  while ((format::kPreambleBytes + hj.json.size()) % 8) hj.json.push_back(' ');
+  hj.idAt = format::kPreambleBytes + hj.json.find(placeholder);
+  return hj;
+}
+
+uint64_t hierarchyId(std::vector<uint64_t> sums, const BuildOptions& options) {
+  sums.push_back(uint64_t(options.leafSize));
+  sums.push_back(uint64_t(options.grid));
+  return lodChecksum(sums.data(), sums.size() * 8) | 1;  // never 0
+}
+
+std::string headerBytes(const HeaderJson& hj, uint64_t id, const std::vector<BNode>& nodes,
+                        const std::vector<uint64_t>& offsets, const std::vector<uint64_t>& sizes,
+                        const std::vector<uint64_t>& sums, const std::vector<uint32_t>& nPoints,
+                        const std::vector<uint32_t>& nSegments) {
+  const uint32_t count = uint32_t(nodes.size());
+  std::string head;
+  format::put(head, format::kMagic, 8);
+  format::put(head, format::kVersion);
+  format::put(head, uint32_t(hj.json.size()));
+  format::put(head, id);
+  format::put(head, uint64_t(count));
+  head += hj.json;
+  const std::string hex = fmt::format("{:016x}", id);
+  std::memcpy(head.data() + hj.idAt, hex.data(), 16);
+  for (uint32_t i = 0; i < count; ++i) {
+    const BNode& n = nodes[i];
+    using format::put;
+    put(head, id);
+    put(head, offsets[i]);
+    put(head, sizes[i]);
+    put(head, sums[i]);
+    format::putVec(head, n.cubeMin);
+    put(head, n.side);
+    Bounds3f b = n.bounds;
+    if (b.empty()) b.extend(n.cubeMin);
+    format::putVec(head, b.min);
+    format::putVec(head, b.max);
+    put(head, nPoints[i]);
+    put(head, nSegments[i]);
+    put(head, n.firstChild);
+    put(head, n.childCount);
+    put(head, uint8_t(n.level));
+    put(head, uint8_t(n.leaf));
+    put(head, uint8_t(0));
+  }
+  return head;
+}
+
+}  // namespace detail
+
+using namespace detail;
 
 void validate(const BuildOptions& o) {
   if (o.leafSize < 16 || o.leafSize > (1 << 20))
@@ -216,47 +339,15 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   Bounds3f kb;
   for (size_t j = 0; j < N; ++j)
     if (keyPos(j).allFinite()) kb.extend(keyPos(j));
-  if (kb.empty()) kb.extend(Vec3f::Zero());
-  float side = kb.diagonal().maxCoeff();
-  side = side > 0 ? side * (1 + 1e-5f) : 1.0f;
-  const Vec3f rootMin = kb.min;
+  const auto [rootMin, side] = rootCube(kb);
   std::vector<std::pair<uint64_t, uint32_t>> keys(N);
-  parallelFor(0, N, [&](size_t j) {
-    const Vec3f p = keyPos(j);
-    uint64_t m = 0;
-    for (int k = 0; k < 3; ++k) {
-      double f = (double(p[k]) - rootMin[k]) / side * double(1 << kMaxLevel);
-      uint32_t q = std::isfinite(f) ? uint32_t(std::clamp(f, 0.0, double((1 << kMaxLevel) - 1))) : 0;
-      m |= spread3(q) << k;
-    }
-    keys[j] = {m, uint32_t(j)};
-  }, 4096);
+  parallelFor(0, N, [&](size_t j) { keys[j] = {mortonKey(keyPos(j), rootMin, side), uint32_t(j)}; }, 4096);
   std::sort(keys.begin(), keys.end());
 
   // Topology, breadth first: children contiguous and after their parent.
   std::vector<BNode> nodes;
   nodes.push_back({0, N, 0, rootMin, side});
-  for (size_t i = 0; i < nodes.size(); ++i) {
-    BNode nd = nodes[i];
-    if (nd.end - nd.begin <= size_t(options.leafSize) || nd.level >= kMaxLevel) {
-      nodes[i].leaf = true;
-      continue;
-    }
-    const int shift = 3 * (kMaxLevel - 1 - nd.level);
-    nodes[i].firstChild = uint32_t(nodes.size());
-    size_t b = nd.begin;
-    for (uint32_t o = 0; o < 8 && b < nd.end; ++o) {
-      size_t e = b;
-      while (e < nd.end && ((keys[e].first >> shift) & 7) == o) ++e;
-      if (e == b) continue;
-      BNode c;
-      c.begin = b, c.end = e, c.level = nd.level + 1, c.side = 0.5f * nd.side;
-      c.cubeMin = nd.cubeMin + c.side * Vec3f(float(o & 1), float((o >> 1) & 1), float((o >> 2) & 1));
-      nodes.push_back(c);
-      ++nodes[i].childCount;
-      b = e;
-    }
-  }
+  splitBreadthFirst(nodes, 0, keys, options.leafSize);
   const uint32_t count = uint32_t(nodes.size());
 
   int depth = 0;
@@ -269,32 +360,12 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
     if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius);
   for (const Segment& s : model.segments)
     if (std::isfinite(s.radius)) maxRadius = std::max(maxRadius, s.radius);
-  const Attributes& a = model.attributes;
-  const std::string idPlaceholder(16, '0');
-  nlohmann::json j = {
-      {"format", "linesurf-lod"},
-      {"version", format::kVersion},
-      {"hierarchy", idPlaceholder},
-      {"points", P},
-      {"segments", S},
-      {"nodes", count},
-      {"depth", depth},
-      {"leafSize", options.leafSize},
-      {"grid", options.grid},
-      {"frame", {{"centre", {frame.centre.x(), frame.centre.y(), frame.centre.z()}}, {"scale", frame.scale}}},
-      {"sphere", {{"center", {sphere.center.x(), sphere.center.y(), sphere.center.z()}}, {"radius", sphere.radius}}},
-      {"maxRadius", maxRadius},
-      {"attributes",
-       {{"normals", a.normals}, {"colors", a.colors}, {"radii", a.radii}, {"texcoords", a.texcoords},
-        {"endpointNormals", a.endpointNormals}, {"shadingNormals", shading}}},
-      {"pointMasses", masses != nullptr},
-      {"recordBytes", {{"node", format::kRecordBytes}, {"point", format::kPointBytes}, {"segment", format::kSegmentBytes},
-                       {"blockHeader", format::kBlockHeaderBytes}}},
-  };
-  std::string js = j.dump();
-  while ((format::kPreambleBytes + js.size()) % 8) js.push_back(' ');
-  const size_t idAt = format::kPreambleBytes + js.find(idPlaceholder);
-  const uint64_t tableOffset = format::kPreambleBytes + js.size();
+  HeaderFacts facts;
+  facts.points = P, facts.segments = S, facts.nodes = count, facts.depth = depth;
+  facts.frame = frame, facts.sphere = sphere, facts.maxRadius = maxRadius;
+  facts.attributes = model.attributes, facts.shading = shading, facts.masses = masses != nullptr;
+  const HeaderJson hj = headerJson(facts, options);
+  const uint64_t tableOffset = format::kPreambleBytes + hj.json.size();
   const uint64_t blocksOffset = tableOffset + uint64_t(count) * format::kRecordBytes;
 
   // Leaf blocks first: their sizes follow from their counts, so each is written in place (in
@@ -391,46 +462,14 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   }
 
   // The hierarchy's id: a hash of every block (id field still zero) and the build parameters.
-  std::vector<uint64_t> sums(count + 2);
+  std::vector<uint64_t> sums(count);
   parallelFor(0, count, [&](size_t i) { sums[i] = lodChecksum(out.data() + offsets[i], sizes[i]); }, 1);
-  sums[count] = uint64_t(options.leafSize);
-  sums[count + 1] = uint64_t(options.grid);
-  const uint64_t id = lodChecksum(sums.data(), sums.size() * 8) | 1;  // never 0
+  const uint64_t id = hierarchyId(sums, options);
   parallelFor(0, count, [&](size_t i) {
     std::memcpy(out.data() + offsets[i] + 8, &id, 8);
     sums[i] = lodChecksum(out.data() + offsets[i], sizes[i]);
   }, 1);
-
-  std::string head;
-  format::put(head, format::kMagic, 8);
-  format::put(head, format::kVersion);
-  format::put(head, uint32_t(js.size()));
-  format::put(head, id);
-  format::put(head, uint64_t(count));
-  head += js;
-  const std::string hex = fmt::format("{:016x}", id);
-  std::memcpy(head.data() + idAt, hex.data(), 16);
-  for (uint32_t i = 0; i < count; ++i) {
-    const BNode& n = nodes[i];
-    using format::put;
-    put(head, id);
-    put(head, offsets[i]);
-    put(head, sizes[i]);
-    put(head, sums[i]);
-    format::putVec(head, n.cubeMin);
-    put(head, n.side);
-    Bounds3f b = n.bounds;
-    if (b.empty()) b.extend(n.cubeMin);
-    format::putVec(head, b.min);
-    format::putVec(head, b.max);
-    put(head, nPoints[i]);
-    put(head, nSegments[i]);
-    put(head, n.firstChild);
-    put(head, n.childCount);
-    put(head, uint8_t(n.level));
-    put(head, uint8_t(n.leaf));
-    put(head, uint8_t(0));
-  }
+  const std::string head = headerBytes(hj, id, nodes, offsets, sizes, sums, nPoints, nSegments);
   if (head.size() != blocksOffset) throw std::logic_error("lod: header size");
   std::memcpy(out.data(), head.data(), head.size());
   if (report) {

@@ -546,6 +546,37 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   }
 }
 
+/// Runs f on every tile of `todo`, at most r.concurrent at once (the memory budget holds that
+/// many tiles), each worker taking the next tile as soon as it is free: tiles differ in size by
+/// orders of magnitude, and running them in fixed groups left a core idle while the largest tile
+/// of a group finished (the per-tile MST is serial). Results do not depend on the schedule: each
+/// tile writes its own files. Progress follows the points done.
+template <class F>
+void forEachTile(const Run& r, const std::vector<uint32_t>& todo, std::string_view stage, const F& f) {
+  uint64_t total = 0;
+  for (uint32_t tile : todo) total += r.tileCounts[r.denseOf.at(tile)];
+  std::atomic<size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::mutex progressMutex;
+  uint64_t done = 0;
+  const size_t workers = std::min(r.concurrent, std::max<size_t>(todo.size(), 1));
+  parallelFor(0, workers, [&](size_t) {
+    for (;;) {
+      const size_t i = next++;
+      if (i >= todo.size() || failed) return;
+      try {
+        f(todo[i]);
+      } catch (...) {
+        failed = true;
+        throw;
+      }
+      std::lock_guard<std::mutex> lock(progressMutex);
+      done += r.tileCounts[r.denseOf.at(todo[i])];
+      reportProgress(r.o.progress, stage, total ? double(done) / double(total) : 1.0);
+    }
+  }, 1);
+}
+
 /// Processes one tile for the normals: writes its result file.
 void processTile(const Run& r, uint32_t tile) {
   TileGeometry tg = tileGeometry(r, tile, false);
@@ -936,14 +967,7 @@ void extractTiles(const Run& r, const EpsDeltaOptions& e, const std::vector<size
   std::error_code ec;
   for (size_t d = 0; d < r.tileIds.size(); ++d)
     if (int(d % size_t(r.o.ranks)) == r.o.rank && !fs::exists(r.extractPath(r.tileIds[d]), ec)) todo.push_back(r.tileIds[d]);
-  uint64_t total = 0, done = 0;
-  for (uint32_t tile : todo) total += r.tileCounts[r.denseOf.at(tile)];
-  for (size_t b = 0; b < todo.size(); b += r.concurrent) {
-    const size_t end = std::min(todo.size(), b + r.concurrent);
-    parallelFor(b, end, [&](size_t i) { extractTile(r, todo[i], e, epsilon, nodeOffset, flip, avg); }, 1);
-    for (size_t i = b; i < end; ++i) done += r.tileCounts[r.denseOf.at(todo[i])];
-    reportProgress(r.o.progress, "eps-delta tiles", total ? double(done) / double(total) : 1.0);
-  }
+  forEachTile(r, todo, "eps-delta tiles", [&](uint32_t tile) { extractTile(r, tile, e, epsilon, nodeOffset, flip, avg); });
   er.tExtract = t.seconds();
 }
 
@@ -1084,16 +1108,9 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
     if (fs::exists(r.resultPath(r.tileIds[d]), ec)) ++rep.tilesReused;
     else todo.push_back(r.tileIds[d]);
   }
-  uint64_t totalTodo = 0, doneTodo = 0;
-  for (uint32_t tile : todo) totalTodo += r.tileCounts[r.denseOf.at(tile)];
   reportProgress(o.progress, "tiles", 0.0);
-  for (size_t b = 0; b < todo.size(); b += r.concurrent) {
-    const size_t e = std::min(todo.size(), b + r.concurrent);
-    parallelFor(b, e, [&](size_t i) { processTile(r, todo[i]); }, 1);
-    // (a tile's normals pass runs without Delaunay lists; the extraction recomputes them per tile)
-    for (size_t i = b; i < e; ++i) doneTodo += r.tileCounts[r.denseOf.at(todo[i])];
-    reportProgress(o.progress, "tiles", totalTodo ? double(doneTodo) / double(totalTodo) : 1.0);
-  }
+  // (a tile's normals pass runs without Delaunay lists; the extraction recomputes them per tile)
+  forEachTile(r, todo, "tiles", [&](uint32_t tile) { processTile(r, tile); });
   rep.tTiles = t.seconds();
   if (o.barrier) o.barrier();
   if (o.rank != 0 && !extract) return rep;  // rank 0 joins the orientations and writes the output

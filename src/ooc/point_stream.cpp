@@ -266,20 +266,8 @@ size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
 // ---------------------------------------------------------------------------------------------
 PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
                                bool normals, bool radius, const std::string& moreElements)
-    : path_(path.string()), count_(count), normals_(normals), radius_(radius) {
-  std::filesystem::path dir = path.parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec)) throwIo(path_, "output folder does not exist");
-  tmp_ = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
-  const int fd = ::mkstemp(tmp_.data());
-  if (fd < 0) throwIo(path_, std::string("cannot create file: ") + std::strerror(errno));
-  f_ = ::fdopen(fd, "wb");
-  if (!f_) {
-    ::close(fd);
-    ::unlink(tmp_.c_str());
-    throwIo(path_, "cannot open the temporary file");
-  }
+    : path_(path.string()), out_(std::make_unique<AtomicFileWriter>(path)), count_(count), normals_(normals),
+      radius_(radius) {
   // The header exactly as writePlyModel (io/ply_model.cpp) writes it.
   std::string h = "ply\nformat binary_little_endian 1.0\n";
   for (const std::string& c : comments) {
@@ -300,15 +288,13 @@ PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count
   put(h.data(), h.size());
 }
 
-PlyPointWriter::~PlyPointWriter() {
-  if (f_) std::fclose(f_);
-  if (!done_) ::unlink(tmp_.c_str());
-}
+PlyPointWriter::~PlyPointWriter() = default;  // an unfinished file's temporary goes with out_
 
 void PlyPointWriter::put(const char* data, size_t n) {
-  if (std::fwrite(data, 1, n, f_) != n) {
-    const int e = errno;
-    throwIo(path_, std::string("write failed: ") + std::strerror(e));
+  buf_.append(data, n);
+  if (buf_.size() >= (size_t(8) << 20)) {
+    out_->write(buf_.data(), buf_.size());
+    buf_.clear();
   }
 }
 
@@ -334,16 +320,9 @@ void PlyPointWriter::writeRaw(const std::string& bytes) {
 
 void PlyPointWriter::finish() {
   if (written_ != count_) throw std::logic_error("PlyPointWriter: fewer rows than declared");
-  if (std::fflush(f_) != 0 || ::fsync(::fileno(f_)) != 0) {
-    const int e = errno;
-    throwIo(path_, std::string("write failed: ") + std::strerror(e));
-  }
-  const int rc = std::fclose(f_);
-  f_ = nullptr;
-  if (rc != 0) throwIo(path_, "close failed");
-  ::chmod(tmp_.c_str(), 0644);
-  if (std::rename(tmp_.c_str(), path_.c_str()) != 0) throwIo(path_, std::string("rename failed: ") + std::strerror(errno));
-  done_ = true;
+  out_->write(buf_.data(), buf_.size());
+  buf_.clear();
+  out_->commit();
 }
 
 }  // namespace linesurf::ooc

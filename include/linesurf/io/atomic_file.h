@@ -20,6 +20,8 @@
 ///
 /// Staging an output onto a file the command has read (see noteInput), or the same output twice,
 /// is refused (Error::Kind::BadParameter).
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string_view>
@@ -29,6 +31,42 @@ namespace linesurf {
 /// Writes `bytes` to `path` atomically (staged when a transaction is open); throws
 /// linesurf::Error (Kind::Io) when it cannot write.
 void writeFileAtomically(const std::filesystem::path& path, std::string_view bytes);
+
+/// writeFileAtomically for outputs too large to hold: a temporary file beside the destination
+/// (registered for cleanup on signals) written in pieces, in order or at offsets, and put in
+/// place (or staged, inside a transaction) by commit(). Destroyed without commit, it removes the
+/// temporary. The checks of writeFileAtomically (output onto an input, one output twice, missing
+/// folder) run in the constructor, before anything is written. Throws Error (Kind::Io).
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(const std::filesystem::path& path);
+  ~AtomicFileWriter();
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  void write(const void* data, size_t bytes);  ///< appends at the current position
+  void writeAt(uint64_t offset, const void* data, size_t bytes);
+  void readAt(uint64_t offset, void* data, size_t bytes);  ///< reads back what was written
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// A hidden working folder (`.ls-XXXXXX` in `parent`) for the temporaries of one run, removed
+/// with everything in it when destroyed, and by the signal cleanup (removeTemporaryOutputs).
+class TemporaryFolder {
+ public:
+  explicit TemporaryFolder(const std::filesystem::path& parent);  ///< throws Error (Kind::Io)
+  ~TemporaryFolder();
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+  void* slot_ = nullptr;
+};
 
 /// Makes `path` a folder for outputs (its parents must exist or be output folders themselves).
 /// Outside a transaction it is created at once (nothing happens when it exists). Inside one, a

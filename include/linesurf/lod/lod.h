@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "linesurf/core/model.h"
+#include "linesurf/core/progress.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/render/renderer.h"
@@ -34,6 +35,7 @@ struct BuildReport {
   uint32_t nodes = 0, leaves = 0, depth = 0;
   uint64_t bytes = 0;
   uint64_t hierarchyId = 0;
+  uint32_t chunks = 0;  ///< subtrees built one at a time (buildLodStreaming)
 };
 
 /// Builds the hierarchy of `model` into the bytes of a .lod file. `model` must already be in its
@@ -43,6 +45,26 @@ struct BuildReport {
 /// properties other than the point mass are not kept. Deterministic for any thread count.
 std::string buildLod(const HybridModel& model, const ModelFrame& frame, const BuildOptions& options = {},
                      BuildReport* report = nullptr);
+
+/// How buildLodStreaming may use memory and disk.
+struct StreamBuildOptions {
+  /// Resident bytes the build aims to stay within (it sizes its subtrees to a third of it; a
+  /// subtree of one top cell that alone exceeds it is still built whole).
+  double memoryBytes = 1.5e9;
+  /// Where its working files go (about the model's size again, removed at the end); empty: the
+  /// output's folder.
+  std::filesystem::path workDir;
+  ProgressFn progress;
+};
+
+/// buildLod for a model file too large to hold: reads `input` (binary little-endian PLY of points
+/// and segments that carry every normal and radius, as `linesurf extract` writes them; see
+/// io/model_stream.h) in chunks, moves it into its normalising frame (io/model_frame.h) and
+/// writes the .lod file at `output` (atomically). The file is byte for byte the one buildLod
+/// makes from the same model read whole, framed and prepared. Throws Error (BadInput) for a
+/// model whose primitives lack normals or radii, Error (Io) when the disk is full.
+BuildReport buildLodStreaming(const std::filesystem::path& input, const std::filesystem::path& output,
+                              const BuildOptions& options, const StreamBuildOptions& streamOptions);
 
 /// One node of the table.
 struct NodeInfo {

@@ -8,7 +8,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <memory>
 #include <vector>
+
+#include "linesurf/io/atomic_file.h"
 
 #include "linesurf/core/math.h"
 
@@ -67,8 +70,9 @@ class PointReader {
 
 /// Writes a binary little-endian PLY of points with x y z [nx ny nz] [radius] (floats), row by
 /// row, byte for byte as io/model_io.h's writeModel writes the same points. The rows go to a
-/// temporary file beside `path`; finish() renames it into place once every declared row is
-/// written; destroying an unfinished writer removes it, so no partial output is ever left.
+/// temporary file beside `path` (io/atomic_file.h: removed on signals too); finish() puts it in
+/// place, or stages it in the command's transaction, once every declared row is written;
+/// destroying an unfinished writer removes it, so no partial output is ever left.
 class PlyPointWriter {
  public:
   /// `moreElements`: header lines of elements after the vertices (e.g. "element segment N\n
@@ -86,10 +90,11 @@ class PlyPointWriter {
 
  private:
   void put(const char* data, size_t n);
-  std::string path_, tmp_;
-  std::FILE* f_ = nullptr;
+  std::string path_;
+  std::unique_ptr<AtomicFileWriter> out_;
+  std::string buf_;
   uint64_t count_ = 0, written_ = 0;
-  bool normals_ = false, radius_ = false, done_ = false;
+  bool normals_ = false, radius_ = false;
   std::string row_;
 };
 
