@@ -813,7 +813,7 @@ void main() {
         self.ready = true;
       }
       self.start = () => {
-        loadHeader().then(drawSoon, (e) => fail(e && e.message ? e.message : String(e)));
+        loadHeader().then(() => drawSoon(true), (e) => fail(e && e.message ? e.message : String(e)));
       };
 
       // lod::selectNodes (src/lod/lod_read.cpp) for the page's camera: a cut refined coarse to
@@ -989,7 +989,7 @@ void main() {
         }
         --self.inFlight;
         pump();
-        drawSoon();
+        drawSoon(self.inFlight === 0);
       }
       function pump() {
         while (self.inFlight < MAX_IN_FLIGHT && self.queue.length) load(self.queue.shift());
@@ -1285,14 +1285,18 @@ void main() {
       describeCamera();
     }
 
-    // After a node arrives: a task, not an animation frame, so that a headless browser under
+    // After nodes arrive: a task, not an animation frame, so that a headless browser under
     // virtual time (which runs animation frames only as its clock advances) draws the complete cut
-    // before its budget ends; arrivals in one burst share a frame.
-    let drawQueued = false;
-    function drawSoon() {
-      if (drawQueued) return;
-      drawQueued = true;
-      setTimeout(() => { drawQueued = false; try { draw(); } catch (e) { fail(e.message); } }, 0);
+    // before its budget ends. While requests are still out, at most 5 frames a second (a frame of
+    // a large cut is costly, and each would be redrawn soon); the last arrival draws at once.
+    let drawTimer = null, drawTimerLast = false;
+    function drawSoon(last) {
+      if (drawTimer !== null) {
+        if (!last || drawTimerLast) return;
+        clearTimeout(drawTimer);
+      }
+      drawTimerLast = !!last;
+      drawTimer = setTimeout(() => { drawTimer = null; try { draw(); } catch (e) { fail(e.message); } }, last ? 0 : 200);
     }
 
     let pending = false;
