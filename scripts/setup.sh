@@ -8,6 +8,7 @@ PKGS=(
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium  # headless browser test of `linesurf view` (tests/browser)
   libhwy-dev
+  libcpp-httplib-dev  # optional: `linesurf view MODEL.lod` serves the streaming viewer
   openmpi-bin libopenmpi-dev  # optional: `mpirun -n N linesurf normals` (out-of-core tiles over ranks)
   python3 python3-dev python3-numpy python3-pytest pybind11-dev
 )

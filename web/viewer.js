@@ -1,5 +1,8 @@
 // linesurf view: WebGL2 splatting of points and line segments (thesis §4.2.2, §5, §6.2; the GPU
-// line-segment splatting of §9.3). Embedded in the page by `linesurf view`; no network access.
+// line-segment splatting of §9.3). Embedded in the page by `linesurf view`. A page of a model
+// holds it and needs no network; a page of a level-of-detail hierarchy (meta.lod, served by
+// `linesurf view MODEL.lod`) reads the hierarchy's nodes from its server by HTTP Range requests,
+// chosen for each view within a splat budget as lod::selectNodes chooses them (src/lod/lod_read.cpp).
 //
 // Frame (Botsch, Hornung, Zwicker, Kobbelt 2005, "High-quality surface splatting on today's GPUs"):
 //  1. visibility: every splat writes its depth pushed back by its z threshold (depth only);
@@ -46,7 +49,7 @@
     return { data: new t[0](buffer, off, count * comps), desc: desc, comps: comps };
   }
 
-  function loadModel() {
+  function readMeta() {
     let meta;
     try {
       meta = JSON.parse($('linesurf-meta').textContent);
@@ -55,6 +58,13 @@
     }
     if (!meta || meta.format !== 'linesurf-view' || meta.version !== 1)
       throw new Error('not a linesurf view model (format/version)');
+    const s = meta.sphere;
+    if (!s || !(s.radius > 0) || !s.center || s.center.length !== 3 || !s.center.every(Number.isFinite))
+      throw new Error('bad bounding sphere');
+    return meta;
+  }
+
+  function loadModel(meta) {
     let buffer;
     try {
       buffer = decodeBase64($('linesurf-data').textContent);
@@ -63,9 +73,6 @@
     }
     if (buffer.byteLength !== meta.bytes)
       throw new Error('the embedded data holds ' + buffer.byteLength + ' bytes, the description says ' + meta.bytes);
-    const s = meta.sphere;
-    if (!s || !(s.radius > 0) || !s.center || s.center.length !== 3 || !s.center.every(Number.isFinite))
-      throw new Error('bad bounding sphere');
     const np = meta.points ? meta.points.count : 0, ns = meta.segments ? meta.segments.count : 0;
     if (!Number.isInteger(np) || !Number.isInteger(ns) || np < 0 || ns < 0) throw new Error('bad primitive counts');
     if (np + ns === 0) throw new Error('the model holds no drawable point or segment');
@@ -537,8 +544,9 @@ void main() {
   // ---- the viewer -------------------------------------------------------------------------------
 
   function main() {
-    const model = loadModel();
-    const meta = model.meta;
+    const meta = readMeta();
+    const lodMode = !!meta.lod;
+    const model = lodMode ? null : loadModel(meta);
     const D = meta.defaults;
     shaderConstants = meta.constants || {};
     const sphere = { center: meta.sphere.center, radius: meta.sphere.radius };
@@ -559,80 +567,97 @@ void main() {
     })();
     canvas.addEventListener('webglcontextlost', (e) => { e.preventDefault(); fail('the WebGL context was lost'); });
 
-    const pointProg = model.np ? compile(gl, POINT_VS, POINT_FS, 'point splat') : null;
-    const segProg = model.ns ? compile(gl, SEGMENT_VS, SEGMENT_FS, 'segment splat') : null;
+    const pointProg = lodMode || model.np ? compile(gl, POINT_VS, POINT_FS, 'point splat') : null;
+    const segProg = lodMode || model.ns ? compile(gl, SEGMENT_VS, SEGMENT_FS, 'segment splat') : null;
     const resolveProg = compile(gl, RESOLVE_VS, RESOLVE_FS, 'normalisation');
 
     // Buffers: one per attribute, each splat's values repeated at its 4 corner vertices, and an
     // index buffer of 2 triangles per splat (corner = gl_VertexID & 3). Not instancing: software
-    // GL (SwiftShader) runs every instance as a draw of its own, ~30x slower.
-    function attrib(loc, arr, normalized) {
+    // GL (SwiftShader) runs every instance as a draw of its own, ~30x slower. They are created
+    // into `buffers` (to delete them with their batch); each returns its size in bytes.
+    function attrib(loc, arr, normalized, buffers) {
       const src = arr.data, c = arr.comps, n = src.length / c;
       const dst = new src.constructor(src.length * 4);
       for (let i = 0; i < n; ++i)
         for (let v = 0; v < 4; ++v)
           for (let j = 0; j < c; ++j) dst[(4 * i + v) * c + j] = src[i * c + j];
       const buf = gl.createBuffer();
+      buffers.push(buf);
       gl.bindBuffer(gl.ARRAY_BUFFER, buf);
       gl.bufferData(gl.ARRAY_BUFFER, dst, gl.STATIC_DRAW);
       const type = src instanceof Float32Array ? gl.FLOAT : src instanceof Int16Array ? gl.SHORT : gl.UNSIGNED_BYTE;
       gl.enableVertexAttribArray(loc);
       gl.vertexAttribPointer(loc, c, type, normalized, 0, 0);
+      return dst.byteLength;
     }
-    function quadIndices(n) {
+    function quadIndices(n, buffers) {
       const idx = new Uint32Array(6 * n);
       for (let i = 0, k = 0; i < n; ++i, k += 6) {
         const b = 4 * i;
         idx[k] = b; idx[k + 1] = b + 1; idx[k + 2] = b + 2; idx[k + 3] = b + 2; idx[k + 4] = b + 1; idx[k + 5] = b + 3;
       }
       const buf = gl.createBuffer();
+      buffers.push(buf);
       gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, buf);
       gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
+      return idx.byteLength;
     }
     const defaultColor = D.defaultColor;
-    let pointVao = null, segVao = null;
-    if (model.np) {
-      const P = model.points;
-      pointVao = gl.createVertexArray();
-      gl.bindVertexArray(pointVao);
-      attrib(0, P.position, false);
-      attrib(1, P.normal, true);
-      attrib(2, P.radius, false);
-      if (P.color) attrib(3, P.color, true);
-      else { gl.disableVertexAttribArray(3); gl.vertexAttrib4f(3, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
-      if (P.cluster) attrib(4, P.cluster, false);
-      else { gl.disableVertexAttribArray(4); gl.vertexAttrib1f(4, -1); }
-      if (P.shadingNormal) attrib(5, P.shadingNormal, true);
-      else { gl.disableVertexAttribArray(5); gl.vertexAttrib3f(5, 0, 0, 0); }
-      if (P.mass) attrib(6, P.mass, false);
-      else { gl.disableVertexAttribArray(6); gl.vertexAttrib1f(6, 1); }
-      quadIndices(model.np);
+    // A batch: the points and segments of one draw (the whole model, or one node of a hierarchy),
+    // each kind in a vertex array of its own. P and S hold typed arrays as loadModel() gives them.
+    function makeBatch(P, np, S, ns) {
+      const b = { np: np, ns: ns, pointVao: null, segVao: null, endpointNormals: false, buffers: [], bytes: 0 };
+      const B = b.buffers;
+      if (np) {
+        b.pointVao = gl.createVertexArray();
+        gl.bindVertexArray(b.pointVao);
+        b.bytes += attrib(0, P.position, false, B) + attrib(1, P.normal, true, B) + attrib(2, P.radius, false, B);
+        if (P.color) b.bytes += attrib(3, P.color, true, B);
+        else { gl.disableVertexAttribArray(3); gl.vertexAttrib4f(3, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
+        if (P.cluster) b.bytes += attrib(4, P.cluster, false, B);
+        else { gl.disableVertexAttribArray(4); gl.vertexAttrib1f(4, -1); }
+        if (P.shadingNormal) b.bytes += attrib(5, P.shadingNormal, true, B);
+        else { gl.disableVertexAttribArray(5); gl.vertexAttrib3f(5, 0, 0, 0); }
+        if (P.mass) b.bytes += attrib(6, P.mass, false, B);
+        else { gl.disableVertexAttribArray(6); gl.vertexAttrib1f(6, 1); }
+        b.bytes += quadIndices(np, B);
+      }
+      if (ns) {
+        b.segVao = gl.createVertexArray();
+        gl.bindVertexArray(b.segVao);
+        b.bytes += attrib(0, S.p0, false, B) + attrib(1, S.p1, false, B) + attrib(2, S.normal, true, B) +
+          attrib(3, S.radius, false, B);
+        if (S.color) b.bytes += attrib(4, S.color, true, B);
+        else { gl.disableVertexAttribArray(4); gl.vertexAttrib4f(4, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
+        b.endpointNormals = !!(S.normal0 && S.normal1);
+        if (b.endpointNormals) b.bytes += attrib(5, S.normal0, true, B) + attrib(6, S.normal1, true, B);
+        else { gl.disableVertexAttribArray(5); gl.disableVertexAttribArray(6); }
+        b.bytes += quadIndices(ns, B);
+      }
+      gl.bindVertexArray(null);
+      return b;
     }
-    if (model.ns) {
-      const S = model.segments;
-      segVao = gl.createVertexArray();
-      gl.bindVertexArray(segVao);
-      attrib(0, S.p0, false);
-      attrib(1, S.p1, false);
-      attrib(2, S.normal, true);
-      attrib(3, S.radius, false);
-      if (S.color) attrib(4, S.color, true);
-      else { gl.disableVertexAttribArray(4); gl.vertexAttrib4f(4, defaultColor[0], defaultColor[1], defaultColor[2], 1); }
-      if (S.normal0 && S.normal1) { attrib(5, S.normal0, true); attrib(6, S.normal1, true); }
-      else { gl.disableVertexAttribArray(5); gl.disableVertexAttribArray(6); }
-      quadIndices(model.ns);
+    function deleteBatch(b) {
+      if (b.pointVao) gl.deleteVertexArray(b.pointVao);
+      if (b.segVao) gl.deleteVertexArray(b.segVao);
+      for (const buf of b.buffers) gl.deleteBuffer(buf);
+      b.buffers = [];
     }
-    gl.bindVertexArray(null);
+    const batches = model ? [makeBatch(model.points, model.np, model.segments, model.ns)] : [];
     const emptyVao = gl.createVertexArray();
 
-    // Weights are 1/length^2 (§5.2.3.3); a constant factor keeps them near 1 in the float target.
-    let meanRadius = 0, nr = 0;
-    for (const arr of [model.points && model.points.radius, model.segments && model.segments.radius]) {
-      if (!arr) continue;
-      const step = Math.max(1, Math.floor(arr.data.length / 4096));
-      for (let i = 0; i < arr.data.length; i += step) if (arr.data[i] > 0) { meanRadius += arr.data[i]; ++nr; }
+    // Weights are 1/length^2 (§5.2.3.3); a constant factor keeps them near 1 in the float target
+    // (a hierarchy's: from the first node it loads, then kept).
+    function meanRadiusOf(P, S) {
+      let sum = 0, nr = 0;
+      for (const arr of [P && P.radius, S && S.radius]) {
+        if (!arr) continue;
+        const step = Math.max(1, Math.floor(arr.data.length / 4096));
+        for (let i = 0; i < arr.data.length; i += step) if (arr.data[i] > 0) { sum += arr.data[i]; ++nr; }
+      }
+      return nr ? sum / nr : 0;
     }
-    meanRadius = nr ? meanRadius / nr : 1;
+    let meanRadius = model ? meanRadiusOf(model.points, model.segments) || 1 : 0;
 
     // Render targets: float accumulation + depth.
     let fbo = null, accumTex = null, depthRb = null, fbW = 0, fbH = 0;
@@ -670,8 +695,8 @@ void main() {
     if (params.ui === '0') $('ui').classList.add('hidden');
     $('name').textContent = meta.name || '';
     if (meta.name) document.title = meta.name + ' - linesurf view';
-    if (!model.np || !(model.points.cluster)) $('clusterOption').disabled = true;
-    {  // the optional attributes the page draws with
+    if (!model || !model.np || !(model.points.cluster)) $('clusterOption').disabled = true;
+    if (model) {  // the optional attributes the page draws with
       const has = [];
       if (model.np && model.points.shadingNormal) has.push('point shading normals');
       if (model.np && model.points.mass) has.push('point masses');
@@ -702,12 +727,406 @@ void main() {
       return cam;
     }
 
+    // ---- level-of-detail streaming (`linesurf view MODEL.lod`) ---------------------------------
+    // The page reads the hierarchy from its server: the preamble, then the JSON header and the node
+    // table, then the blocks of the nodes each view needs (docs/file-format.md, "How the viewer
+    // reads a hierarchy over HTTP"). Every frame chooses its cut as lod::selectNodes does; a node
+    // not loaded yet is drawn through its nearest loaded ancestor, one that failed is left out (as
+    // `linesurf render` leaves it out) and named in the panel.
+    const lod = lodMode ? createLod(meta.lod) : null;
+    function createLod(L) {
+      const total = L.points + L.segments;
+      const RECORD = 88, BLOCK_HEADER = 32, POINT_WORDS = 16, SEGMENT_WORDS = 25;
+      const MAX_REQUEST_BYTES = 16 << 20, MAX_IN_FLIGHT = 4;
+      const MIN_BUDGET = Math.min(total, 10000);
+      const self = {
+        budget: 0, adaptive: params.adaptive === '1',
+        targetMs: Math.min(1000, Math.max(5, Number(params.frameMs) || 33)),
+        cacheLimit: Math.max(64, Number(params.cache) || 1024) * 1048576,  // GPU bytes of cached nodes
+        ready: false, nodes: null, parent: null, leaves: null, idHex: '',
+        cache: new Map(),  // node -> batch, least recently drawn first
+        cachedBytes: 0, loading: new Set(), failed: new Map(), queue: [], inFlight: 0, bytesFetched: 0,
+        selection: null, complete: false, splats: 0, drawnNodes: 0, firstFrameMs: null, emaMs: 0, lastAdapt: 0,
+      };
+      const hex8 = (v) => (v >>> 0).toString(16).padStart(8, '0');
+      const magic = (dv, at, text) => { for (let k = 0; k < 8; ++k) if (dv.getUint8(at + k) !== text.charCodeAt(k)) return false; return true; };
+      self.setBudget = (n) => {
+        n = Math.round(Number(n));
+        self.budget = Number.isFinite(n) ? Math.min(Math.max(n, 1), 2 ** 40) : L.budget;
+        $('budget').value = String(self.budget);
+        params.budget = String(self.budget);
+      };
+      self.setBudget(params.budget ? Number(params.budget) : L.budget);
+
+      // [start, end) of the file; the response may be short (checked by the caller).
+      async function fetchRange(start, end) {
+        const r = await fetch(L.url, { headers: { Range: `bytes=${start}-${end - 1}` }, cache: 'no-store' });
+        if (r.status !== 206) throw new Error(`HTTP ${r.status}${r.statusText ? ' ' + r.statusText : ''} for bytes ${start}-${end - 1}`);
+        const buf = await r.arrayBuffer();
+        self.bytesFetched += buf.byteLength;
+        return buf;
+      }
+
+      async function loadHeader() {
+        const pre = await fetchRange(0, 32);
+        if (pre.byteLength < 32) throw new Error(L.url + ': truncated preamble');
+        const dv = new DataView(pre);
+        if (!magic(dv, 0, 'LINESLOD')) throw new Error(L.url + ': not a linesurf level-of-detail hierarchy (no LINESLOD magic)');
+        if (dv.getUint32(8, true) !== 1) throw new Error(L.url + ': version ' + dv.getUint32(8, true) + ' (this page reads version 1)');
+        const jsonBytes = dv.getUint32(12, true);
+        self.idLo = dv.getUint32(16, true);
+        self.idHi = dv.getUint32(20, true);
+        self.idHex = hex8(self.idHi) + hex8(self.idLo);
+        if (self.idHex !== L.hierarchy) throw new Error(L.url + ': the server now holds hierarchy ' + self.idHex + ', not ' + L.hierarchy);
+        const count = Number(dv.getBigUint64(24, true));
+        if (!(count >= 1)) throw new Error(L.url + ': no nodes');
+        const end = 32 + jsonBytes + count * RECORD;
+        const rest = await fetchRange(32, end);
+        if (rest.byteLength !== end - 32) throw new Error(L.url + ': truncated header or node table');
+        let header;
+        try { header = JSON.parse(new TextDecoder().decode(new Uint8Array(rest, 0, jsonBytes))); } catch (e) { header = null; }
+        if (!header || header.format !== 'linesurf-lod') throw new Error(L.url + ': invalid JSON header');
+        const t = new DataView(rest, jsonBytes);
+        const nodes = new Array(count), parent = new Int32Array(count).fill(-1), leaves = [];
+        for (let i = 0; i < count; ++i) {
+          const r = i * RECORD;
+          if (t.getUint32(r, true) !== self.idLo || t.getUint32(r + 4, true) !== self.idHi)
+            throw new Error(L.url + ': node ' + i + ': its table record belongs to another hierarchy');
+          const f = (k) => t.getFloat32(r + k, true);
+          const bmin = [f(48), f(52), f(56)], bmax = [f(60), f(64), f(68)];
+          const n = {
+            offset: Number(t.getBigUint64(r + 8, true)), size: Number(t.getBigUint64(r + 16, true)),
+            points: t.getUint32(r + 72, true), segments: t.getUint32(r + 76, true),
+            firstChild: t.getUint32(r + 80, true), childCount: t.getUint8(r + 84), leaf: t.getUint8(r + 86) !== 0,
+            center: V.mul(V.add(bmin, bmax), 0.5), radius: 0.5 * V.len(V.sub(bmax, bmin)),
+          };
+          n.count = n.points + n.segments;
+          if (n.leaf !== (n.childCount === 0) || (!n.leaf && (n.firstChild <= i || n.firstChild + n.childCount > count)))
+            throw new Error(L.url + ': node ' + i + ': invalid tree links in the node table');
+          nodes[i] = n;
+          if (n.leaf) leaves.push(i);
+          for (let c = n.firstChild; c < n.firstChild + n.childCount; ++c) parent[c] = i;
+        }
+        self.nodes = nodes;
+        self.parent = parent;
+        self.leaves = leaves;
+        self.ready = true;
+      }
+      self.start = () => {
+        loadHeader().then(() => drawSoon(true), (e) => fail(e && e.message ? e.message : String(e)));
+      };
+
+      // lod::selectNodes (src/lod/lod_read.cpp) for the page's camera: a cut refined coarse to
+      // fine, largest projected node first, while the total stays within the budget.
+      function select() {
+        const nodes = self.nodes;
+        if (self.budget >= total) return { nodes: self.leaves, primitives: total };
+        const cam = state.camera, w = canvas.width, h = canvas.height;
+        const f = cameraFrame(cam, sphere);
+        const focal = 0.5 * h / Math.tan(0.5 * cam.fov * Math.PI / 180);
+        const tx = 0.5 * w / focal, ty = 0.5 * h / focal;
+        const planes = [[1, 0, -tx, 0], [-1, 0, -tx, 0], [0, 1, -ty, 0], [0, -1, -ty, 0], [0, 0, -1, -f.near], [0, 0, 1, f.far]];
+        const eye = cam.eye;
+        const visible = (i) => {
+          const n = nodes[i], d = V.sub(n.center, eye);
+          const c = [V.dot(f.right, d), V.dot(f.up, d), V.dot(f.back, d)];
+          for (const p of planes) {
+            const len = Math.hypot(p[0], p[1], p[2]);
+            if (len > 0 && (p[0] * c[0] + p[1] * c[1] + p[2] * c[2] + p[3]) / len < -n.radius) return false;
+          }
+          return true;
+        };
+        const priority = (i) => {
+          const n = nodes[i], d = V.len(V.sub(n.center, eye)) - n.radius;
+          return n.radius / Math.max(d, 1e-6 * Math.max(n.radius, 1e-30));
+        };
+        // binary max-heap of [priority, node]; ties: the lower node first
+        const heap = [];
+        const before = (a, b) => a[0] !== b[0] ? a[0] > b[0] : a[1] < b[1];
+        const push = (item) => {
+          let k = heap.push(item) - 1;
+          while (k > 0) {
+            const p = (k - 1) >> 1;
+            if (!before(heap[k], heap[p])) break;
+            [heap[k], heap[p]] = [heap[p], heap[k]];
+            k = p;
+          }
+        };
+        const pop = () => {
+          const top = heap[0], last = heap.pop();
+          if (heap.length) {
+            heap[0] = last;
+            for (let k = 0; ;) {
+              const l = 2 * k + 1, r = l + 1;
+              let m = k;
+              if (l < heap.length && before(heap[l], heap[m])) m = l;
+              if (r < heap.length && before(heap[r], heap[m])) m = r;
+              if (m === k) break;
+              [heap[k], heap[m]] = [heap[m], heap[k]];
+              k = m;
+            }
+          }
+          return top;
+        };
+        const inCut = new Uint8Array(nodes.length);
+        inCut[0] = 1;
+        let sum = nodes[0].count;
+        if (!nodes[0].leaf) push([priority(0), 0]);
+        while (heap.length) {
+          const i = pop()[1], n = nodes[i];
+          let cost = -n.count;
+          for (let c = n.firstChild; c < n.firstChild + n.childCount; ++c) if (visible(c)) cost += nodes[c].count;
+          if (sum + cost > self.budget) continue;  // stays coarse; smaller nodes may still fit
+          sum += cost;
+          inCut[i] = 0;
+          for (let c = n.firstChild; c < n.firstChild + n.childCount; ++c)
+            if (visible(c)) {
+              inCut[c] = 1;
+              if (!nodes[c].leaf) push([priority(c), c]);
+            }
+        }
+        const out = [];
+        for (let i = 0; i < nodes.length; ++i) if (inCut[i]) out.push(i);
+        return { nodes: out, primitives: sum };
+      }
+
+      // A node's block checked (magic, hierarchy id, node number and counts; not its checksum,
+      // see docs/decisions.md) and decoded as viewer_page.cpp prepares a model's primitives.
+      function decodeNode(i, buf) {
+        const n = self.nodes[i], dv = new DataView(buf);
+        if (!magic(dv, 0, 'LSLODND1')) throw new Error('its block is not a node block (wrong magic)');
+        if (dv.getUint32(8, true) !== self.idLo || dv.getUint32(12, true) !== self.idHi)
+          throw new Error(`its block belongs to another hierarchy (${hex8(dv.getUint32(12, true))}${hex8(dv.getUint32(8, true))}, this one is ${self.idHex}); refused`);
+        if (dv.getUint32(16, true) !== i || dv.getUint32(20, true) !== n.points || dv.getUint32(24, true) !== n.segments)
+          throw new Error('its block holds another node');
+        const c = sphere.center, inv = 1 / sphere.radius, maxMass = shaderConstants.maxPointMass || 1e6;
+        const unit = (x, y, z) => { const l = Math.hypot(x, y, z); return l > 0 && Number.isFinite(l) ? [x / l, y / l, z / l] : [0, 0, 0]; };
+        const sn16 = (v) => Math.round(Math.min(1, Math.max(-1, v)) * 32767);
+        const un8 = (v) => Math.round(Math.min(1, Math.max(0, Number.isFinite(v) ? v : 0)) * 255);
+        const fin = (a, k, m) => { for (let j = 0; j < m; ++j) if (!Number.isFinite(a[k + j])) return false; return true; };
+        let P = null, np = 0, S = null, ns = 0;
+        if (n.points) {
+          const f = new Float32Array(buf, BLOCK_HEADER, n.points * POINT_WORDS);
+          const pos = new Float32Array(3 * n.points), nrm = new Int16Array(3 * n.points), rad = new Float32Array(n.points);
+          const mass = new Float32Array(n.points);
+          const snrm = L.shadingNormals ? new Int16Array(3 * n.points) : null, col = L.colors ? new Uint8Array(4 * n.points) : null;
+          for (let k = 0; k < n.points; ++k) {
+            const b = k * POINT_WORDS, r = f[b + 13];
+            if (!fin(f, b, 6) || !(r > 0) || !Number.isFinite(r)) continue;
+            pos[3 * np] = (f[b] - c[0]) * inv; pos[3 * np + 1] = (f[b + 1] - c[1]) * inv; pos[3 * np + 2] = (f[b + 2] - c[2]) * inv;
+            const u = unit(f[b + 3], f[b + 4], f[b + 5]);
+            for (let j = 0; j < 3; ++j) nrm[3 * np + j] = sn16(u[j]);
+            if (snrm) { const m = unit(f[b + 6], f[b + 7], f[b + 8]); for (let j = 0; j < 3; ++j) snrm[3 * np + j] = sn16(m[j]); }
+            if (col) for (let j = 0; j < 4; ++j) col[4 * np + j] = un8(f[b + 9 + j]);
+            rad[np] = r * inv;
+            const m = f[b + 14];
+            mass[np] = m > 0 && m <= maxMass ? m : 1;
+            ++np;
+          }
+          const A = (data, comps) => ({ data: data.subarray(0, np * comps), comps: comps });
+          P = { position: A(pos, 3), normal: A(nrm, 3), radius: A(rad, 1), mass: A(mass, 1),
+                shadingNormal: snrm ? A(snrm, 3) : null, color: col ? A(col, 4) : null, cluster: null };
+        }
+        if (n.segments) {
+          const f = new Float32Array(buf, BLOCK_HEADER + 64 * n.points, n.segments * SEGMENT_WORDS);
+          const p0 = new Float32Array(3 * n.segments), p1 = new Float32Array(3 * n.segments), rad = new Float32Array(n.segments);
+          const nrm = new Int16Array(3 * n.segments), ends = L.endpointNormals;
+          const n0 = ends ? new Int16Array(3 * n.segments) : null, n1 = ends ? new Int16Array(3 * n.segments) : null;
+          const col = L.colors ? new Uint8Array(4 * n.segments) : null;
+          for (let k = 0; k < n.segments; ++k) {
+            const b = k * SEGMENT_WORDS, r = f[b + 19];
+            if (!fin(f, b, 9) || !(r > 0) || !Number.isFinite(r) ||
+                !(Math.hypot(f[b + 3] - f[b], f[b + 4] - f[b + 1], f[b + 5] - f[b + 2]) > 0)) continue;
+            for (let j = 0; j < 3; ++j) { p0[3 * ns + j] = (f[b + j] - c[j]) * inv; p1[3 * ns + j] = (f[b + 3 + j] - c[j]) * inv; }
+            const e0 = unit(f[b + 9], f[b + 10], f[b + 11]), e1 = unit(f[b + 12], f[b + 13], f[b + 14]);
+            // a smooth segment without a plane normal lies in the plane of its mean endpoint normal
+            const smooth = ends && V.len(e0) > 0 && V.len(e1) > 0;
+            const planeless = !(f[b + 6] * f[b + 6] + f[b + 7] * f[b + 7] + f[b + 8] * f[b + 8] > 0);
+            const u = smooth && planeless ? unit(f[b + 9] + f[b + 12], f[b + 10] + f[b + 13], f[b + 11] + f[b + 14])
+              : unit(f[b + 6], f[b + 7], f[b + 8]);
+            for (let j = 0; j < 3; ++j) nrm[3 * ns + j] = sn16(u[j]);
+            if (ends) for (let j = 0; j < 3; ++j) { n0[3 * ns + j] = sn16(e0[j]); n1[3 * ns + j] = sn16(e1[j]); }
+            if (col) for (let j = 0; j < 4; ++j) col[4 * ns + j] = un8(f[b + 15 + j]);
+            rad[ns] = r * inv;
+            ++ns;
+          }
+          const A = (data, comps) => ({ data: data.subarray(0, ns * comps), comps: comps });
+          S = { p0: A(p0, 3), p1: A(p1, 3), normal: A(nrm, 3), radius: A(rad, 1),
+                normal0: ends ? A(n0, 3) : null, normal1: ends ? A(n1, 3) : null, color: col ? A(col, 4) : null };
+        }
+        if (!meanRadius) meanRadius = meanRadiusOf(P, S);
+        return makeBatch(P, np, S, ns);
+      }
+
+      function failNode(i, why) {
+        self.failed.set(i, why);
+        console.warn(`node ${i} failed: ${why}`);
+      }
+
+      // One Range request for a run of nodes whose blocks lie back to back in the file.
+      async function load(run) {
+        const nodes = self.nodes, first = nodes[run[0]], last = nodes[run[run.length - 1]];
+        const start = first.offset, end = last.offset + last.size;
+        ++self.inFlight;
+        for (const i of run) self.loading.add(i);
+        let buf = null, err = null;
+        try { buf = await fetchRange(start, end); } catch (e) { err = e && e.message ? e.message : String(e); }
+        for (const i of run) {
+          self.loading.delete(i);
+          const n = nodes[i], at = n.offset - start;
+          if (err) { failNode(i, err); continue; }
+          if (buf.byteLength < at + n.size) {
+            failNode(i, `short read (${Math.max(0, buf.byteLength - at)} of its ${n.size} bytes)`);
+            continue;
+          }
+          try {
+            const b = decodeNode(i, buf.slice(at, at + n.size));
+            self.cache.set(i, b);
+            self.cachedBytes += b.bytes;
+          } catch (e) {
+            failNode(i, e && e.message ? e.message : String(e));
+          }
+        }
+        --self.inFlight;
+        pump();
+        drawSoon(self.inFlight === 0);
+      }
+      function pump() {
+        while (self.inFlight < MAX_IN_FLIGHT && self.queue.length) load(self.queue.shift());
+      }
+      // The missing nodes' blocks, those lying back to back in the file coalesced into one request
+      // of at most MAX_REQUEST_BYTES; the requests coarse first (the table is breadth first, so
+      // by their lowest node number), whatever order the writer put the blocks in.
+      function request(missing) {
+        const nodes = self.nodes;
+        missing.sort((a, b) => nodes[a].offset - nodes[b].offset);
+        const runs = [];
+        let run = null, runStart = 0, runEnd = 0;
+        for (const i of missing) {
+          const n = nodes[i];
+          if (run && n.offset === runEnd && n.offset + n.size - runStart <= MAX_REQUEST_BYTES) {
+            run.push(i);
+            runEnd = n.offset + n.size;
+          } else {
+            run = [i];
+            runs.push(run);
+            runStart = n.offset;
+            runEnd = n.offset + n.size;
+          }
+        }
+        const first = new Map(runs.map((r) => [r, r.reduce((m, i) => Math.min(m, i), Infinity)]));
+        runs.sort((a, b) => first.get(a) - first.get(b));
+        self.queue = runs;  // what this view needs: requests queued for an older view are dropped
+        pump();
+      }
+
+      // Least recently drawn first, while over the limit; never a node of this frame.
+      function evict(keep) {
+        for (const [i, b] of self.cache) {
+          if (self.cachedBytes <= self.cacheLimit) break;
+          if (keep.has(i)) continue;
+          self.cache.delete(i);
+          self.cachedBytes -= b.bytes;
+          deleteBatch(b);
+        }
+      }
+
+      // The batches of this frame.
+      self.frame = () => {
+        if (!self.ready) return [];
+        const sel = select();
+        self.selection = sel;
+        const list = [], drawnNodes = new Set(), missing = [];
+        let complete = true;
+        for (const i of sel.nodes) {
+          if (self.failed.has(i)) continue;
+          let k = i;
+          if (!self.cache.has(i)) {
+            complete = false;
+            if (!self.loading.has(i)) missing.push(i);
+            do k = self.parent[k]; while (k >= 0 && !self.cache.has(k));
+            if (k < 0) continue;
+          }
+          if (drawnNodes.has(k)) continue;
+          drawnNodes.add(k);
+          const b = self.cache.get(k);
+          self.cache.delete(k);  // most recently drawn: to the end
+          self.cache.set(k, b);
+          list.push(b);
+        }
+        self.complete = complete;
+        self.drawnNodes = list.length;
+        self.splats = list.reduce((a, b) => a + b.np + b.ns, 0);
+        request(missing);
+        evict(drawnNodes);
+        return list;
+      };
+
+      // After a frame: the panel, the test attributes and the adaptive budget.
+      self.drawn = (list, ms) => {
+        const body = document.body;
+        const mb = (x) => (x / 1e6).toFixed(x < 1e7 ? 2 : 1) + ' MB';
+        body.setAttribute('data-splats', String(self.splats));
+        body.setAttribute('data-nodes', String(self.drawnNodes));
+        body.setAttribute('data-nodes-loading', String(self.loading.size));
+        body.setAttribute('data-bytes-fetched', String(self.bytesFetched));
+        body.setAttribute('data-file-bytes', String(L.bytes));
+        body.setAttribute('data-budget', String(self.budget));
+        body.setAttribute('data-failed-nodes', [...self.failed.keys()].join(','));
+        if (self.ready && self.complete && self.firstFrameMs === null) {
+          self.firstFrameMs = performance.now();
+          body.setAttribute('data-first-frame-ms', self.firstFrameMs.toFixed(1));
+        }
+        body.setAttribute('data-state', self.ready && self.complete ? 'drawn' : 'loading');
+        $('lodStatus').textContent = `${self.splats.toLocaleString('en')} splats in ${self.drawnNodes} nodes` +
+          (self.nodes ? ` of ${self.nodes.length}` : '') + `, ${self.loading.size} loading; ` +
+          `${mb(self.bytesFetched)} of ${mb(L.bytes)} fetched, ${mb(self.cachedBytes)} on the GPU`;
+        const failed = [...self.failed.entries()];
+        $('lodFailures').hidden = !failed.length;
+        $('lodFailures').textContent = failed.slice(0, 8).map(([i, why]) => `node ${i} failed: ${why}`).join('\n') +
+          (failed.length > 8 ? `\n(and ${failed.length - 8} more)` : '');
+        adapt(ms);
+      };
+      // Adaptive budget: the frame time (smoothed) kept near the target by scaling the budget by
+      // target / time when over by 25% (at most halving), and by 1.2 when under 70% of it while
+      // the budget, not the model, limits the cut. Measured on complete cuts only (a frame of
+      // half-loaded nodes says little), and at most every 250 ms so that a change is seen first.
+      function adapt(ms) {
+        if (!self.adaptive || !self.complete || !(ms > 0)) return;
+        self.emaMs = self.emaMs ? 0.6 * self.emaMs + 0.4 * ms : ms;
+        const now = performance.now();
+        if (now - self.lastAdapt >= 250) {
+          self.lastAdapt = now;
+          let next = self.budget;
+          if (self.emaMs > 1.25 * self.targetMs) next = Math.floor(self.budget * Math.max(0.5, self.targetMs / self.emaMs));
+          else if (self.emaMs < 0.7 * self.targetMs && self.selection && self.selection.primitives >= 0.9 * self.budget &&
+                   self.budget < total) next = Math.ceil(self.budget * 1.2);
+          next = Math.min(Math.max(next, MIN_BUDGET), Math.max(total, MIN_BUDGET));
+          if (next !== self.budget) { self.setBudget(next); self.emaMs = 0; describeCamera(); }
+        }
+        setTimeout(requestDraw, 250);  // keep measuring while adaptive
+      }
+
+      $('lodControls').hidden = false;
+      $('lodStatus').hidden = false;
+      $('targetMs').textContent = String(self.targetMs);
+      $('adaptive').checked = self.adaptive;
+      $('budget').addEventListener('change', () => { self.setBudget($('budget').value); describeCamera(); requestDraw(); });
+      $('adaptive').addEventListener('input', () => {
+        self.adaptive = $('adaptive').checked;
+        self.emaMs = 0;
+        params.adaptive = self.adaptive ? '1' : '0';
+        requestDraw();
+      });
+      return self;
+    }
+
     // ---- drawing -----------------------------------------------------------------------------
     const light = V.norm(D.light);
     let lastFrameMs = 0, counts = { points: 0, segments: 0 };
 
     // Front-facing primitives in front of the camera (the GPU culls the others in its vertex stage).
-    function countDrawn(f) {
+    function countDrawn() {
       const c = { points: 0, segments: 0 };
       const eyeN = V.mul(V.sub(state.camera.eye, sphere.center), 1 / sphere.radius);
       if (model.np && state.showPoints) {
@@ -750,27 +1169,35 @@ void main() {
       gl.uniform4f(u.uMaterial, D.ambient, D.diffuse, D.specular, D.shininess);
     }
 
-    function drawSplats(pass, f, w, h) {
+    // One pass over the batches: all their points, then all their segments.
+    function drawSplats(pass, f, w, h, list) {
       if (pointProg && state.showPoints) {
         gl.useProgram(pointProg.prog);
         setCommon(pointProg, f, w, h);
         gl.uniform1i(pointProg.u.uPass, pass);
         gl.uniform3f(pointProg.u.uKindColor, 0.62, 0.64, 0.68);
-        gl.bindVertexArray(pointVao);
-        gl.drawElements(gl.TRIANGLES, 6 * model.np, gl.UNSIGNED_INT, 0);
+        for (const b of list) {
+          if (!b.np) continue;
+          gl.bindVertexArray(b.pointVao);
+          gl.drawElements(gl.TRIANGLES, 6 * b.np, gl.UNSIGNED_INT, 0);
+        }
       }
       if (segProg && state.showSegments) {
         gl.useProgram(segProg.prog);
         setCommon(segProg, f, w, h);
         gl.uniform1i(segProg.u.uPass, pass);
         gl.uniform3f(segProg.u.uKindColor, 0.93, 0.55, 0.18);
-        gl.uniform1i(segProg.u.uEndpointNormals, model.segments.normal0 ? 1 : 0);
-        gl.bindVertexArray(segVao);
-        gl.drawElements(gl.TRIANGLES, 6 * model.ns, gl.UNSIGNED_INT, 0);
+        for (const b of list) {
+          if (!b.ns) continue;
+          gl.uniform1i(segProg.u.uEndpointNormals, b.endpointNormals ? 1 : 0);
+          gl.bindVertexArray(b.segVao);
+          gl.drawElements(gl.TRIANGLES, 6 * b.ns, gl.UNSIGNED_INT, 0);
+        }
       }
     }
 
-    function renderFrame() {
+    // The three passes over `list`, a list of batches (makeBatch).
+    function renderFrame(list) {
       const w = canvas.width, h = canvas.height;
       ensureTargets(w, h);
       const f = cameraFrame(state.camera, sphere);
@@ -787,7 +1214,7 @@ void main() {
       gl.disable(gl.BLEND);
       gl.colorMask(false, false, false, false);
       gl.depthFunc(gl.LESS);
-      drawSplats(0, f, w, h);
+      drawSplats(0, f, w, h, list);
       // 2. accumulation
       gl.colorMask(true, true, true, true);
       gl.depthMask(false);
@@ -795,7 +1222,7 @@ void main() {
       gl.enable(gl.BLEND);
       gl.blendEquation(gl.FUNC_ADD);
       gl.blendFunc(gl.ONE, gl.ONE);
-      drawSplats(1, f, w, h);
+      drawSplats(1, f, w, h, list);
       // 3. normalisation
       gl.disable(gl.BLEND);
       gl.disable(gl.DEPTH_TEST);
@@ -817,7 +1244,8 @@ void main() {
       const v3 = (a) => a.map(fmt).join(' ');
       const args = `--size ${canvas.width}x${canvas.height} --eye ${v3(c.eye)} --target ${v3(c.target)} --up ${v3(c.up)} --fov ${fmt(c.fov)}`;
       const file = /^[\w.+-]+$/.test(meta.name || '') ? meta.name : 'MODEL';
-      const extra = typeof meta.renderArguments === 'string' && meta.renderArguments ? ' ' + meta.renderArguments : '';
+      const extra = lodMode ? ' --budget ' + lod.budget
+        : typeof meta.renderArguments === 'string' && meta.renderArguments ? ' ' + meta.renderArguments : '';
       $('camera').textContent = 'linesurf render ' + file + ' ' + args + extra;
       const frag = `eye=${c.eye.map(fmt).join(',')}&target=${c.target.map(fmt).join(',')}&up=${c.up.map(fmt).join(',')}&fov=${fmt(c.fov)}`;
       const keep = Object.keys(params).filter((k) => !['eye', 'target', 'up', 'fov'].includes(k))
@@ -830,22 +1258,45 @@ void main() {
     function sync() { gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel); }
 
     function draw() {
+      const list = lodMode ? lod.frame() : batches;
       const t0 = performance.now();
-      renderFrame();
+      renderFrame(list);
       sync();
       lastFrameMs = performance.now() - t0;
+      if (lodMode) {
+        lod.drawn(list, lastFrameMs);
+        finishFrame();
+        return;
+      }
       counts = countDrawn();
       const pct = (a, b) => b ? ' (' + (100 * a / b).toFixed(0) + '%)' : '';
       const parts = [];
       if (model.np) parts.push(state.showPoints ? `${counts.points.toLocaleString('en')} of ${model.np.toLocaleString('en')} points${pct(counts.points, model.np)}` : 'points hidden');
       if (model.ns) parts.push(state.showSegments ? `${counts.segments.toLocaleString('en')} of ${model.ns.toLocaleString('en')} segments${pct(counts.segments, model.ns)}` : 'segments hidden');
       $('counts').textContent = 'front-facing: ' + parts.join(', ');
+      finishFrame();
+      document.body.setAttribute('data-state', 'drawn');
+    }
+    function finishFrame() {
       // (under a headless browser's virtual time the clock stands still: no figure then)
       $('frameTime').textContent = (lastFrameMs > 0 ? `frame ${lastFrameMs.toFixed(1)} ms` : 'frame') +
         ` at ${canvas.width}x${canvas.height}` + (gpuName ? ' on ' + gpuName : '') +
         (floatBlend ? '' : ' (half-float accumulation)');
       describeCamera();
-      document.body.setAttribute('data-state', 'drawn');
+    }
+
+    // After nodes arrive: a task, not an animation frame, so that a headless browser under
+    // virtual time (which runs animation frames only as its clock advances) draws the complete cut
+    // before its budget ends. While requests are still out, at most 5 frames a second (a frame of
+    // a large cut is costly, and each would be redrawn soon); the last arrival draws at once.
+    let drawTimer = null, drawTimerLast = false;
+    function drawSoon(last) {
+      if (drawTimer !== null) {
+        if (!last || drawTimerLast) return;
+        clearTimeout(drawTimer);
+      }
+      drawTimerLast = !!last;
+      drawTimer = setTimeout(() => { drawTimer = null; try { draw(); } catch (e) { fail(e.message); } }, last ? 0 : 200);
     }
 
     let pending = false;
@@ -954,11 +1405,12 @@ void main() {
     bind('colorMode', 'colorMode', Number);
     bind('radiusScale', 'radiusScale', (v) => Math.pow(2, Number(v)));
     syncLabels();
-    if (!model.np) $('showPoints').disabled = true;
-    if (!model.ns) $('showSegments').disabled = true;
+    if (model && !model.np) $('showPoints').disabled = true;
+    if (model && !model.ns) $('showSegments').disabled = true;
     window.addEventListener('resize', () => { resize(); requestDraw(); });
     window.addEventListener('hashchange', () => {
       const p = parseFragment(location.hash);
+      if (lodMode && p.budget && Number(p.budget) !== lod.budget) { lod.setBudget(Number(p.budget)); requestDraw(); }
       if (p.eye || p.target || p.up || p.fov) {
         Object.assign(params, p);
         try { state.camera = cameraFromFragment(); state.autoFramed = false; requestDraw(); } catch (e) { fail(e.message); }
@@ -973,10 +1425,11 @@ void main() {
         if (m) { canvas.width = +m[1]; canvas.height = +m[2]; if (state.autoFramed) state.camera = defaultCamera(+m[1], +m[2]); }
       }
       draw();
+      const list = lodMode ? lod.frame() : batches;
       const times = [];
       for (let i = 0; i < n; ++i) {
         const t0 = performance.now();
-        renderFrame();
+        renderFrame(list);
         sync();
         times.push(performance.now() - t0);
       }
@@ -985,12 +1438,14 @@ void main() {
       const out = document.createElement('pre');
       out.id = 'bench';
       out.textContent = `bench frames=${n} size=${canvas.width}x${canvas.height} median_ms=${med.toFixed(2)} ` +
-        `min_ms=${times[0].toFixed(2)} max_ms=${times[times.length - 1].toFixed(2)} points=${model.np} segments=${model.ns} ` +
+        `min_ms=${times[0].toFixed(2)} max_ms=${times[times.length - 1].toFixed(2)} ` +
+        `points=${list.reduce((a, b) => a + b.np, 0)} segments=${list.reduce((a, b) => a + b.ns, 0)} ` +
         `renderer=${(gpuName || gl.getParameter(gl.RENDERER)).replace(/\s+/g, '_')}`;
       document.body.appendChild(out);
       return;
     }
     draw();
+    if (lodMode) lod.start();
   }
 
   try {

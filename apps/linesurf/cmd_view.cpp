@@ -1,8 +1,12 @@
 // linesurf view MODEL [-o model.html]: one self-contained HTML page that draws the model with
 // WebGL2 (GPU point and line-segment splatting, thesis §4-§6.2 and §9.3). Raw scans get normals
 // and radii from the geometry stage (§6.1) first, as for `linesurf render`.
+// linesurf view MODEL.lod: the same viewer served from localhost, streaming the hierarchy's nodes
+// by HTTP Range requests within a splat budget (lod_server.h).
 #include <fmt/format.h>
 
+#include <cctype>
+#include <cstdio>
 #include <filesystem>
 
 #include "command.h"
@@ -10,8 +14,10 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/view/viewer_page.h"
+#include "lod_server.h"
 #include "options_bind.h"
 
 namespace linesurf::cli {
@@ -22,7 +28,35 @@ struct ViewArgs {
   ViewerPageOptions page;  // its view and render fields bound from the option tables
   PrepareOptions prepare;
   size_t maxPrimitives = ViewerPageOptions{}.maxPrimitives;
+  // .lod hierarchies: served, not written
+  int port = 8080;
+  std::string host = "127.0.0.1";
+  uint64_t budget = 1'000'000;
+  CLI::Option *portOption = nullptr, *hostOption = nullptr, *budgetOption = nullptr, *outputOption = nullptr;
 };
+
+// A hierarchy: check its header and node table, then serve the page and the file until stopped.
+void serveHierarchy(const ViewArgs& a, ViewerPageOptions o) {
+  if (a.outputOption->count()) throwBadOption("output", "does not apply to a .lod hierarchy (it is served, not written)");
+  const lod::LodFile file(a.model);  // throws BadInput naming the file when it is not a valid hierarchy
+  std::error_code ec;
+  const uint64_t bytes = std::filesystem::file_size(a.model, ec);
+  o.renderArguments = fmt::format("--budget {}", a.budget);
+  LodServeOptions s;
+  s.host = a.host;
+  s.port = a.port;
+  s.file = a.model;
+  s.page = lodViewerPage(file.header(), {.url = "/model.lod", .fileBytes = bytes, .budget = a.budget}, o);
+  s.listening = [&](int port) {
+    // One line for people and scripts (the port when --port 0), printed even with --quiet.
+    std::printf("serving %s at http://%s:%d/ (Ctrl-C stops)\n", a.model.c_str(),
+                a.host.find(':') != std::string::npos ? ("[" + a.host + "]").c_str() : a.host.c_str(), port);
+    std::fflush(stdout);
+  };
+  say(fmt::format("{}: {} nodes, {} points + {} segments, {:.1f} MB; initial budget {} splats", a.model,
+                  file.nodes().size(), file.header().points, file.header().segments, double(bytes) / 1e6, a.budget));
+  serveLod(s);
+}
 
 void run(const ViewArgs& a) {
   Timer total;
@@ -33,6 +67,12 @@ void run(const ViewArgs& a) {
   // The page's title: printable UTF-8 whatever bytes the file name holds (oneLine escapes the rest).
   o.name = oneLine(std::filesystem::path(a.model).filename().string());
   o.maxPrimitives = a.maxPrimitives;
+  // By content, or by name: a damaged file named .lod is refused as a hierarchy, naming it.
+  std::string ext = std::filesystem::path(a.model).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (lod::isLodFile(a.model) || ext == ".lod") return serveHierarchy(a, o);
+  for (const CLI::Option* opt : {a.portOption, a.hostOption, a.budgetOption})
+    if (opt->count()) throwBadOption(opt->get_name().substr(2), "needs a level-of-detail hierarchy (linesurf lod build), got " + a.model);
   const std::string out =
       a.output.empty() ? std::filesystem::path(a.model).filename().replace_extension(".html").string() : a.output;
   checkFiles({a.model}, {{"--output", out, {".html", ".htm"}}});
@@ -70,10 +110,13 @@ void run(const ViewArgs& a) {
 RegisterCommand reg(45, [](CLI::App& app) {
   auto a = std::make_shared<ViewArgs>();
   CLI::App* sub = app.add_subcommand(
-      "view", "Write a self-contained HTML page that draws the model with WebGL2 splats (orbit, zoom, pan)");
-  sub->add_option("MODEL", a->model, "Point cloud, hybrid or line model (.ply, .xyz); a mesh shows its vertices")
+      "view", "Write a self-contained HTML page that draws the model with WebGL2 splats (orbit, zoom, pan); "
+              "serve a .lod hierarchy's viewer from localhost, streaming its nodes within a splat budget");
+  sub->add_option("MODEL", a->model,
+                  "Point cloud, hybrid or line model (.ply, .xyz; a mesh shows its vertices), or a .lod hierarchy "
+                  "(linesurf lod build)")
       ->required();  // a missing file is reported after the options are checked, as render does
-  sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
+  a->outputOption = sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
   // The page's defaults: the option tables' viewer fields (pipeline/option_tables.h).
   bindOptions(sub, a->page.view, {}, kUseViewer);
   bindOptions(sub, a->page.render, {}, kUseViewer);
@@ -81,6 +124,15 @@ RegisterCommand reg(45, [](CLI::App& app) {
   sub->add_option("--max-primitives", a->maxPrimitives, "Refuse models with more points + segments than this")
       ->capture_default_str()
       ->check(CLI::Range(size_t(1), size_t(1) << 40));
+  // A .lod hierarchy is served from localhost instead (its nodes streamed within a splat budget).
+  a->portOption = sub->add_option("--port", a->port, "With a .lod hierarchy: the HTTP port to serve on (0: any free port)")
+                      ->capture_default_str()
+                      ->check(CLI::Range(0, 65535));
+  a->hostOption = sub->add_option("--host", a->host, "With a .lod hierarchy: the address to serve on")->capture_default_str();
+  a->budgetOption = sub->add_option("--budget", a->budget,
+                                    "With a .lod hierarchy: the page's initial splat budget (its panel changes it)")
+                        ->capture_default_str()
+                        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 40));
   sub->callback([a] { run(*a); });
 });
 

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "linesurf/core/error.h"
@@ -108,6 +109,23 @@ void fill(std::string& page, const std::string& marker, const std::string& text)
   const size_t at = page.find(marker);
   if (at == std::string::npos) throw Error(Error::Kind::Io, "web/viewer.html", "", "template lacks " + marker);
   page.replace(at, marker.size(), text);
+}
+
+// The template filled with the page's description and its base64 data.
+std::string assemblePage(const json& meta, const std::string& data) {
+  std::string metaText = meta.dump();
+  // JSON inside <script>: "</" would end the element early.
+  for (size_t at = 0; (at = metaText.find("</", at)) != std::string::npos; at += 3) metaText.replace(at, 2, "<\\/");
+  std::string page(web::kViewerHtml);
+  // From the end of the template backwards, so that no inserted text is searched for a marker.
+  fill(page, "@VIEWER_JS@", std::string(web::kViewerJs));
+  fill(page, "@DATA@", data);
+  fill(page, "@META@", metaText);
+  return page;
+}
+
+json constants() {
+  return {{"maxStretch", detail::kMaxStretch}, {"minFacing", detail::kMinFacing}, {"maxPointMass", kMaxPointMass}};
 }
 
 }  // namespace
@@ -237,19 +255,38 @@ std::string viewerPage(const HybridModel& model, const ViewerPageOptions& o, Vie
   meta["renderArguments"] = o.renderArguments;
   meta["skipped"] = {{"points", st.skippedPoints}, {"segments", st.skippedSegments}};
   meta["defaults"] = viewerDefaults(o);
-  meta["constants"] = {{"maxStretch", detail::kMaxStretch}, {"minFacing", detail::kMinFacing}};
-  std::string metaText = meta.dump();
-  // JSON inside <script>: "</" would end the element early.
-  for (size_t at = 0; (at = metaText.find("</", at)) != std::string::npos; at += 3) metaText.replace(at, 2, "<\\/");
-
-  std::string page(web::kViewerHtml);
-  // From the end of the template backwards, so that no inserted text is searched for a marker.
-  fill(page, "@VIEWER_JS@", std::string(web::kViewerJs));
-  fill(page, "@DATA@", base64(blob.bytes()));
-  fill(page, "@META@", metaText);
+  meta["constants"] = constants();
+  std::string page = assemblePage(meta, base64(blob.bytes()));
   st.bytes = page.size();
   if (statsOut) *statsOut = st;
   return page;
+}
+
+std::string lodViewerPage(const lod::LodHeader& h, const LodPageSource& source, const ViewerPageOptions& o) {
+  validate(o.render);
+  validate(o.view);
+  if (source.budget < 1) throwBadParameter("budget", "must be >= 1");
+  if (!(h.sphere.radius > 0) || !h.sphere.center.allFinite())
+    throw Error(Error::Kind::BadInput, o.name, "header", "the hierarchy has no valid bounding sphere");
+  const Attributes& a = h.attributes;
+  json meta = {{"format", "linesurf-view"}, {"version", 1}, {"name", o.name}};
+  // The hierarchy's own description: the page checks what it reads against it (the preamble's
+  // id and the node table come from the file itself).
+  meta["lod"] = {{"url", source.url},
+                 {"bytes", source.fileBytes},
+                 {"budget", source.budget},
+                 {"hierarchy", fmt::format("{:016x}", h.hierarchyId)},
+                 {"points", h.points},
+                 {"segments", h.segments},
+                 {"colors", a.colors},
+                 {"shadingNormals", a.shadingNormals},
+                 {"endpointNormals", a.endpointNormals}};
+  meta["bytes"] = 0;
+  meta["sphere"] = {{"center", vec(h.sphere.center)}, {"radius", h.sphere.radius}};
+  meta["renderArguments"] = o.renderArguments;
+  meta["defaults"] = viewerDefaults(o);
+  meta["constants"] = constants();
+  return assemblePage(meta, "");
 }
 
 ViewerPageStats writeViewerPage(const std::filesystem::path& path, const HybridModel& model,

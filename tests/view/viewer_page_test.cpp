@@ -4,11 +4,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 
 #include "linesurf/core/error.h"
+#include "linesurf/lod/lod.h"
 #include "linesurf/render/camera.h"
 #include "linesurf/view/viewer_page.h"
 #include "test_util.h"
@@ -223,6 +225,48 @@ TEST(ViewCli, WritesAPageAndRefusesBadInput) {
   EXPECT_EQ(over.exitCode, 2) << over.out;
   EXPECT_NE(over.out.find("budget"), std::string::npos) << over.out;
   EXPECT_FALSE(std::filesystem::exists(dir / "over.html"));
+}
+
+// A hierarchy's page holds no primitives: it names the hierarchy, where to read it and the
+// initial budget, and the page's usual defaults and frame (the file's bounding sphere).
+TEST(ViewerPage, LodModeDescribesTheHierarchyAndEmbedsNoPrimitives) {
+  const HybridModel m = smallHybrid();
+  const std::string bytes = lod::buildLod(m, ModelFrame{}, {.leafSize = 16, .grid = 4});
+  const auto path = test::scratchDir("view_lod") / "small.lod";
+  std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  const lod::LodFile file(path);
+  const std::string page =
+      lodViewerPage(file.header(), {.url = "/model.lod", .fileBytes = bytes.size(), .budget = 1234}, {.name = "small.lod"});
+  const json meta = json::parse(scriptText(page, "linesurf-meta"));
+  EXPECT_EQ(meta["format"], "linesurf-view");
+  EXPECT_EQ(meta["lod"]["url"], "/model.lod");
+  EXPECT_EQ(meta["lod"]["budget"], 1234);
+  EXPECT_EQ(meta["lod"]["bytes"], bytes.size());
+  EXPECT_EQ(meta["lod"]["points"], 5);
+  EXPECT_EQ(meta["lod"]["segments"], 1);
+  char id[17];
+  std::snprintf(id, sizeof id, "%016llx", static_cast<unsigned long long>(file.header().hierarchyId));
+  EXPECT_EQ(meta["lod"]["hierarchy"], id);
+  EXPECT_FLOAT_EQ(meta["sphere"]["radius"].get<float>(), file.header().sphere.radius);
+  EXPECT_TRUE(meta.contains("defaults"));
+  EXPECT_TRUE(meta["constants"].contains("maxPointMass"));
+  EXPECT_EQ(scriptText(page, "linesurf-data"), "");
+  EXPECT_THROW(lodViewerPage(file.header(), {.budget = 0}), Error);
+}
+
+// `view X.lod` checks the hierarchy before serving (a bad one: exit 2, one line naming it);
+// the server's options need a hierarchy, and a hierarchy is served, not written.
+TEST(ViewCli, RefusesBadHierarchiesAndServerOptionsOfPlainModels) {
+  const auto dir = test::scratchDir("view_lod_cli");
+  std::ofstream(dir / "bad.lod", std::ios::binary) << "LINESLOD and nothing else";
+  auto bad = test::runCli("view " + (dir / "bad.lod").string() + " --port 0");
+  EXPECT_EQ(bad.exitCode, 2) << bad.out;
+  EXPECT_NE(bad.out.find("bad.lod"), std::string::npos) << bad.out;
+  const std::string model = (test::bundledData() / "rockerarm_points.ply").string();
+  auto port = test::runCli("view " + model + " -o " + (dir / "r.html").string() + " --budget 1000");
+  EXPECT_EQ(port.exitCode, 1) << port.out;
+  EXPECT_NE(port.out.find("--budget"), std::string::npos) << port.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "r.html"));
 }
 
 }  // namespace

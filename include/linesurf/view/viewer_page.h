@@ -17,6 +17,7 @@
 #include <string>
 
 #include "linesurf/core/model.h"
+#include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/render/render_options.h"
 
@@ -54,6 +55,19 @@ struct ViewerPageStats {
 /// options.maxPrimitives primitives or nothing drawable; BadParameter for absurd options.
 std::string viewerPage(const HybridModel& model, const ViewerPageOptions& options = {},
                        ViewerPageStats* stats = nullptr);
+
+/// The page in level-of-detail mode (`linesurf view MODEL.lod`): it embeds no primitives but
+/// reads the hierarchy `header` describes from `url` (served over HTTP with Range support) node
+/// block by node block, choosing its nodes for each view as lod::selectNodes does within a splat
+/// budget (initially `budget`, >= 1; the page's control changes it). See docs/file-format.md,
+/// "How the viewer reads a hierarchy over HTTP". Throws BadParameter for absurd options.
+struct LodPageSource {
+  std::string url = "/model.lod";
+  uint64_t fileBytes = 0;  ///< size of the .lod file (shown in the panel)
+  uint64_t budget = 1'000'000;
+};
+std::string lodViewerPage(const lod::LodHeader& header, const LodPageSource& source,
+                          const ViewerPageOptions& options = {});
 
 /// viewerPage() written atomically to `path` (no half-written file on failure).
 ViewerPageStats writeViewerPage(const std::filesystem::path& path, const HybridModel& model,
