@@ -1073,9 +1073,17 @@ void main() {
         body.setAttribute('data-file-bytes', String(L.bytes));
         body.setAttribute('data-budget', String(self.budget));
         body.setAttribute('data-failed-nodes', [...self.failed.keys()].join(','));
+        if (self.firstAnyMs === undefined && self.splats > 0) self.firstAnyMs = performance.now();
         if (self.ready && self.complete && self.firstFrameMs === null) {
           self.firstFrameMs = performance.now();
           body.setAttribute('data-first-frame-ms', self.firstFrameMs.toFixed(1));
+          // The served page tells `linesurf view` its first frame (the browser's clock, from the
+          // page's start), which prints it: a measure a headless run can read.
+          if (location.protocol.startsWith('http')) {
+            const q = `first=${self.firstAnyMs.toFixed(0)}&complete=${self.firstFrameMs.toFixed(0)}` +
+              `&splats=${self.splats}&nodes=${self.drawnNodes}&bytes=${self.bytesFetched}`;
+            fetch('report?' + q, { cache: 'no-store' }).catch(() => {});
+          }
         }
         body.setAttribute('data-state', self.ready && self.complete ? 'drawn' : 'loading');
         $('lodStatus').textContent = `${self.splats.toLocaleString('en')} splats in ${self.drawnNodes} nodes` +

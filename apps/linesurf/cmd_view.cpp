@@ -53,6 +53,10 @@ void serveHierarchy(const ViewArgs& a, ViewerPageOptions o) {
                 a.host.find(':') != std::string::npos ? ("[" + a.host + "]").c_str() : a.host.c_str(), port);
     std::fflush(stdout);
   };
+  s.report = [](const std::string& line) {  // printed even with --quiet, like the address
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+  };
   say(fmt::format("{}: {} nodes, {} points + {} segments, {:.1f} MB; initial budget {} splats", a.model,
                   file.nodes().size(), file.header().points, file.header().segments, double(bytes) / 1e6, a.budget));
   serveLod(s);

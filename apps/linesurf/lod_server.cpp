@@ -108,6 +108,18 @@ void serveLod(const LodServeOptions& o) {
                              });
   });
 
+  server.Get("/report", [&o](const httplib::Request& req, httplib::Response& res) {
+    res.set_header("Cache-Control", "no-store");
+    if (!o.report) return;
+    // Numbers only (the page's own figures): nothing a page sends reaches the terminal unchecked.
+    auto num = [&](const char* key) {
+      const std::string v = req.get_param_value(key);
+      return !v.empty() && v.size() < 24 && v.find_first_not_of("0123456789.") == std::string::npos ? v : std::string("?");
+    };
+    o.report(fmt::format("page: first frame {} ms, first complete view {} ms ({} splats in {} nodes, {} bytes fetched)",
+                         num("first"), num("complete"), num("splats"), num("nodes"), num("bytes")));
+  });
+
   int port = o.port;
   if (port == 0) port = server.bind_to_any_port(o.host);
   else if (!server.bind_to_port(o.host, port)) port = -1;

@@ -15,6 +15,9 @@ struct LodServeOptions {
   std::filesystem::path file;  ///< served at /model.lod with HTTP Range support
   /// Called once the server listens, with the port it took.
   std::function<void(int port)> listening;
+  /// Called with what a page reports of its first view (GET /report?first=MS&complete=MS&...):
+  /// times measured by the browser's own clock from the page's start.
+  std::function<void(const std::string& line)> report;
 };
 
 /// Serves until SIGINT or SIGTERM, then returns. Throws Error: Io when the address cannot be
