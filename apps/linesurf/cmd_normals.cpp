@@ -35,7 +35,6 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   Timer total;
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
-  if (args.geometry.curvature) throwBadParameter("--curvature", "is not available on the out-of-core path (normals and radii only)");
   std::string ext = std::filesystem::path(args.out).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext != ".ply") throwBadParameter("--output", "the out-of-core path writes .ply");
@@ -75,16 +74,17 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
 void run(const NormalsArgs& args) {
   Timer total;
   validate(args.geometry);  // before reading the cloud
-  // Without curvature the path is chosen below by its own estimate (in memory or out of core).
-  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}}, /*inputsHeldWhole=*/args.geometry.curvature);
+  // The path is chosen below by its own estimate (in memory or out of core).
+  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}}, /*inputsHeldWhole=*/false);
   if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty() || launchedRanks() > 1) {
     runOutOfCore(args, args.tiles > 0            ? fmt::format("--tiles {}", args.tiles)
                        : launchedRanks() > 1     ? std::string("started by mpirun")
                                                  : std::string("--out-of-core"));
     return;
   }
-  if (!args.geometry.curvature) {
-    const double need = inMemoryEstimate(args.in, args.geometry.k);
+  {
+    // Curvature adds the Delaunay lists and its results (~140 bytes a point).
+    const double need = inMemoryEstimate(args.in, args.geometry.k) * (args.geometry.curvature ? 1.4 : 1.0);
     if (need > memoryBudgetBytes()) {
       runOutOfCore(args, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
                                      globalOptions().maxMegabytes));

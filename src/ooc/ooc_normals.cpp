@@ -24,6 +24,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <tuple>
 
 #include "geometry/detail/point_geometry_tile.h"
 #include "linesurf/core/error.h"
@@ -272,7 +273,12 @@ struct Run {
   fs::path cellPath(uint32_t t) const { return dir / "cells" / fmt::format("cell_{:06d}.bin", t); }
   fs::path resultPath(uint32_t t) const { return dir / "results" / fmt::format("tile_{:06d}.res", t); }
   fs::path extractPath(uint32_t t) const { return dir / "results" / fmt::format("extract_{:06d}.res", t); }
+  /// Curvature of a tile's interior points (§6.1.2, with `normals --curvature`), in the order of
+  /// its result records: k_min, k_max, min and max directions, under the tile's own orientation.
+  fs::path curvaturePath(uint32_t t) const { return dir / "results" / fmt::format("curv_{:06d}.res", t); }
+  bool curvature() const { return o.geometry.curvature && !extract; }
 };
+constexpr size_t kCurvatureRecord = 32;
 
 json argumentsJson(const OocNormalsOptions& o, const EpsDeltaOptions* e) {
   const GeometryOptions& g = o.geometry;
@@ -286,6 +292,8 @@ json argumentsJson(const OocNormalsOptions& o, const EpsDeltaOptions* e) {
               {"orient", g.orientNormals},
               {"recompute", g.recomputeNormals},
               {"memory_bytes", o.memoryBytes},
+              {"curvature", g.curvature && !e},
+              {"curvature_fit", int(g.curvatureFit)},
               {"min_tiles", o.minTiles}};
 }
 
@@ -363,7 +371,8 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
     reportProgress(progress, "histogram", double(reader.position()) / double(n));
   }
   // (ε,δ) also holds Delaunay lists and candidates per tile: a quarter more.
-  const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k) * (r.extract ? 1.25 : 1.0);
+  // Curvature keeps the Delaunay lists (~12 entries of index + weight) and its results.
+  const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k) * (r.extract ? 1.25 : 1.0) + (r.curvature() ? 140.0 : 0.0);
   // Sized for kTilesInFlight tiles whatever the thread count, so the tiles (and the output) do
   // not depend on it.
   const double base = std::min(64.0 * 1024 * 1024, r.o.memoryBytes / 4);
@@ -480,8 +489,8 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   for (int a = 0; a < 3; ++a) openLow[a] = c[size_t(a)] == 0, openHigh[a] = c[size_t(a)] == g.tiles[size_t(a)] - 1;
 
   GeometryOptions go = r.o.geometry;
-  go.delaunayNeighbours = delaunay;
-  go.curvature = false;
+  go.curvature = r.curvature();
+  go.delaunayNeighbours = delaunay || go.curvature;
   go.coverRadius = true;
   go.progress = {};
   double h = g.width() * kHaloStart;
@@ -631,6 +640,14 @@ void processTile(const Run& r, uint32_t tile) {
     sum.components = comps;
     sum.inexact = inexact;
     sum.withHalo = uint32_t(n);
+    if (r.curvature()) {  // before the result file, whose presence marks the tile done
+      std::string c;
+      c.reserve(res.size() * kCurvatureRecord);
+      for (size_t i = 0; i < n; ++i)
+        if (tg.owner[i] == tile)
+          putRaw(c, geo.kMin[i]), putRaw(c, geo.kMax[i]), putRaw(c, geo.minCurvatureDir[i]), putRaw(c, geo.maxCurvatureDir[i]);
+      writeWhole(r.curvaturePath(tile), c);
+    }
     writeWhole(r.resultPath(tile), encodeResult(sum, res, ext, shared));
   }
 }
@@ -765,11 +782,15 @@ std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vecto
 
 void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vector<size_t>& nodeOffset, float avgSpacing) {
   const uint64_t n = r.info.count;
-  PlyPointWriter w(r.out, n, r.info.comments, true, true);
+  // Curvature properties in the order writeModel writes them (addCurvatureProperties' names, sorted).
+  const bool curv = r.curvature();
+  const std::vector<std::string> extraNames =
+      curv ? std::vector<std::string>{"dmin_x", "dmin_y", "dmin_z", "k_max", "k_min"} : std::vector<std::string>{};
+  PlyPointWriter w(r.out, n, r.info.comments, true, true, "", extraNames);
   const size_t T = r.tileIds.size();
   std::vector<uint64_t> done(T, 0);  // records consumed per tile
   std::vector<Vec3f> pos, nrm;
-  std::vector<float> rad;
+  std::vector<float> rad, extra;
   std::vector<uint8_t> filled;
   const size_t rs = recordSize(r.normalsIn);
   for (size_t blk = 0; blk < r.blocks; ++blk) {
@@ -778,12 +799,16 @@ void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vect
     pos.assign(m, Vec3f::Zero());
     nrm.assign(m, Vec3f::Zero());
     rad.assign(m, 0.0f);
+    extra.assign(m * extraNames.size(), 0.0f);
     filled.assign(m, 0);
     for (size_t d = 0; d < T; ++d) {
       const uint32_t cnt = r.blockCounts[d * r.blocks + blk];
       if (cnt == 0) continue;
       Points p;
       decodeRecords(readRange(r.cellPath(r.tileIds[d]), done[d] * rs, uint64_t(cnt) * rs), r.normalsIn, p);
+      const std::string cv = curv ? readRange(r.curvaturePath(r.tileIds[d]), done[d] * kCurvatureRecord,
+                                              uint64_t(cnt) * kCurvatureRecord)
+                                  : std::string();
       const std::string res = readRange(r.resultPath(r.tileIds[d]), 8 + sizeof(TileSummary) + done[d] * kResultRecord,
                                         uint64_t(cnt) * kResultRecord);
       for (size_t i = 0; i < cnt; ++i) {
@@ -796,12 +821,23 @@ void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vect
         nrm[o] = flip[nodeOffset[d] + x.component] ? Vec3f(-x.normal) : x.normal;
         // Radius rule of applyGeometry: cover radius, else spacing, else the average spacing.
         rad[o] = x.cover > 0 ? x.cover : x.spacing > 0 ? x.spacing : avgSpacing;
+        if (curv) {
+          const char* q = cv.data() + i * kCurvatureRecord;
+          float kMin = getRaw<float>(q), kMax = getRaw<float>(q);
+          Vec3f dMin = getRaw<Vec3f>(q);
+          const Vec3f dMax = getRaw<Vec3f>(q);
+          // A flipped tile component: with -n every directional curvature changes sign, so the
+          // principal values swap and negate and the minimum direction is the maximum one.
+          if (flip[nodeOffset[d] + x.component]) std::tie(kMin, kMax, dMin) = std::make_tuple(-kMax, -kMin, dMax);
+          float* e = extra.data() + o * 5;
+          e[0] = dMin.x(), e[1] = dMin.y(), e[2] = dMin.z(), e[3] = kMax, e[4] = kMin;
+        }
       }
       done[d] += cnt;
     }
     for (uint8_t f : filled)
       if (!f) throwIo(r.dir.string(), "a point is missing from the tiles (the folder was changed during the run?)");
-    w.write(pos.data(), nrm.data(), rad.data(), m);
+    w.write(pos.data(), nrm.data(), rad.data(), m, curv ? extra.data() : nullptr);
     reportProgress(r.o.progress, "write", double(b1) / double(n));
   }
   w.finish();
@@ -1105,7 +1141,8 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
   std::vector<uint32_t> todo;
   for (size_t d = 0; d < r.tileIds.size(); ++d) {
     if (int(d % size_t(o.ranks)) != o.rank) continue;
-    if (fs::exists(r.resultPath(r.tileIds[d]), ec)) ++rep.tilesReused;
+    if (fs::exists(r.resultPath(r.tileIds[d]), ec) && (!r.curvature() || fs::exists(r.curvaturePath(r.tileIds[d]), ec)))
+      ++rep.tilesReused;
     else todo.push_back(r.tileIds[d]);
   }
   reportProgress(o.progress, "tiles", 0.0);

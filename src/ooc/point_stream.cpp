@@ -272,9 +272,10 @@ size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
 
 // ---------------------------------------------------------------------------------------------
 PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
-                               bool normals, bool radius, const std::string& moreElements)
+                               bool normals, bool radius, const std::string& moreElements,
+                               const std::vector<std::string>& extra)
     : path_(path.string()), out_(std::make_unique<AtomicFileWriter>(path)), count_(count), normals_(normals),
-      radius_(radius) {
+      radius_(radius), extra_(extra.size()) {
   // The header exactly as writePlyModel (io/ply_model.cpp) writes it.
   std::string h = "ply\nformat binary_little_endian 1.0\n";
   for (const std::string& c : comments) {
@@ -290,6 +291,7 @@ PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count
   h += "property float x\nproperty float y\nproperty float z\n";
   if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
   if (radius) h += "property float radius\n";
+  for (const std::string& e : extra) h += "property float " + e + "\n";
   h += moreElements;
   h += "end_header\n";
   put(h.data(), h.size());
@@ -305,16 +307,17 @@ void PlyPointWriter::put(const char* data, size_t n) {
   }
 }
 
-void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n) {
+void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra) {
   static_assert(std::endian::native == std::endian::little, "the binary writer assumes a little-endian host");
   if (written_ + n > count_) throw std::logic_error("PlyPointWriter: more rows than declared");
-  const size_t rowFloats = 3 + (normals_ ? 3 : 0) + (radius_ ? 1 : 0);
+  const size_t rowFloats = 3 + (normals_ ? 3 : 0) + (radius_ ? 1 : 0) + extra_;
   row_.resize(n * rowFloats * 4);
   char* o = row_.data();
   for (size_t i = 0; i < n; ++i) {
     std::memcpy(o, pos[i].data(), 12), o += 12;
     if (normals_) std::memcpy(o, nrm[i].data(), 12), o += 12;
     if (radius_) std::memcpy(o, &radius[i], 4), o += 4;
+    if (extra_) std::memcpy(o, extra + i * extra_, 4 * extra_), o += 4 * extra_;
   }
   put(row_.data(), row_.size());
   written_ += n;

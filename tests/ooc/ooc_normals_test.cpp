@@ -194,6 +194,31 @@ TEST(PointStream, WriterWritesTheBytesWriteModelWrites) {
   EXPECT_EQ(files, 0u);
 }
 
+// Curvature (§6.1.2) out of core: each tile's interior points under the tile's orientation, turned
+// (values negated and swapped, directions exchanged) where the join flips the tile's component:
+// the in-memory file byte for byte, with both fits.
+TEST(OocNormals, CurvatureInTilesIsTheInMemoryCurvature) {
+  const fs::path d = test::scratchDir("ooc_curvature");
+  ooc::SyntheticScanOptions s;
+  s.count = 120000;
+  s.seed = 3;
+  ooc::writeSyntheticScan(d / "scan.ply", s);
+  const std::string in = "'" + (d / "scan.ply").string() + "'";
+  for (const std::string fit : {"taubin", "quadric"}) {
+    const std::string mem = "'" + (d / ("mem_" + fit + ".ply")).string() + "'";
+    const std::string ooc = "'" + (d / ("ooc_" + fit + ".ply")).string() + "'";
+    ASSERT_EQ(test::runCli("-q normals " + in + " -o " + mem + " --curvature --curvature-fit " + fit).exitCode, 0);
+    const auto r = test::runCli("normals " + in + " -o " + ooc + " --curvature --curvature-fit " + fit + " --tiles 40");
+    ASSERT_EQ(r.exitCode, 0) << r.out;
+    // The flip path is taken: some tile components are turned by the join.
+    EXPECT_EQ(r.out.find(" 0 tile component(s) flipped"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("tile component(s) flipped"), std::string::npos) << r.out;
+    const HybridModel m = readModel(d / ("ooc_" + fit + ".ply"));
+    ASSERT_TRUE(m.pointProperties.count("k_min") && m.pointProperties.count("dmin_z")) << fit;
+    EXPECT_TRUE(slurp(d / ("ooc_" + fit + ".ply")) == slurp(d / ("mem_" + fit + ".ply"))) << fit;
+  }
+}
+
 TEST(OocNormals, CliPicksTheOutOfCorePathWhenTheInputDoesNotFit) {
   const fs::path d = test::scratchDir("ooc_cli");
   ooc::SyntheticScanOptions s;

@@ -19,8 +19,9 @@
 namespace linesurf::ooc {
 
 struct OocNormalsOptions {
-  /// k, orientationPenalty, orientNormals, recomputeNormals are used; curvature and Delaunay
-  /// neighbour lists are not written by this path (cover radii are).
+  /// k, orientationPenalty, orientNormals, recomputeNormals, curvature and curvatureFit are used
+  /// (curvature: the k_min k_max dmin_x dmin_y dmin_z properties of `normals --curvature`);
+  /// Delaunay neighbour lists are not written (cover radii are).
   GeometryOptions geometry;
   /// Working folder for the tiles (created; reused by a run with the same input and arguments,
   /// cleared when it belongs to another input or other arguments).

@@ -77,13 +77,16 @@ class PlyPointWriter {
  public:
   /// `moreElements`: header lines of elements after the vertices (e.g. "element segment N\n
   /// property ..."), whose rows follow through writeRaw() once every vertex row is written.
+  /// `extra`: names of further float vertex properties after radius (written through write()'s
+  /// `extra` rows).
   PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
-                 bool normals, bool radius, const std::string& moreElements = "");
+                 bool normals, bool radius, const std::string& moreElements = "",
+                 const std::vector<std::string>& extra = {});
   ~PlyPointWriter();
   PlyPointWriter(const PlyPointWriter&) = delete;
   PlyPointWriter& operator=(const PlyPointWriter&) = delete;
   /// Appends n rows (nrm / radius ignored when the file has none).
-  void write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n);
+  void write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra = nullptr);
   /// Rows of the further elements, already encoded.
   void writeRaw(const std::string& bytes);
   void finish();
@@ -95,6 +98,7 @@ class PlyPointWriter {
   std::string buf_;
   uint64_t count_ = 0, written_ = 0;
   bool normals_ = false, radius_ = false;
+  size_t extra_ = 0;
   std::string row_;
 };
 
