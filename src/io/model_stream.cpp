@@ -23,6 +23,8 @@ ModelChunkReader::ModelChunkReader(const std::filesystem::path& path) : path_(pa
   std::string head = detail::readFileBytes(path, size_t(1) << 20);
   if (head.find("end_header") == std::string::npos && head.size() < size)
     head = detail::readFileBytes(path, size_t(64) << 20);
+  if (head.compare(0, 3, "ply") != 0)
+    throwBadInput(name_, "", "streamed reading takes binary little-endian PLY only (convert it with `linesurf convert`)");
   const ply::Header h = ply::parseHeader(head, name_);
   if (h.format != ply::Format::BinaryLittleEndian)
     throwBadInput(name_, "", "streamed reading takes binary little-endian PLY only (convert it with `linesurf convert`)");

@@ -197,6 +197,8 @@ TEST(LodStream, RefusesWhatItCannotBuildAndLeavesNothing) {
     w.encoding = PlyEncoding::Ascii;
     writeModel(dir / "ascii.ply", m, w);
     expectRefused(dir / "ascii.ply", "binary");
+    writeModel(dir / "points.xyz", m);
+    expectRefused(dir / "points.xyz", "binary");
   }
 }
 
