@@ -136,17 +136,18 @@ struct Grid {
   }
 };
 
-// --- tile cell files: u64 index, float x y z [, float nx ny nz] ---------------------------------
+// --- tile cell files: u64 index, float x y z [, float nx ny nz] [, float radius] ---------------
 struct Points {
   std::vector<uint64_t> idx;
   std::vector<Vec3f> pos, nrm;
+  std::vector<float> rad;
   size_t size() const { return idx.size(); }
 };
 
-size_t recordSize(bool normals) { return 8 + 12 + (normals ? 12 : 0); }
+size_t recordSize(bool normals, bool radius) { return 8 + 12 + (normals ? 12 : 0) + (radius ? 4 : 0); }
 
-void decodeRecords(const std::string& bytes, bool normals, Points& out) {
-  const size_t rs = recordSize(normals), n = bytes.size() / rs;
+void decodeRecords(const std::string& bytes, bool normals, bool radius, Points& out) {
+  const size_t rs = recordSize(normals, radius), n = bytes.size() / rs;
   const char* p = bytes.data();
   for (size_t i = 0; i < n; ++i) {
     out.idx.push_back(getRaw<uint64_t>(p));
@@ -157,6 +158,7 @@ void decodeRecords(const std::string& bytes, bool normals, Points& out) {
       std::memcpy(v.data(), p, 12), p += 12;
       out.nrm.push_back(v);
     }
+    if (radius) out.rad.push_back(getRaw<float>(p));
   }
 }
 
@@ -259,6 +261,10 @@ struct Run {
   const EpsDeltaOptions* extract = nullptr;  ///< set for the (ε,δ) extraction
   PointFileInfo info;
   bool normalsIn = false;
+  /// The input's radii travel with the points for the extraction, which keeps them as the
+  /// in-memory path does (`normals` sets every radius again and leaves them).
+  bool radiusIn = false;
+  size_t recordBytes() const { return recordSize(normalsIn, radiusIn); }
   Grid grid;
   Bounds3f bounds;
   float dupTol = 0;
@@ -343,6 +349,7 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
   PointReader reader(r.in);
   r.info = reader.info();
   r.normalsIn = r.info.normals;
+  r.radiusIn = r.info.radius && r.extract;
   const uint64_t n = r.info.count;
   const size_t chunk = 1 << 20;
   std::vector<Vec3f> pos, nrm;
@@ -397,15 +404,17 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
   };
   reader.rewind();
   uint64_t index = 0;
-  while (reader.read(pos, nrm, chunk) > 0) {
+  std::vector<float> rad;
+  while (reader.read(pos, nrm, chunk, &rad) > 0) {
     for (size_t i = 0; i < pos.size(); ++i, ++index) {
       const size_t d = r.denseOf.at(g.tileOf(pos[i]));
       std::string& b = buf[d];
       putRaw(b, index);
       b.append(reinterpret_cast<const char*>(pos[i].data()), 12);
       if (r.normalsIn) b.append(reinterpret_cast<const char*>(nrm[i].data()), 12);
+      if (r.radiusIn) putRaw(b, rad[i]);
       ++r.blockCounts[d * r.blocks + size_t(index / kBlock)];
-      buffered += recordSize(r.normalsIn);
+      buffered += r.recordBytes();
     }
     if (double(buffered) > r.ioBytes) flush();
     reportProgress(progress, "partition", double(reader.position()) / double(n));
@@ -423,6 +432,7 @@ json manifestJson(const Run& r, const FileIdentity& id) {
               {"arguments", argumentsJson(r.o, r.extract)},
               {"points", r.info.count},
               {"normals", r.normalsIn},
+              {"radius", r.radiusIn},
               {"comments", r.info.comments},
               {"bounds_bits", {floatBits(r.bounds.min.x()), floatBits(r.bounds.min.y()), floatBits(r.bounds.min.z()),
                                floatBits(r.bounds.max.x()), floatBits(r.bounds.max.y()), floatBits(r.bounds.max.z())}},
@@ -435,6 +445,7 @@ json manifestJson(const Run& r, const FileIdentity& id) {
 void loadManifest(Run& r, const json& m) {
   r.info.count = m.at("points").get<uint64_t>();
   r.normalsIn = m.at("normals").get<bool>();
+  r.radiusIn = m.value("radius", false);
   r.info.normals = r.normalsIn;
   r.info.comments = m.at("comments").get<std::vector<std::string>>();
   const auto bb = m.at("bounds_bits").get<std::vector<uint32_t>>();
@@ -469,9 +480,9 @@ struct TileGeometry {
 
 TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   const Grid& g = r.grid;
-  const size_t rs = recordSize(r.normalsIn);
+  const size_t rs = r.recordBytes();
   Points interior;
-  decodeRecords(readRange(r.cellPath(tile), 0, r.tileCounts[r.denseOf.at(tile)] * rs), r.normalsIn, interior);
+  decodeRecords(readRange(r.cellPath(tile), 0, r.tileCounts[r.denseOf.at(tile)] * rs), r.normalsIn, r.radiusIn, interior);
   Vec3d bmin, bmax;
   g.box(tile, bmin, bmax);
   const auto c = g.coords(tile);
@@ -501,13 +512,14 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
     std::vector<uint32_t> owner(interior.size(), tile);
     for (uint32_t u : neighbours) {
       Points p;
-      decodeRecords(readRange(r.cellPath(u), 0, r.tileCounts[r.denseOf.at(u)] * rs), r.normalsIn, p);
+      decodeRecords(readRange(r.cellPath(u), 0, r.tileCounts[r.denseOf.at(u)] * rs), r.normalsIn, r.radiusIn, p);
       for (size_t i = 0; i < p.size(); ++i) {
         const Vec3d q = p.pos[i].cast<double>();
         if ((q.array() >= bmin.array() - h).all() && (q.array() <= bmax.array() + h).all()) {
           all.idx.push_back(p.idx[i]);
           all.pos.push_back(p.pos[i]);
           if (r.normalsIn) all.nrm.push_back(p.nrm[i]);
+          if (r.radiusIn) all.rad.push_back(p.rad[i]);
           owner.push_back(u);
         }
       }
@@ -527,8 +539,10 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
       tg.owner[i] = owner[perm[i]];
       tg.model.points[i].position = all.pos[perm[i]];
       if (r.normalsIn) tg.model.points[i].normal = all.nrm[perm[i]];
+      if (r.radiusIn) tg.model.points[i].radius = all.rad[perm[i]];
     }
     tg.model.attributes.normals = r.normalsIn;
+    tg.model.attributes.radii = r.radiusIn;
     tg.geo = detail::computePointGeometryTile(tg.model, go, r.dupTol, &tg.extras);
     // Distance from a point to the halo's outer boundary (faces on the grid's border: none).
     auto room = [&](const Vec3f& pf) {
@@ -685,7 +699,7 @@ std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vecto
     if (!any) continue;
     const size_t count = views[b].summary.interior;
     Points pts;
-    decodeRecords(readRange(r.cellPath(tile), 0, count * recordSize(r.normalsIn)), r.normalsIn, pts);
+    decodeRecords(readRange(r.cellPath(tile), 0, count * r.recordBytes()), r.normalsIn, r.radiusIn, pts);
     const std::string res = readRange(r.resultPath(tile), views[b].interiorOffset, count * kResultRecord);
     for (size_t a = 0; a < T; ++a) {
       auto it = views[a].shared.find(tile);
@@ -792,7 +806,7 @@ void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vect
   std::vector<Vec3f> pos, nrm;
   std::vector<float> rad, extra;
   std::vector<uint8_t> filled;
-  const size_t rs = recordSize(r.normalsIn);
+  const size_t rs = r.recordBytes();
   for (size_t blk = 0; blk < r.blocks; ++blk) {
     const uint64_t b0 = uint64_t(blk) * kBlock, b1 = std::min(n, b0 + kBlock);
     const size_t m = size_t(b1 - b0);
@@ -805,7 +819,7 @@ void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vect
       const uint32_t cnt = r.blockCounts[d * r.blocks + blk];
       if (cnt == 0) continue;
       Points p;
-      decodeRecords(readRange(r.cellPath(r.tileIds[d]), done[d] * rs, uint64_t(cnt) * rs), r.normalsIn, p);
+      decodeRecords(readRange(r.cellPath(r.tileIds[d]), done[d] * rs, uint64_t(cnt) * rs), r.normalsIn, r.radiusIn, p);
       const std::string cv = curv ? readRange(r.curvaturePath(r.tileIds[d]), done[d] * kCurvatureRecord,
                                               uint64_t(cnt) * kCurvatureRecord)
                                   : std::string();
@@ -929,6 +943,7 @@ void extractTile(const Run& r, uint32_t tile, const EpsDeltaOptions& e, double e
   HybridModel c;
   c.points.resize(m);
   c.attributes.normals = true;
+  c.attributes.radii = r.radiusIn;
   PointGeometry sg;
   sg.k = g.k;
   sg.averageSpacing = avg;
@@ -941,6 +956,7 @@ void extractTile(const Run& r, uint32_t tile, const EpsDeltaOptions& e, double e
     const Vec3f nrm = flip[nodeOffset[d] + comp] ? Vec3f(-g.normals[i]) : g.normals[i];
     c.points[j].position = tg.all.pos[i];
     c.points[j].normal = nrm;
+    c.points[j].radius = tg.model.points[i].radius;  // the input's, as extractEpsDelta keeps it in memory
     sg.normals.push_back(nrm);
     sg.eigenvalues.push_back(g.eigenvalues[i]);
     sg.surfaceVariation.push_back(g.surfaceVariation[i]);

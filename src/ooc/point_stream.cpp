@@ -141,9 +141,10 @@ PointReader::PointReader(const std::filesystem::path& path) : path_(path.string(
     for (int c = 0; c < 6; ++c)
       if (p.name == names[c]) which = c;
     if (which < 0 && p.name == "radius") {
-      // Skipped: `normals` and `extract` give every point its radius from the §6.1 geometry
-      // (applyGeometry's rule) whatever the file holds, in memory as out of core; so the output
-      // of `normals` goes on to `extract eps-delta` out of core.
+      // The radius `normals` writes: `normals` sets every radius again, `extract eps-delta`
+      // keeps it (as in memory), so the output of `normals` goes on out of core.
+      radius_ = {off, int(p.type), "radius"};
+      info_.radius = true;
       off += size_t(ply::typeSize(p.type));
       continue;
     }
@@ -190,14 +191,17 @@ void PointReader::rewind() {
   if (std::fseek(f_, long(ply_ ? bodyOffset_ : 0), SEEK_SET) != 0) throwBadInput(path_, "", "cannot seek");
 }
 
-size_t PointReader::read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max) {
-  return ply_ ? readPly(pos, nrm, max) : readXyz(pos, nrm, max);
+size_t PointReader::read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad) {
+  const size_t n = ply_ ? readPly(pos, nrm, max, rad) : readXyz(pos, nrm, max);
+  if (!ply_ && rad) rad->clear();
+  return n;
 }
 
-size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max) {
+size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad) {
   const size_t n = size_t(std::min<uint64_t>(max, info_.count - next_));
   pos.resize(n);
   nrm.resize(info_.normals ? n : 0);
+  if (rad) rad->resize(info_.radius ? n : 0);
   if (n == 0) return 0;
   buf_.resize(n * rowSize_);
   const size_t got = std::fread(buf_.data(), 1, buf_.size(), f_);
@@ -223,6 +227,12 @@ size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
     }
     pos[r] = Vec3f(v[0], v[1], v[2]);
     if (nf == 6) nrm[r] = Vec3f(v[3], v[4], v[5]);
+    if (rad && info_.radius) {
+      const double d = decode(row + radius_.offset, ply::Type(radius_.type));
+      if (!std::isfinite(d) || std::fabs(d) > double(std::numeric_limits<float>::max()))
+        throwBadInput(path_, "element vertex " + std::to_string(next_ + r), "non-finite or too large value in property 'radius'");
+      (*rad)[r] = float(d);
+    }
   }
   next_ += n;
   return n;

@@ -1,6 +1,9 @@
 // (ε,δ) extraction out of core (ooc/ooc_normals.h) against the in-memory extraction.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <map>
+
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/ooc/ooc_normals.h"
@@ -60,6 +63,33 @@ TEST(OocEpsDelta, TilesKeepEveryPointOnceAndTheBounds) {
   // And the (ε,δ) bound of every segment, proved by verify-extraction.
   const auto v = test::runCli("verify-extraction '" + (d / "scan.ply").string() + "' '" + (d / "ooc.ply").string() + "'");
   EXPECT_EQ(v.exitCode, 0) << v.out;
+}
+
+// The output of `normals` (with its radii) goes on out of core, and the extraction keeps each
+// kept point's radius from the file as the in-memory extraction does (it used to drop them and
+// fall back on the spacing).
+TEST(OocEpsDelta, KeepsTheRadiiOfItsInput) {
+  const fs::path d = test::scratchDir("ooc_eps_delta_radii");
+  ooc::SyntheticScanOptions s;
+  s.count = 60000;
+  s.seed = 4;
+  ooc::writeSyntheticScan(d / "scan.ply", s);
+  const std::string q = "'" + d.string() + "/";
+  ASSERT_EQ(test::runCli("-q normals " + q + "scan.ply' -o " + q + "n.ply'").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q extract eps-delta " + q + "n.ply' -o " + q + "mem.ply'").exitCode, 0);
+  const auto r = test::runCli("extract eps-delta " + q + "n.ply' -o " + q + "ooc.ply' --tiles 8");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("out of core"), std::string::npos) << r.out;
+  const HybridModel in = readModel(d / "n.ply"), mem = readModel(d / "mem.ply"), ooc = readModel(d / "ooc.ply");
+  ASSERT_TRUE(in.attributes.radii);
+  std::map<std::array<float, 3>, float> radiusAt;
+  for (const Point& p : in.points) radiusAt[{p.position.x(), p.position.y(), p.position.z()}] = p.radius;
+  size_t same = 0;
+  for (const Point& p : ooc.points) same += radiusAt.at({p.position.x(), p.position.y(), p.position.z()}) == p.radius;
+  EXPECT_EQ(same, ooc.points.size());
+  size_t memSame = 0;
+  for (const Point& p : mem.points) memSame += radiusAt.at({p.position.x(), p.position.y(), p.position.z()}) == p.radius;
+  EXPECT_EQ(memSame, mem.points.size());  // the in-memory rule this mirrors
 }
 
 }  // namespace

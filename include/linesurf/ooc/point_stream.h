@@ -21,6 +21,7 @@ namespace linesurf::ooc {
 struct PointFileInfo {
   uint64_t count = 0;                 ///< points
   bool normals = false;               ///< nx ny nz present
+  bool radius = false;                ///< radius present (binary PLY)
   std::vector<std::string> comments;  ///< kept like the whole-file reader keeps them
   std::string header;                 ///< the PLY header bytes (empty for XYZ), for identity hashes
 };
@@ -37,8 +38,9 @@ class PointReader {
 
   const PointFileInfo& info() const { return info_; }
   /// Reads up to `max` points from the current position (positions into `pos`, normals into
-  /// `nrm` when the file has them; both resized to the number read). Returns 0 at the end.
-  size_t read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
+  /// `nrm` and radii into `*rad` when the file has them; each resized to the number read, or
+  /// emptied). Returns 0 at the end.
+  size_t read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad = nullptr);
   /// Back to the first point.
   void rewind();
   /// Index of the next point read().
@@ -46,7 +48,7 @@ class PointReader {
 
  private:
   void openBody();
-  size_t readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
+  size_t readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad);
   size_t readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
 
   std::string path_;
@@ -58,6 +60,7 @@ class PointReader {
   size_t rowSize_ = 0;
   struct Field { size_t offset; int type; const char* name; };
   std::vector<Field> fields_;  ///< x y z [nx ny nz]
+  Field radius_{0, 0, "radius"};
   std::vector<char> buf_;
   // XYZ state
   std::string pending_;
