@@ -502,7 +502,9 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   GeometryOptions go = r.o.geometry;
   go.curvature = r.curvature();
   go.delaunayNeighbours = delaunay || go.curvature;
-  go.coverRadius = true;
+  // The cover radius is the radius `normals` writes; the extraction's first pass (normals and the
+  // join only) has no use for it, and its Delaunay stars are a fifth of that pass.
+  go.coverRadius = !(r.extract && !delaunay);
   go.progress = {};
   double h = g.width() * kHaloStart;
   TileGeometry tg;
@@ -634,7 +636,7 @@ void processTile(const Run& r, uint32_t tile) {
       }
       InteriorResult x;
       x.normal = geo.normals[i];
-      x.cover = geo.coverRadius[i];
+      x.cover = geo.coverRadius.empty() ? 0.0f : geo.coverRadius[i];  // none in the extraction's first pass
       x.spacing = geo.spacing[i];
       x.component = comp;
       x.flags = geo.flags[i];
