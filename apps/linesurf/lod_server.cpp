@@ -7,11 +7,9 @@
 #include "linesurf/core/error.h"
 
 #ifdef LINESURF_HAVE_HTTPLIB
-#include <fcntl.h>
 #include <httplib.h>
 #include <pthread.h>
 #include <signal.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -19,24 +17,14 @@
 #include <memory>
 #include <thread>
 #include <vector>
+
+#include "linesurf/core/read_only_file.h"
 #endif
 
 namespace linesurf::cli {
 
 #ifdef LINESURF_HAVE_HTTPLIB
 namespace {
-
-// The hierarchy, opened once and read by pread from the server's threads (hierarchies are many
-// GB: never read whole; each range is copied through a small buffer as the socket takes it).
-struct SharedFd {
-  int fd = -1;
-  explicit SharedFd(const std::filesystem::path& p) : fd(::open(p.c_str(), O_RDONLY | O_CLOEXEC)) {}
-  ~SharedFd() {
-    if (fd >= 0) ::close(fd);
-  }
-  SharedFd(const SharedFd&) = delete;
-  SharedFd& operator=(const SharedFd&) = delete;
-};
 
 // Blocks SIGINT and SIGTERM in this thread and every thread it starts (the server's pool), so
 // that sigwait() receives them and the server stops cleanly instead of dying mid-response.
@@ -76,8 +64,10 @@ bool satisfiableRanges(httplib::Ranges& ranges, uint64_t size) {
 }  // namespace
 
 void serveLod(const LodServeOptions& o) {
-  auto file = std::make_shared<SharedFd>(o.file);
-  if (file->fd < 0) throw Error(Error::Kind::Io, o.file.string(), "", "cannot open the file");
+  // Opened once and read by pread from the server's threads (hierarchies are many GB: never read
+  // whole; each range is copied through a small buffer as the socket takes it).
+  auto file = std::make_shared<ReadOnlyFile>(o.file);
+  if (!file->isOpen()) throw Error(Error::Kind::Io, o.file.string(), "", "cannot open the file");
   std::error_code ec;
   const uint64_t size = std::filesystem::file_size(o.file, ec);
   if (ec) throw Error(Error::Kind::Io, o.file.string(), "", "cannot read the file size");
@@ -102,9 +92,9 @@ void serveLod(const LodServeOptions& o) {
     res.set_content_provider(size, "application/octet-stream",
                              [file](size_t offset, size_t length, httplib::DataSink& sink) {
                                std::vector<char> buf(std::min<size_t>(length, size_t(1) << 20));
-                               const ssize_t r = ::pread(file->fd, buf.data(), buf.size(), off_t(offset));
-                               if (r <= 0) return false;  // the file shrank: the response ends short
-                               return sink.write(buf.data(), size_t(r));
+                               const size_t got = file->read(offset, buf.data(), buf.size());
+                               if (got == 0) return false;  // the file shrank: the response ends short
+                               return sink.write(buf.data(), got);
                              });
   });
 

@@ -1,8 +1,6 @@
 // Reading a level-of-detail hierarchy, choosing its nodes for a view and rendering them with a
 // splat budget (include/linesurf/lod/lod.h; the §6.2 pipeline through the public Renderer).
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +10,7 @@
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
+#include "linesurf/core/read_only_file.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/io/atomic_file.h"
 #include "linesurf/lod/lod.h"
@@ -19,27 +18,6 @@
 
 namespace linesurf::lod {
 namespace {
-
-// A read-only file descriptor read by byte range (pread: safe from several threads).
-struct Fd {
-  int fd = -1;
-  explicit Fd(const std::filesystem::path& p) : fd(::open(p.c_str(), O_RDONLY | O_CLOEXEC)) {}
-  ~Fd() {
-    if (fd >= 0) ::close(fd);
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  // Bytes actually read (fewer at the end of the file).
-  size_t read(uint64_t offset, char* out, size_t n) const {
-    size_t got = 0;
-    while (got < n) {
-      ssize_t r = ::pread(fd, out + got, n - got, off_t(offset + got));
-      if (r <= 0) break;
-      got += size_t(r);
-    }
-    return got;
-  }
-};
 
 Vec3f vec3(const nlohmann::json& j) { return Vec3f(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()); }
 
@@ -50,8 +28,8 @@ bool isLodFile(const std::filesystem::path& path) {
   // block or read for ever; the model readers report those.
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return false;
-  Fd f(path);
-  if (f.fd < 0) return false;
+  ReadOnlyFile f(path);
+  if (!f.isOpen()) return false;
   char m[8];
   return f.read(0, m, 8) == 8 && std::memcmp(m, format::kMagic, 8) == 0;
 }
@@ -59,8 +37,8 @@ bool isLodFile(const std::filesystem::path& path) {
 LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
   noteInput(path);
   const std::string ps = path.string();
-  Fd f(path);
-  if (f.fd < 0) throwBadInput(ps, "", "cannot open the file");
+  ReadOnlyFile f(path);
+  if (!f.isOpen()) throwBadInput(ps, "", "cannot open the file");
   std::error_code ec;
   fileSize_ = std::filesystem::file_size(path, ec);
   if (ec) throwBadInput(ps, "", "cannot read the file size");
@@ -153,8 +131,8 @@ void LodFile::readBlock(uint32_t i, std::vector<char>& buf) const {
     throwBadInput(ps, where, fmt::format("missing or truncated: its block [{}, {}) lies past the file's end ({} bytes)",
                                          n.offset, n.offset + n.size, fileSize_));
   if (buf.size() < n.size) buf.resize(n.size);
-  Fd f(path_);
-  if (f.fd < 0 || f.read(n.offset, buf.data(), n.size) != n.size)
+  ReadOnlyFile f(path_);
+  if (!f.isOpen() || f.read(n.offset, buf.data(), n.size) != n.size)
     throwBadInput(ps, where, "missing or truncated: its block cannot be read in full");
   const char* p = buf.data();
   if (std::memcmp(p, format::kBlockMagic, 8) != 0) throwBadInput(ps, where, "its block is not a node block");
