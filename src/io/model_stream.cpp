@@ -49,7 +49,6 @@ ModelChunkReader::ModelChunkReader(const std::filesystem::path& path) : path_(pa
         e.listCountBytes.push_back(ply::typeSize(p.countType));
         e.listItemBytes.push_back(ply::typeSize(p.type));
         e.fixedBytes += size_t(ply::typeSize(p.countType));
-        e.lists = true;
       } else {
         e.properties += fmt::format("property {} {}\n", ply::typeName(p.type), p.name);
         e.fixedBytes += size_t(ply::typeSize(p.type));
@@ -58,7 +57,7 @@ ModelChunkReader::ModelChunkReader(const std::filesystem::path& path) : path_(pa
     if (e.name == "vertex") points_ = e.count;
     else segments_ = e.count;
     fixedBody += e.count * e.fixedBytes;
-    anyList |= e.lists;
+    anyList |= !e.listAt.empty();
     elements_.push_back(std::move(e));
   }
   if (elements_.empty()) throwBadInput(name_, "", "no 'vertex' or 'segment' element (nothing to read as points)");
@@ -87,14 +86,13 @@ void ModelChunkReader::readRows(Element& e, uint64_t rows, std::string& out) {
   auto fail = [&] {
     throwBadInput(name_, fmt::format("{} {}", e.name, rowInElement_), "truncated (the file ends inside the rows)");
   };
-  if (!e.lists) {
+  if (e.listAt.empty()) {
     const size_t n = size_t(rows) * e.fixedBytes, at = out.size();
     out.resize(at + n);
     if (std::fread(out.data() + at, 1, n, f_) != n) fail();
     return;
   }
   // Rows with lists: each row's scalar prefix, then its list items after each count.
-  std::vector<char> row;
   for (uint64_t r = 0; r < rows; ++r) {
     size_t from = 0;
     for (size_t l = 0; l <= e.listAt.size(); ++l) {

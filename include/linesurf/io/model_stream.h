@@ -40,11 +40,10 @@ class ModelChunkReader {
     std::string name;
     uint64_t count = 0;
     std::string properties;         ///< the header's property lines
-    size_t fixedBytes = 0;          ///< bytes of a row without lists (the row size when !lists)
+    size_t fixedBytes = 0;          ///< bytes of a row without list items (the row size without lists)
     std::vector<int> listCountBytes;  ///< per list property: bytes of its count, then item bytes
     std::vector<int> listItemBytes;
     std::vector<size_t> listAt;     ///< byte offset of each list count within the scalar prefix
-    bool lists = false;
   };
   void readRows(Element& e, uint64_t rows, std::string& out);
 
