@@ -28,10 +28,8 @@ namespace {
 using namespace detail;
 namespace fs = std::filesystem;
 
-constexpr int kHistLevel = 7;  // 2^21 cells of the top histogram (8 MiB of counts)
+constexpr int kHistLevel = 7;  // 2^21 cells of the top histogram (16 MiB of 64-bit counts)
 constexpr size_t kRowsPerRead = size_t(1) << 19;
-
-using Keys = std::vector<std::pair<uint64_t, uint32_t>>;
 
 // Appends to a working file, buffered; files are opened only to flush, so that any number of
 // them can be filled at once.
@@ -80,7 +78,9 @@ struct TopNode {
 // A chunk's records: the primitives with their keys, sorted as buildLod sorts its keys.
 struct ChunkData {
   std::string points, segments;  // block-format records
-  Keys keys;                     // (key, model-wide index j: points first, then P + segment index)
+  // (key, record position: points first, then segments), sorted: within a chunk records are in
+  // model order, so this is buildLod's (key, model index) order.
+  std::vector<std::pair<uint64_t, uint32_t>> keys;
 };
 
 }  // namespace
@@ -103,9 +103,13 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   Bounds3f raw, kb, sb;
   float maxRadius = 0, maxPointRadius = 0;
   auto frameStats = [&](const HybridModel& m) {
+    // As buildLod takes them: maxRadius over every finite radius; the sphere's box and its
+    // fallback radius (boundingSphere) over points with finite positions.
     for (const Point& p : m.points) {
-      if (p.position.allFinite()) kb.extend(p.position), sb.extend(p.position);
-      if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius), maxPointRadius = std::max(maxPointRadius, p.radius);
+      if (std::isfinite(p.radius)) maxRadius = std::max(maxRadius, p.radius);
+      if (!p.position.allFinite()) continue;
+      kb.extend(p.position), sb.extend(p.position);
+      if (std::isfinite(p.radius)) maxPointRadius = std::max(maxPointRadius, p.radius);
     }
     for (const Segment& s : m.segments) {
       const Vec3f mid = Vec3f(0.5f * (s.p0 + s.p1));
@@ -115,7 +119,7 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
     }
   };
   Attributes attributes;
-  bool shading = false, masses = false, first = true, pointNormals = true, segmentNormals = true;
+  bool shading = false, masses = false, first = true, firstPoints = true, pointNormals = true, segmentNormals = true;
   HybridModel c;
   while (reader.next(c, kRowsPerRead)) {
     progress("reading", double(reader.pointsRead() + reader.segmentsRead()) / double(N) / 3);
@@ -124,10 +128,10 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
       // needs them on every element that has rows (as the whole-file reader decides).
       attributes = c.attributes;
       shading = attributes.shadingNormals && P > 0;
-      masses = P > 0 && pointMasses(c) != nullptr;
       first = false;
     }
     if (!c.points.empty()) {
+      if (firstPoints) masses = pointMasses(c) != nullptr, firstPoints = false;
       pointNormals = pointNormals && c.attributes.normals;
       if (!c.attributes.normals || !c.attributes.radii ||
           std::any_of(c.points.begin(), c.points.end(), [](const Point& p) { return p.radius == 0.0f; }))
