@@ -30,14 +30,22 @@ struct LodArgs {
 
 // The model's size in memory as the in-memory build holds it (model, keys, the file's bytes):
 // about 260 bytes a primitive; 0 when the header cannot tell (not a binary PLY).
-double inMemoryLodEstimate(const std::string& path, uint64_t& primitives) {
+double inMemoryLodEstimate(const std::string& path) {
   try {
     ModelChunkReader r(path);
-    primitives = r.points() + r.segments();
-    return 260.0 * double(primitives);
+    return 260.0 * double(r.points() + r.segments());
   } catch (const Error&) {
     return 0;
   }
+}
+
+// What either build made: the line both print.
+std::string hierarchyLine(const lod::BuildReport& rep) {
+  return fmt::format("hierarchy {:016x}: {} nodes ({} leaves), depth {}, {} representatives in the inner nodes ({:.1f}% "
+                     "of the model), {:.1f} MB{}",
+                     rep.hierarchyId, rep.nodes, rep.leaves, rep.depth, rep.representatives,
+                     100.0 * double(rep.representatives) / double(rep.primitives), double(rep.bytes) / 1e6,
+                     rep.chunks ? fmt::format(", {} subtrees", rep.chunks) : std::string());
 }
 
 void runStreaming(const LodArgs& a, const std::string& why) {
@@ -52,10 +60,7 @@ void runStreaming(const LodArgs& a, const std::string& why) {
   endProgress();
   const double seconds = total.seconds();
   say(fmt::format("{}: {} primitives; {} threads", a.model, rep.primitives, currentThreadCount()));
-  say(fmt::format("hierarchy {:016x}: {} nodes ({} leaves), depth {}, {} representatives in the inner nodes ({:.1f}% of "
-                  "the model), {:.1f} MB, {} subtrees",
-                  rep.hierarchyId, rep.nodes, rep.leaves, rep.depth, rep.representatives,
-                  100.0 * double(rep.representatives) / double(rep.primitives), double(rep.bytes) / 1e6, rep.chunks));
+  say(hierarchyLine(rep));
   say(fmt::format("time (s): total {:.3f} ({:.2f} M primitives/s)", seconds,
                   double(rep.primitives) / std::max(seconds, 1e-9) / 1e6));
   say("wrote " + a.output);
@@ -70,8 +75,7 @@ void run(LodArgs& a) {
     runStreaming(a, a.outOfCore ? "--out-of-core" : "--work-dir");
     return;
   }
-  uint64_t primitives = 0;
-  if (const double need = inMemoryLodEstimate(a.model, primitives); need > memoryBudgetBytes()) {
+  if (const double need = inMemoryLodEstimate(a.model); need > memoryBudgetBytes()) {
     runStreaming(a, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
                                 globalOptions().maxMegabytes));
     return;
@@ -98,10 +102,7 @@ void run(LodArgs& a) {
   writeFileAtomically(a.output, bytes);
   say(fmt::format("{}: {} points, {} segments; {} threads", a.model, model.points.size(), model.segments.size(),
                   currentThreadCount()));
-  say(fmt::format("hierarchy {:016x}: {} nodes ({} leaves), depth {}, {} representatives in the inner nodes ({:.1f}% of "
-                  "the model), {:.1f} MB",
-                  rep.hierarchyId, rep.nodes, rep.leaves, rep.depth, rep.representatives,
-                  100.0 * double(rep.representatives) / double(rep.primitives), double(rep.bytes) / 1e6));
+  say(hierarchyLine(rep));
   say(fmt::format("time (s): read {:.3f}, build {:.3f} ({:.2f} M primitives/s), total {:.3f}", readSeconds, buildSeconds,
                   double(rep.primitives) / std::max(buildSeconds, 1e-9) / 1e6, total.seconds()));
   say("wrote " + a.output);
