@@ -1,5 +1,6 @@
 // linesurf extract shape-approx IN -o OUT [--clustering greedy|hierarchical] [--delta-n 0.008]
-// [--seed N] [--clusters-out FILE]: shape-approximation based line segment extraction, thesis §3.2.
+// [--seed N] [--clusters-out FILE] [--out-of-core]: shape-approximation based line segment extraction,
+// thesis §3.2; in tiles streamed from disk when the cloud would not fit --max-mb.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -14,6 +15,9 @@
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
+#include "linesurf/core/parallel.h"
+#include "linesurf/ooc/ooc_normals.h"
+#include "ooc_cli.h"
 
 namespace linesurf::cli {
 namespace {
@@ -23,14 +27,89 @@ struct ShapeApproxArgs {
   GeometryOptions geometry;  // curvature on: §3.2.4.2 needs minimum-curvature directions
   ShapeApproxOptions extract;
   bool ascii = false;
+  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
+  bool outOfCore = false;
+  int tiles = 0;
+  std::string tileDir;
+  bool keepTiles = false;
 };
+
+std::string histogramText(const ShapeApproxStats& st) {
+  std::string hist;
+  for (size_t b = 0; b < st.sizeHistogram.size(); ++b)
+    hist += fmt::format("{}{}: {}", b ? ", " : "", ShapeApproxStats::kHistogramLabels[b], st.sizeHistogram[b]);
+  return hist;
+}
+
+void sayCounts(const ShapeApproxStats& st, const ShapeApproxOptions& o, const std::string& output) {
+  say(fmt::format("             {} clusters > 100 points hold {} points; {} with segments; {} below {} points; "
+                  "{} degenerate; {} took the k_min direction",
+                  st.largeClusters, st.largeClusterPoints, st.clustersWithSegments, st.smallClusters, o.minClusterSize,
+                  st.degenerateClusters, st.curvatureDirectionUsed));
+  say(fmt::format("output       {} points + {} segments -> {}", st.pointsKept, st.segments, output));
+  say(fmt::format("replaced     {} points ({:.2f}%), {:.2f} points per segment{}", st.pointsReplaced,
+                  100.0 * double(st.pointsReplaced) / double(std::max<size_t>(st.inputPoints, 1)),
+                  st.segments ? double(st.pointsReplaced) / double(st.segments) : 0.0,
+                  st.degenerateRuns ? fmt::format("; {} degenerate runs kept as points", st.degenerateRuns) : ""));
+  say(fmt::format("reduction    {:.2f}% (§7.2.2: 6 floats per point, 9 per segment)", 100.0 * st.dataReduction()));
+}
+
+void runOutOfCore(ShapeApproxArgs& a, const std::string& why) {
+  Timer total;
+  if (a.ascii) throwBadParameter("--ascii", "the out-of-core path writes binary PLY");
+  if (!a.clustersOut.empty())
+    throwBadParameter("--clusters-out", "is not written out of core (clusters are cut per tile); run in memory for it");
+  MpiRun mpi;
+  if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
+  ooc::OocNormalsOptions o;
+  o.geometry = a.geometry;
+  o.workDir = a.tileDir.empty() ? a.output + ".tiles" : a.tileDir;
+  o.memoryBytes = outOfCoreBudgetBytes();
+  o.minTiles = a.tiles;
+  o.keepWorkDir = a.keepTiles;
+  o.progress = withTimeLeft(progressBar());
+  o.rank = mpi.rank;
+  o.ranks = mpi.ranks;
+  o.barrier = mpi.barrier();
+  say(fmt::format("{}: out of core ({}), tiles in {}{}", a.input, why, o.workDir.string(),
+                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  ooc::OocShapeApproxReport r;
+  mpi.guard([&] { r = ooc::extractShapeApproxOutOfCore(a.input, a.output, o, a.extract); });
+  endProgress();
+  if (mpi.rank != 0) return;
+  const ooc::OocNormalsReport& g = r.geometry;
+  const ShapeApproxStats& st = r.stats;
+  if (g.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
+  say(fmt::format("input        {} points ({}), {} tiles (largest {} points with halo){}, {} threads", g.points, a.input, g.tiles,
+                  g.tilePointsMax, g.tilesReused ? fmt::format(", {} reused", g.tilesReused) : "", currentThreadCount()));
+  say(fmt::format("halo         {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", g.haloWidenings,
+                  g.inexactPoints));
+  say(fmt::format("clusters     {} (cut at tile borders); sizes {}", st.clusters, histogramText(st)));
+  sayCounts(st, a.extract, a.output);
+  say(fmt::format("times        bbox {:.3f} s, partition {:.3f} s, geometry tiles {:.3f} s, orientation {:.3f} s, "
+                  "shape-approx tiles {:.3f} s, write {:.3f} s, total {:.3f} s",
+                  g.tBbox, g.tPartition, g.tTiles, g.tOrient, r.tExtract, r.tWrite, total.seconds()));
+}
 
 void run(ShapeApproxArgs& a) {
   Timer total;
   ShapeApproxOptions& o = a.extract;
   validate(o);  // before the (long) geometry stage
   validate(a.geometry);
-  checkFiles({a.input}, {{"--output", a.output, {".ply"}}, {"--clusters-out", a.clustersOut, {".ply", ".xyz"}}});
+  checkFiles({a.input}, {{"--output", a.output, {".ply"}}, {"--clusters-out", a.clustersOut, {".ply", ".xyz"}}}, false);
+  if (a.outOfCore || a.tiles > 0 || !a.tileDir.empty() || launchedRanks() > 1) {
+    runOutOfCore(a, a.tiles > 0 ? fmt::format("--tiles {}", a.tiles) : launchedRanks() > 1 ? "started by mpirun" : "--out-of-core");
+    return;
+  }
+  {
+    // Clustering holds Delaunay lists, curvature and cluster labels besides the normals' data.
+    const double need = 1.5 * inMemoryEstimate(a.input, a.geometry.k);
+    if (need > memoryBudgetBytes()) {
+      runOutOfCore(a, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
+                                  globalOptions().maxMegabytes));
+      return;
+    }
+  }
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const HybridModel& cloud = in.cloud;
   const PointGeometry& geo = in.geometry;
@@ -61,20 +140,8 @@ void run(ShapeApproxArgs& a) {
                       ? fmt::format(", seed {}, {} splits, {} growths, {} stopped by the cap of {}", o.clustering.seed,
                                     clustering.splits, clustering.iterations, clustering.capReached, o.clustering.maxIterations)
                       : std::string()));
-  std::string hist;
-  for (size_t b = 0; b < st.sizeHistogram.size(); ++b)
-    hist += fmt::format("{}{}: {}", b ? ", " : "", ShapeApproxStats::kHistogramLabels[b], st.sizeHistogram[b]);
-  say(fmt::format("clusters     {} ({} connected components); sizes {}", st.clusters, clustering.components, hist));
-  say(fmt::format("             {} clusters > 100 points hold {} points; {} with segments; {} below {} points; "
-                  "{} degenerate; {} took the k_min direction",
-                  st.largeClusters, st.largeClusterPoints, st.clustersWithSegments, st.smallClusters, o.minClusterSize,
-                  st.degenerateClusters, st.curvatureDirectionUsed));
-  say(fmt::format("output       {} points + {} segments -> {}", st.pointsKept, st.segments, a.output));
-  say(fmt::format("replaced     {} points ({:.2f}%), {:.2f} points per segment{}", st.pointsReplaced,
-                  100.0 * double(st.pointsReplaced) / double(std::max<size_t>(st.inputPoints, 1)),
-                  st.segments ? double(st.pointsReplaced) / double(st.segments) : 0.0,
-                  st.degenerateRuns ? fmt::format("; {} degenerate runs kept as points", st.degenerateRuns) : ""));
-  say(fmt::format("reduction    {:.2f}% (§7.2.2: 6 floats per point, 9 per segment)", 100.0 * st.dataReduction()));
+  say(fmt::format("clusters     {} ({} connected components); sizes {}", st.clusters, clustering.components, histogramText(st)));
+  sayCounts(st, o, a.output);
   if (!a.clustersOut.empty()) say(fmt::format("clusters-out {} (points coloured by cluster)", a.clustersOut));
   say(fmt::format("times        read {:.3f} s, geometry {:.3f} s (kNN {:.3f}, normals {:.3f}, orient {:.3f}, "
                   "delaunay {:.3f}, curvature {:.3f}, spacing {:.3f}), clustering {:.3f} s, segments {:.3f} s, "
@@ -98,6 +165,11 @@ RegisterCommand reg(32, [](CLI::App& app) {
   // on here (§3.2.4.2 needs minimum-curvature directions); --no-curvature: from the rectangles only
   bindOptions(sub, a->geometry, {"curvature"});
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
+  sub->add_flag("--out-of-core", a->outOfCore,
+                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
+  sub->add_option("--tiles", a->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
+  sub->add_option("--tile-dir", a->tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
+  sub->add_flag("--keep-tiles", a->keepTiles, "Keep the tile folder after a successful out-of-core run");
   sub->callback([a] { run(*a); });
 });
 

@@ -50,7 +50,7 @@ struct OutputSpec {
   std::vector<std::string> extensions;  ///< lower case with the dot; empty = any
 };
 /// inputsHeldWhole: reading an input holds it in memory (checked against the budget); false for
-/// commands that estimate their own path first (normals, eps-delta: in memory or out of core).
+/// commands that estimate their own path first (normals, the extractions: in memory or out of core).
 void checkFiles(const std::vector<std::string>& inputs, const std::vector<OutputSpec>& outputs,
                 bool inputsHeldWhole = true);
 

@@ -258,7 +258,10 @@ InteriorResult decodeInterior(const char* p) {
 struct Run {
   const OocNormalsOptions& o;
   fs::path in, out, dir;
-  const EpsDeltaOptions* extract = nullptr;  ///< set for the (ε,δ) extraction
+  /// The extraction a run ends with, if any: (ε,δ) (§3.1) or shape approximation (§3.2).
+  const EpsDeltaOptions* epsDelta = nullptr;
+  const ShapeApproxOptions* shapeApprox = nullptr;
+  bool extracting() const { return epsDelta || shapeApprox; }
   PointFileInfo info;
   bool normalsIn = false;
   /// The input's radii travel with the points for the extraction, which keeps them as the
@@ -282,23 +285,44 @@ struct Run {
   /// Curvature of a tile's interior points (§6.1.2, with `normals --curvature`), in the order of
   /// its result records: k_min, k_max, min and max directions, under the tile's own orientation.
   fs::path curvaturePath(uint32_t t) const { return dir / "results" / fmt::format("curv_{:06d}.res", t); }
-  bool curvature() const { return o.geometry.curvature && !extract; }
+  /// A tile's own points with the geometry the extraction needs, from the first pass: the
+  /// second pass reads it instead of computing the tile's neighbourhoods again.
+  fs::path ownGeometryPath(uint32_t t) const { return dir / "results" / fmt::format("geom_{:06d}.bin", t); }
+  /// `normals --curvature`: the output carries the curvature.
+  bool curvatureOut() const { return o.geometry.curvature && !extracting(); }
+  /// The tiles compute curvature: for the output, or for the shape approximation's k_min directions.
+  bool tileCurvature() const { return o.geometry.curvature && (!extracting() || shapeApprox); }
 };
 constexpr size_t kCurvatureRecord = 32;
+constexpr size_t kExtractStats = 16;  // counters in a tile extraction file
 
-json argumentsJson(const OocNormalsOptions& o, const EpsDeltaOptions* e) {
+json argumentsJson(const OocNormalsOptions& o, const EpsDeltaOptions* e, const ShapeApproxOptions* sa) {
   const GeometryOptions& g = o.geometry;
   json x = nullptr;
   if (e)
     x = json{{"epsilon", e->epsilon}, {"epsilon_relative", e->epsilonRelative}, {"delta", e->delta},
              {"min_replaced", e->minReplaced}, {"max_replaced", e->maxReplaced}, {"endpoint_normals", e->endpointNormals}};
+  if (sa) {
+    const ClusteringOptions& c = sa->clustering;
+    x = json{{"method", sa->method == ClusteringMethod::Hierarchical ? "hierarchical" : "greedy"},
+             {"delta_n_bits", floatBits(c.deltaN)},
+             {"max_iterations", c.maxIterations},
+             {"seed", c.seed},
+             {"seeding", int(c.seeding)},
+             {"min_cluster_size", sa->minClusterSize},
+             {"min_run_points", sa->minRunPoints},
+             {"curvature_switch_bits", floatBits(sa->curvatureSwitchDegrees)},
+             {"curvature_coherence_bits", floatBits(sa->curvatureCoherence)},
+             {"radius_scale_bits", floatBits(sa->radiusScale)},
+             {"endpoint_normals", sa->endpointNormals}};
+  }
   return json{{"extract", x},
               {"k", g.k},
               {"orientation_penalty_bits", floatBits(g.orientationPenalty)},
               {"orient", g.orientNormals},
               {"recompute", g.recomputeNormals},
               {"memory_bytes", o.memoryBytes},
-              {"curvature", g.curvature && !e},
+              {"curvature", g.curvature && (!e || sa)},
               {"curvature_fit", int(g.curvatureFit)},
               {"min_tiles", o.minTiles}};
 }
@@ -349,7 +373,7 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
   PointReader reader(r.in);
   r.info = reader.info();
   r.normalsIn = r.info.normals;
-  r.radiusIn = r.info.radius && r.extract;
+  r.radiusIn = r.info.radius && r.extracting();
   const uint64_t n = r.info.count;
   const size_t chunk = 1 << 20;
   std::vector<Vec3f> pos, nrm;
@@ -379,7 +403,7 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
   }
   // (ε,δ) also holds Delaunay lists and candidates per tile: a quarter more.
   // Curvature keeps the Delaunay lists (~12 entries of index + weight) and its results.
-  const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k) * (r.extract ? 1.25 : 1.0) + (r.curvature() ? 140.0 : 0.0);
+  const double perPoint = inMemoryNormalsBytesPerPoint(r.o.geometry.k) * (r.extracting() ? 1.25 : 1.0) + (r.tileCurvature() ? 140.0 : 0.0);
   // Sized for kTilesInFlight tiles whatever the thread count, so the tiles (and the output) do
   // not depend on it.
   const double base = std::min(64.0 * 1024 * 1024, r.o.memoryBytes / 4);
@@ -429,7 +453,7 @@ json manifestJson(const Run& r, const FileIdentity& id) {
   return json{{"format", kFormat},
               {"version", kVersion},
               {"input", identityJson(r.in, id)},
-              {"arguments", argumentsJson(r.o, r.extract)},
+              {"arguments", argumentsJson(r.o, r.epsDelta, r.shapeApprox)},
               {"points", r.info.count},
               {"normals", r.normalsIn},
               {"radius", r.radiusIn},
@@ -500,11 +524,10 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   for (int a = 0; a < 3; ++a) openLow[a] = c[size_t(a)] == 0, openHigh[a] = c[size_t(a)] == g.tiles[size_t(a)] - 1;
 
   GeometryOptions go = r.o.geometry;
-  go.curvature = r.curvature();
+  go.curvature = r.tileCurvature();
   go.delaunayNeighbours = delaunay || go.curvature;
-  // The cover radius is the radius `normals` writes; the extraction's first pass (normals and the
-  // join only) has no use for it, and its Delaunay stars are a fifth of that pass.
-  go.coverRadius = !(r.extract && !delaunay);
+  // The cover radius is the radius `normals` writes; the extractions do not use it.
+  go.coverRadius = !r.extracting();
   go.progress = {};
   double h = g.width() * kHaloStart;
   TileGeometry tg;
@@ -602,9 +625,94 @@ void forEachTile(const Run& r, const std::vector<uint32_t>& todo, std::string_vi
   }, 1);
 }
 
+/// A tile's own points with what an extraction needs of their geometry (§6.1), written by the
+/// first pass and read by the second, so that the tile's kNN, PCA, MST and Delaunay stars are
+/// computed once per run. Normals and curvature directions are under the tile's own
+/// orientation (the join's flips are applied when the file is read); the Delaunay stars keep
+/// only own points, so a segment or cluster can only take own points.
+struct OwnGeometry {
+  std::vector<uint64_t> idx;  ///< input indices, ascending
+  std::vector<Vec3f> pos, normal;
+  std::vector<float> radius, spacing, variation;
+  std::vector<uint32_t> component;
+  std::vector<uint8_t> flags;
+  std::vector<Vec3f> minDir, maxDir;        ///< with curvature (shape approximation, §3.2.4.2)
+  std::vector<uint32_t> starOffsets, star;  ///< CSR over local indices
+  size_t size() const { return idx.size(); }
+};
+
+template <class T>
+void putColumn(std::string& s, const std::vector<T>& v) {
+  s.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+template <class T>
+void getColumn(const std::string& s, size_t& at, size_t n, std::vector<T>& v, const fs::path& path) {
+  if (at + n * sizeof(T) > s.size()) throwIo(path.string(), "tile geometry file is truncated");
+  v.resize(n);
+  if (n) std::memcpy(static_cast<void*>(v.data()), s.data() + at, n * sizeof(T));
+  at += n * sizeof(T);
+}
+
+OwnGeometry ownGeometry(const TileGeometry& tg, uint32_t tile, bool curvature) {
+  const PointGeometry& g = tg.geo;
+  const size_t n = tg.all.size();
+  OwnGeometry og;
+  std::vector<uint32_t> local(n, PointGeometry::kNoNeighbour);
+  for (size_t i = 0; i < n; ++i)
+    if (tg.owner[i] == tile) local[i] = uint32_t(og.idx.size()), og.idx.push_back(tg.all.idx[i]);
+  og.starOffsets.push_back(0);
+  for (size_t i = 0; i < n; ++i) {
+    if (local[i] == PointGeometry::kNoNeighbour) continue;
+    og.pos.push_back(tg.all.pos[i]);
+    og.normal.push_back(g.normals[i]);
+    og.radius.push_back(tg.model.points[i].radius);  // the input's, as the extractions keep it in memory
+    og.spacing.push_back(g.spacing[i]);
+    og.variation.push_back(g.surfaceVariation[i]);
+    og.component.push_back(tg.extras.component.empty() ? 0 : tg.extras.component[i]);
+    og.flags.push_back(g.flags[i]);
+    if (curvature) og.minDir.push_back(g.minCurvatureDir[i]), og.maxDir.push_back(g.maxCurvatureDir[i]);
+    for (uint32_t q : g.delaunayOf(i))
+      if (local[q] != PointGeometry::kNoNeighbour) og.star.push_back(local[q]);
+    og.starOffsets.push_back(uint32_t(og.star.size()));
+  }
+  return og;
+}
+
+std::string encodeOwnGeometry(const OwnGeometry& og) {
+  std::string s = "LSGEO001";
+  putRaw(s, uint64_t(og.size())), putRaw(s, uint64_t(og.star.size())), putRaw(s, uint8_t(!og.minDir.empty()));
+  putColumn(s, og.idx), putColumn(s, og.pos), putColumn(s, og.normal), putColumn(s, og.radius), putColumn(s, og.spacing);
+  putColumn(s, og.variation), putColumn(s, og.component), putColumn(s, og.flags), putColumn(s, og.minDir);
+  putColumn(s, og.maxDir), putColumn(s, og.starOffsets), putColumn(s, og.star);
+  return s;
+}
+
+OwnGeometry decodeOwnGeometry(const fs::path& path) {
+  const std::string s = readRange(path, 0, fs::file_size(path));
+  if (s.size() < 25 || s.compare(0, 8, "LSGEO001") != 0) throwIo(path.string(), "not a tile geometry file");
+  const char* q = s.data() + 8;
+  const uint64_t m = getRaw<uint64_t>(q), stars = getRaw<uint64_t>(q);
+  const bool curvature = getRaw<uint8_t>(q) != 0;
+  if (m > s.size() || stars > s.size()) throwIo(path.string(), "tile geometry file is damaged");
+  size_t at = 25;
+  OwnGeometry og;
+  getColumn(s, at, m, og.idx, path), getColumn(s, at, m, og.pos, path), getColumn(s, at, m, og.normal, path);
+  getColumn(s, at, m, og.radius, path), getColumn(s, at, m, og.spacing, path), getColumn(s, at, m, og.variation, path);
+  getColumn(s, at, m, og.component, path), getColumn(s, at, m, og.flags, path);
+  getColumn(s, at, curvature ? m : 0, og.minDir, path), getColumn(s, at, curvature ? m : 0, og.maxDir, path);
+  getColumn(s, at, m + 1, og.starOffsets, path), getColumn(s, at, stars, og.star, path);
+  if (at != s.size() || og.starOffsets.back() != stars) throwIo(path.string(), "tile geometry file is damaged");
+  for (size_t j = 0; j < m; ++j)
+    if (og.starOffsets[j] > og.starOffsets[j + 1]) throwIo(path.string(), "tile geometry file is damaged");
+  for (uint32_t v : og.star)
+    if (v >= m) throwIo(path.string(), "tile geometry file is damaged");
+  return og;
+}
+
 /// Processes one tile for the normals: writes its result file.
 void processTile(const Run& r, uint32_t tile) {
-  TileGeometry tg = tileGeometry(r, tile, false);
+  TileGeometry tg = tileGeometry(r, tile, r.extracting());
   const PointGeometry& geo = tg.geo;
   const detail::TileGeometryExtras& extras = tg.extras;
   const size_t n = tg.all.size();
@@ -656,7 +764,7 @@ void processTile(const Run& r, uint32_t tile) {
     sum.components = comps;
     sum.inexact = inexact;
     sum.withHalo = uint32_t(n);
-    if (r.curvature()) {  // before the result file, whose presence marks the tile done
+    if (r.curvatureOut()) {  // before the result file, whose presence marks the tile done
       std::string c;
       c.reserve(res.size() * kCurvatureRecord);
       for (size_t i = 0; i < n; ++i)
@@ -664,6 +772,7 @@ void processTile(const Run& r, uint32_t tile) {
           putRaw(c, geo.kMin[i]), putRaw(c, geo.kMax[i]), putRaw(c, geo.minCurvatureDir[i]), putRaw(c, geo.maxCurvatureDir[i]);
       writeWhole(r.curvaturePath(tile), c);
     }
+    if (r.extracting()) writeWhole(r.ownGeometryPath(tile), encodeOwnGeometry(ownGeometry(tg, tile, r.tileCurvature())));
     writeWhole(r.resultPath(tile), encodeResult(sum, res, ext, shared));
   }
 }
@@ -799,7 +908,7 @@ std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vecto
 void writeOutput(const Run& r, const std::vector<uint8_t>& flip, const std::vector<size_t>& nodeOffset, float avgSpacing) {
   const uint64_t n = r.info.count;
   // Curvature properties in the order writeModel writes them (addCurvatureProperties' names, sorted).
-  const bool curv = r.curvature();
+  const bool curv = r.curvatureOut();
   const std::vector<std::string> extraNames =
       curv ? std::vector<std::string>{"dmin_x", "dmin_y", "dmin_z", "k_max", "k_min"} : std::vector<std::string>{};
   PlyPointWriter w(r.out, n, r.info.comments, true, true, "", extraNames);
@@ -931,136 +1040,176 @@ void readOrientation(const Run& r, std::vector<size_t>& nodeOffset, std::vector<
   avg = getRaw<float>(q);
 }
 
-/// The tile's own points as a cloud of their own, with their (exact) geometry: halo points are
-/// dropped from the neighbour rows and Delaunay stars, so a segment can only take own points.
-void extractTile(const Run& r, uint32_t tile, const EpsDeltaOptions& e, double epsilon, const std::vector<size_t>& nodeOffset,
+/// What the extraction pass adds up over the tiles.
+struct ExtractTotals {
+  uint64_t kept = 0, segments = 0;
+  double epsilon = 0;
+  /// The extraction's counters, summed: (ε,δ) seed directions, candidates, candidate members,
+  /// degenerate neighbours; shape approximation: see shapeApproxStats().
+  std::array<uint64_t, kExtractStats> stats{};
+  double tExtract = 0, tWrite = 0;
+};
+
+std::array<uint64_t, kExtractStats> statsOf(const EpsDeltaStats& st) {
+  return {st.seedDirections, st.candidateDirections, st.candidateMembers, st.degenerateNeighbours};
+}
+std::array<uint64_t, kExtractStats> statsOf(const ShapeApproxStats& st) {
+  std::array<uint64_t, kExtractStats> v{st.clusters, st.smallClusters, st.clustersWithSegments, st.curvatureDirectionUsed,
+                                        st.degenerateClusters, st.degenerateRuns};
+  for (size_t b = 0; b < 6; ++b) v[6 + b] = st.sizeHistogram[b];
+  v[12] = st.largeClusters, v[13] = st.largeClusterPoints, v[14] = st.splits, v[15] = st.iterations;
+  return v;
+}
+ShapeApproxStats shapeApproxStats(const ExtractTotals& t, uint64_t points) {
+  ShapeApproxStats st;
+  const auto& v = t.stats;
+  st.inputPoints = points, st.pointsKept = t.kept, st.pointsReplaced = points - t.kept, st.segments = t.segments;
+  st.clusters = v[0], st.smallClusters = v[1], st.clustersWithSegments = v[2], st.curvatureDirectionUsed = v[3];
+  st.degenerateClusters = v[4], st.degenerateRuns = v[5];
+  for (size_t b = 0; b < 6; ++b) st.sizeHistogram[b] = v[6 + b];
+  st.largeClusters = v[12], st.largeClusterPoints = v[13], st.splits = v[14], st.iterations = v[15];
+  return st;
+}
+
+/// Extracts one tile's own points, as a cloud of their own, from the geometry the first pass
+/// left, with the join's flips applied. Writes the tile's extraction file: counts, the
+/// extraction's counters, kept-per-block counts, kept points, segments with provenance (input
+/// indices).
+void extractTile(const Run& r, uint32_t tile, double epsilon, const std::vector<size_t>& nodeOffset,
                  const std::vector<uint8_t>& flip, float avg) {
-  const TileGeometry tg = tileGeometry(r, tile, true);
-  const PointGeometry& g = tg.geo;
-  const size_t n = tg.all.size(), k = size_t(g.k), d = r.denseOf.at(tile);
-  std::vector<uint32_t> local(n, PointGeometry::kNoNeighbour), own;
-  for (size_t i = 0; i < n; ++i)
-    if (tg.owner[i] == tile) local[i] = uint32_t(own.size()), own.push_back(uint32_t(i));
-  const size_t m = own.size();
+  const OwnGeometry og = decodeOwnGeometry(r.ownGeometryPath(tile));
+  const size_t m = og.size(), d = r.denseOf.at(tile);
+  const bool curvature = !og.minDir.empty();
   HybridModel c;
   c.points.resize(m);
   c.attributes.normals = true;
   c.attributes.radii = r.radiusIn;
   PointGeometry sg;
-  sg.k = g.k;
+  sg.k = r.o.geometry.k;
   sg.averageSpacing = avg;
-  sg.neighbours.assign(m * k, PointGeometry::kNoNeighbour);
-  sg.neighbourDistances.assign(m * k, std::numeric_limits<float>::infinity());
-  sg.delaunayOffsets.assign(m + 1, 0);
+  sg.normals.resize(m);
+  sg.spacing = og.spacing;
+  sg.surfaceVariation = og.variation;
+  sg.flags = og.flags;
+  sg.delaunayOffsets = og.starOffsets;
+  sg.delaunayIndices = og.star;
+  if (curvature) sg.minCurvatureDir.resize(m), sg.maxCurvatureDir.resize(m);
   for (size_t j = 0; j < m; ++j) {
-    const size_t i = own[j];
-    const uint32_t comp = tg.extras.component.empty() ? 0 : tg.extras.component[i];
-    const Vec3f nrm = flip[nodeOffset[d] + comp] ? Vec3f(-g.normals[i]) : g.normals[i];
-    c.points[j].position = tg.all.pos[i];
-    c.points[j].normal = nrm;
-    c.points[j].radius = tg.model.points[i].radius;  // the input's, as extractEpsDelta keeps it in memory
-    sg.normals.push_back(nrm);
-    sg.eigenvalues.push_back(g.eigenvalues[i]);
-    sg.surfaceVariation.push_back(g.surfaceVariation[i]);
-    sg.spacing.push_back(g.spacing[i]);
-    sg.coverRadius.push_back(g.coverRadius[i]);
-    sg.flags.push_back(g.flags[i]);
-    size_t t = 0;
-    for (size_t a = 0; a < k; ++a) {
-      const uint32_t q = g.neighbours[i * k + a];
-      if (q == PointGeometry::kNoNeighbour) break;
-      if (local[q] == PointGeometry::kNoNeighbour) continue;
-      sg.neighbours[j * k + t] = local[q];
-      sg.neighbourDistances[j * k + t] = g.neighbourDistances[i * k + a];
-      ++t;
-    }
-    const auto ids = g.delaunayOf(i);
-    const auto ws = g.delaunayWeightsOf(i);
-    for (size_t a = 0; a < ids.size(); ++a)
-      if (local[ids[a]] != PointGeometry::kNoNeighbour) sg.delaunayIndices.push_back(local[ids[a]]), sg.delaunayWeights.push_back(ws[a]);
-    sg.delaunayOffsets[j + 1] = uint32_t(sg.delaunayIndices.size());
+    // A flipped component's curvature: k_min, k_max become -k_max, -k_min, so the directions swap.
+    const bool f = flip[nodeOffset[d] + og.component[j]] != 0;
+    sg.normals[j] = f ? Vec3f(-og.normal[j]) : og.normal[j];
+    if (curvature) sg.minCurvatureDir[j] = f ? og.maxDir[j] : og.minDir[j], sg.maxCurvatureDir[j] = f ? og.minDir[j] : og.maxDir[j];
+    c.points[j].position = og.pos[j];
+    c.points[j].normal = sg.normals[j];
+    c.points[j].radius = og.radius[j];
   }
-  EpsDeltaOptions eo = e;
-  eo.epsilon = epsilon;
-  eo.provenance = true;
-  eo.progress = {};
-  const HybridModel x = extractEpsDelta(c, sg, eo);
+  HybridModel x;
+  std::array<uint64_t, kExtractStats> stats{};
+  if (r.epsDelta) {
+    EpsDeltaOptions eo = *r.epsDelta;
+    eo.epsilon = epsilon;
+    eo.provenance = true;
+    eo.progress = {};
+    EpsDeltaStats st;
+    x = extractEpsDelta(c, sg, eo, &st);
+    stats = statsOf(st);
+  } else {
+    ShapeApproxOptions so = *r.shapeApprox;
+    so.provenance = true;
+    so.progress = {};
+    so.clustering.progress = {};
+    ShapeApproxStats st;
+    x = extractShapeApprox(c, sg, so, &st);
+    stats = statsOf(st);
+  }
   std::vector<uint8_t> replaced(m, 0);
   for (const auto& prov : x.provenance)
     for (uint32_t j : prov) replaced[j] = 1;
-  // File: counts, kept-per-block counts, kept points, segments with provenance (input indices).
-  std::string b = "LSEXT001";
+  std::string b = "LSEXT002";
   const uint64_t kept = uint64_t(x.points.size());
   putRaw(b, kept), putRaw(b, uint64_t(x.segments.size()));
+  for (uint64_t v : stats) putRaw(b, v);
   std::vector<uint32_t> perBlock(r.blocks, 0);
   for (size_t j = 0; j < m; ++j)
-    if (!replaced[j]) ++perBlock[size_t(tg.all.idx[own[j]] / kBlock)];
+    if (!replaced[j]) ++perBlock[size_t(og.idx[j] / kBlock)];
   for (uint32_t v : perBlock) putRaw(b, v);
   size_t at = 0;
   for (size_t j = 0; j < m; ++j) {
     if (replaced[j]) continue;
     const Point& p = x.points[at++];
-    putRaw(b, tg.all.idx[own[j]]), putRaw(b, p.position), putRaw(b, p.normal), putRaw(b, p.radius);
+    putRaw(b, og.idx[j]), putRaw(b, p.position), putRaw(b, p.normal), putRaw(b, p.radius);
   }
   if (at != x.points.size()) throw std::logic_error("extractTile: kept points do not match the provenance");
   for (size_t sI = 0; sI < x.segments.size(); ++sI) {
     const Segment& sgm = x.segments[sI];
     putRaw(b, sgm.p0), putRaw(b, sgm.p1), putRaw(b, sgm.normal), putRaw(b, sgm.normal0), putRaw(b, sgm.normal1), putRaw(b, sgm.radius);
     putRaw(b, uint32_t(x.provenance[sI].size()));
-    for (uint32_t j : x.provenance[sI]) putRaw(b, uint32_t(tg.all.idx[own[j]]));
+    for (uint32_t j : x.provenance[sI]) putRaw(b, uint32_t(og.idx[j]));
   }
   writeWhole(r.extractPath(tile), b);
+  // The tile's geometry is spent: free its disk now rather than at the end of the run.
+  std::error_code ec;
+  fs::remove(r.ownGeometryPath(tile), ec);
 }
 
-void extractTiles(const Run& r, const EpsDeltaOptions& e, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip,
-                  float avg, OocEpsDeltaReport& er) {
+void extractTiles(const Run& r, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip, float avg,
+                  ExtractTotals& et) {
   Timer t;
-  const double epsilon = e.epsilon > 0 ? e.epsilon : e.epsilonRelative * double(avg);
-  er.epsilon = epsilon;
+  if (r.epsDelta) et.epsilon = r.epsDelta->epsilon > 0 ? r.epsDelta->epsilon : r.epsDelta->epsilonRelative * double(avg);
   std::vector<uint32_t> todo;
   std::error_code ec;
   for (size_t d = 0; d < r.tileIds.size(); ++d)
     if (int(d % size_t(r.o.ranks)) == r.o.rank && !fs::exists(r.extractPath(r.tileIds[d]), ec)) todo.push_back(r.tileIds[d]);
-  forEachTile(r, todo, "eps-delta tiles", [&](uint32_t tile) { extractTile(r, tile, e, epsilon, nodeOffset, flip, avg); });
-  er.tExtract = t.seconds();
+  forEachTile(r, todo, r.epsDelta ? "eps-delta tiles" : "shape-approx tiles",
+              [&](uint32_t tile) { extractTile(r, tile, et.epsilon, nodeOffset, flip, avg); });
+  et.tExtract = t.seconds();
 }
 
-void writeHybrid(const Run& r, const EpsDeltaOptions& e, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip,
-                 OocEpsDeltaReport& er) {
-  (void)nodeOffset, (void)flip;
+void writeHybrid(const Run& r, ExtractTotals& et) {
   const size_t T = r.tileIds.size();
-  const size_t headBytes = 8 + 16 + r.blocks * 4;
+  const size_t headBytes = 8 + 16 + kExtractStats * 8 + r.blocks * 4;
   std::vector<uint64_t> kept(T), segs(T);
   std::vector<std::vector<uint32_t>> perBlock(T);
   for (size_t d = 0; d < T; ++d) {
     const fs::path p = r.extractPath(r.tileIds[d]);
     const std::string h = readRange(p, 0, headBytes);
-    if (h.compare(0, 8, "LSEXT001") != 0) throwIo(p.string(), "not a tile extraction file");
+    if (h.compare(0, 8, "LSEXT002") != 0) throwIo(p.string(), "not a tile extraction file");
     const char* q = h.data() + 8;
     kept[d] = getRaw<uint64_t>(q), segs[d] = getRaw<uint64_t>(q);
+    for (uint64_t& v : et.stats) v += getRaw<uint64_t>(q);
     perBlock[d].resize(r.blocks);
     for (uint32_t& v : perBlock[d]) v = getRaw<uint32_t>(q);
-    er.keptPoints += kept[d];
-    er.segments += segs[d];
+    et.kept += kept[d];
+    et.segments += segs[d];
   }
-  er.replacedPoints = r.info.count - er.keptPoints;
   std::vector<std::string> comments = r.info.comments;
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "eps-delta: epsilon=%.9g delta=%.9g k=%d", er.epsilon, e.delta, r.o.geometry.k);
-  comments.push_back(buf);
-  comments.push_back(std::string("eps-delta: normals=") + (r.normalsIn && !r.o.geometry.recomputeNormals ? "file" : "computed"));
+  bool endpointNormals = false, provenance = false;
+  if (r.epsDelta) {
+    const EpsDeltaOptions& e = *r.epsDelta;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "eps-delta: epsilon=%.9g delta=%.9g k=%d", et.epsilon, e.delta, r.o.geometry.k);
+    comments.push_back(buf);
+    comments.push_back(std::string("eps-delta: normals=") + (r.normalsIn && !r.o.geometry.recomputeNormals ? "file" : "computed"));
+    endpointNormals = e.endpointNormals, provenance = e.provenance;
+  } else {
+    const ShapeApproxOptions& sa = *r.shapeApprox;
+    comments.push_back(std::string("linesurf: shape-approximation extraction (§3.2), ") +
+                       (sa.method == ClusteringMethod::Hierarchical ? "hierarchical" : "greedy") + " clustering, delta_n " +
+                       std::to_string(sa.clustering.deltaN));
+    endpointNormals = sa.endpointNormals, provenance = sa.provenance;
+  }
   // The segment element as writePlyModel declares it.
   std::string segHead;
-  if (er.segments > 0) {
-    segHead = "element segment " + std::to_string(er.segments) + "\n";
+  if (et.segments > 0) {
+    segHead = "element segment " + std::to_string(et.segments) + "\n";
     segHead += "property float x0\nproperty float y0\nproperty float z0\nproperty float x1\nproperty float y1\nproperty float z1\n";
     segHead += "property float nx\nproperty float ny\nproperty float nz\n";
     segHead += "property float radius\n";
-    if (e.endpointNormals)
+    if (endpointNormals)
       segHead += "property float nx0\nproperty float ny0\nproperty float nz0\nproperty float nx1\nproperty float ny1\nproperty float nz1\n";
-    if (e.provenance) segHead += "property list uint uint provenance\n";
+    if (provenance) segHead += "property list uint uint provenance\n";
   }
-  PlyPointWriter w(r.out, er.keptPoints, comments, true, true, segHead);
+  PlyPointWriter w(r.out, et.kept, comments, true, true, segHead);
   constexpr size_t kKeptRecord = 8 + 12 + 12 + 4;
   std::vector<uint64_t> used(T, 0);
   std::vector<Vec3f> pos, nrm;
@@ -1101,11 +1250,11 @@ void writeHybrid(const Run& r, const EpsDeltaOptions& e, const std::vector<size_
       const uint32_t cnt = getRaw<uint32_t>(q);
       for (int a = 0; a < 3; ++a) putRaw(rows, v[a]);
       putRaw(rows, radius);
-      if (e.endpointNormals) putRaw(rows, v[3]), putRaw(rows, v[4]);
-      if (e.provenance) putRaw(rows, cnt);
+      if (endpointNormals) putRaw(rows, v[3]), putRaw(rows, v[4]);
+      if (provenance) putRaw(rows, cnt);
       for (uint32_t i = 0; i < cnt; ++i) {
         const uint32_t idx = getRaw<uint32_t>(q);
-        if (e.provenance) putRaw(rows, idx);
+        if (provenance) putRaw(rows, idx);
       }
       if (rows.size() > (8u << 20)) w.writeRaw(rows), rows.clear();
     }
@@ -1116,20 +1265,22 @@ void writeHybrid(const Run& r, const EpsDeltaOptions& e, const std::vector<size_
 
 void joinTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip);
 
-OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocNormalsOptions& o, const EpsDeltaOptions* extract,
-                             OocEpsDeltaReport* er) {
+OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocNormalsOptions& o, const EpsDeltaOptions* epsDelta,
+                             const ShapeApproxOptions* shapeApprox, ExtractTotals* et) {
   validate(o.geometry);
   if (o.workDir.empty()) throwBadParameter("workDir", "empty path");
   if (o.ranks < 1 || o.rank < 0 || o.rank >= o.ranks) throwBadParameter("rank", "must be in [0, ranks)");
   OocNormalsReport rep;
   Run r{o, in, out, o.workDir};
-  r.extract = extract;
+  r.epsDelta = epsDelta;
+  r.shapeApprox = shapeApprox;
+  const bool extract = r.extracting();
   r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), kTilesInFlight)));
   r.ioBytes = std::clamp(o.memoryBytes / 8, 8.0 * 1024 * 1024, 256.0 * 1024 * 1024);
 
   if (o.ranks > 1 && !o.barrier) throwBadParameter("barrier", "needed when ranks > 1");
   const FileIdentity id = fileIdentity(in);
-  const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o, extract);
+  const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o, epsDelta, shapeApprox);
   const fs::path manifestPath = r.dir / "manifest.json";
   std::error_code ec;
   if (o.rank == 0) prepareFolder(r, rep, id, wantInput, wantArgs);
@@ -1159,12 +1310,15 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
   std::vector<uint32_t> todo;
   for (size_t d = 0; d < r.tileIds.size(); ++d) {
     if (int(d % size_t(o.ranks)) != o.rank) continue;
-    if (fs::exists(r.resultPath(r.tileIds[d]), ec) && (!r.curvature() || fs::exists(r.curvaturePath(r.tileIds[d]), ec)))
+    const uint32_t tile = r.tileIds[d];
+    // Done: its result, with the curvature of `normals --curvature`, or with the geometry the
+    // extraction reads (unless the tile is extracted already, which removes it).
+    if (fs::exists(r.resultPath(tile), ec) && (!r.curvatureOut() || fs::exists(r.curvaturePath(tile), ec)) &&
+        (!extract || fs::exists(r.ownGeometryPath(tile), ec) || fs::exists(r.extractPath(tile), ec)))
       ++rep.tilesReused;
     else todo.push_back(r.tileIds[d]);
   }
   reportProgress(o.progress, "tiles", 0.0);
-  // (a tile's normals pass runs without Delaunay lists; the extraction recomputes them per tile)
   forEachTile(r, todo, "tiles", [&](uint32_t tile) { processTile(r, tile); });
   rep.tTiles = t.seconds();
   if (o.barrier) o.barrier();
@@ -1183,12 +1337,12 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
     }
   }
   if (extract) {
-    extractTiles(r, *extract, nodeOffset, flip, rep.averageSpacing, *er);
+    extractTiles(r, nodeOffset, flip, rep.averageSpacing, *et);
     if (o.barrier) o.barrier();
     if (o.rank != 0) return rep;
     t.reset();
-    writeHybrid(r, *extract, nodeOffset, flip, *er);
-    er->tWrite = t.seconds();
+    writeHybrid(r, *et);
+    et->tWrite = t.seconds();
   } else {
     t.reset();
     writeOutput(r, flip, nodeOffset, rep.averageSpacing);
@@ -1254,15 +1408,31 @@ double inMemoryNormalsBytesPerPoint(int k) {
 }
 
 OocNormalsReport computeNormalsOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o) {
-  return runPipeline(in, out, o, nullptr, nullptr);
+  return runPipeline(in, out, o, nullptr, nullptr, nullptr);
 }
 
 OocEpsDeltaReport extractEpsDeltaOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o,
                                            const EpsDeltaOptions& extract) {
   validate(extract);
   OocEpsDeltaReport er;
-  er.geometry = runPipeline(in, out, o, &extract, &er);
+  ExtractTotals et;
+  er.geometry = runPipeline(in, out, o, &extract, nullptr, &et);
+  er.keptPoints = et.kept, er.segments = et.segments, er.replacedPoints = er.geometry.points - et.kept;
+  er.epsilon = et.epsilon;
+  er.seedDirections = et.stats[0], er.candidateDirections = et.stats[1];
+  er.tExtract = et.tExtract, er.tWrite = et.tWrite;
   return er;
+}
+
+OocShapeApproxReport extractShapeApproxOutOfCore(const fs::path& in, const fs::path& out, const OocNormalsOptions& o,
+                                                 const ShapeApproxOptions& extract) {
+  validate(extract);
+  OocShapeApproxReport sr;
+  ExtractTotals et;
+  sr.geometry = runPipeline(in, out, o, nullptr, &extract, &et);
+  sr.stats = shapeApproxStats(et, sr.geometry.points);
+  sr.tExtract = et.tExtract, sr.tWrite = et.tWrite;
+  return sr;
 }
 
 }  // namespace linesurf::ooc
