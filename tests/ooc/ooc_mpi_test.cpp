@@ -1,5 +1,5 @@
-// `mpirun -n 3 linesurf normals` against one process: the same bytes. Skipped where mpirun is
-// missing or the CLI was built without MPI (an optional dependency).
+// `mpirun -n 3 linesurf normals` (and the extractions) against one process: the same bytes.
+// Skipped where mpirun is missing or the CLI was built without MPI (an optional dependency).
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -62,6 +62,15 @@ TEST(OocMpi, ThreeRanksWriteWhatOneProcessWrites) {
                             "' --provenance --tiles 16 -j 1");
   ASSERT_EQ(eThree.exitCode, 0) << eThree.out;
   EXPECT_TRUE(slurp(d / "e3.ply") == slurp(d / "e1.ply"));
+
+  // And the shape approximation, with the clustering that draws random seeds.
+  const std::string sa = " --clustering hierarchical --provenance --tiles 16";
+  const auto sOne = test::runCli("extract shape-approx " + in + " -o '" + (d / "s1.ply").string() + "'" + sa);
+  ASSERT_EQ(sOne.exitCode, 0) << sOne.out;
+  const auto sThree =
+      shell(mpirun + LINESURF_CLI + " extract shape-approx " + in + " -o '" + (d / "s3.ply").string() + "'" + sa + " -j 1");
+  ASSERT_EQ(sThree.exitCode, 0) << sThree.out;
+  EXPECT_TRUE(slurp(d / "s3.ply") == slurp(d / "s1.ply"));
 
   // A bad input stops every rank with the reader's exit code and leaves no output.
   const std::string bytes = slurp(d / "scan.ply");

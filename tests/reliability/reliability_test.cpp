@@ -441,7 +441,7 @@ const std::vector<Case> kCases = {
   {"ViewOverBudget", "view big.ply -o out.html --max-mb 1", 1, {"--output", "page", "--max-mb 1"}},
   {"ConvertXyzOverBudget", "convert big.ply out.xyz --max-mb 1", 1, {"output", "40000 points", "--max-mb 1"}},
   {"EpsDeltaOverBudget", "extract eps-delta big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
-  {"ShapeApproxOverBudget", "extract shape-approx big.ply -o out.ply --max-mb 1", 1, {"big.ply", "--max-mb 1"}},
+  {"ShapeApproxOverBudget", "extract shape-approx big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
   {"RenderGeometryOverBudget", "render big.ply -o out.png --size 16x16 --max-mb 1", 1, {"big.ply", "geometry"}},
   {"MaxMbNan", "normals raw.ply -o out.ply --max-mb nan", 1, {"--max-mb", "nan"}},
   // --- One parameter cannot make unbounded work --------------------------------------------------
