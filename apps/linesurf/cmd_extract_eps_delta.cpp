@@ -10,7 +10,6 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/eps_delta.h"
 #include "options_bind.h"
-#include "linesurf/core/parallel.h"
 #include "linesurf/ooc/ooc_normals.h"
 #include "ooc_cli.h"
 
@@ -28,11 +27,7 @@ struct EpsDeltaArgs {
   }();
   EpsDeltaOptions extract;
   bool ascii = false;
-  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
-  bool outOfCore = false;
-  int tiles = 0;
-  std::string tileDir;
-  bool keepTiles = false;
+  OutOfCoreFlags ooc;  // picked by itself when the input would not fit --max-mb
 };
 
 void runOutOfCore(EpsDeltaArgs& a, const std::string& why) {
@@ -40,28 +35,13 @@ void runOutOfCore(EpsDeltaArgs& a, const std::string& why) {
   if (a.ascii) throwBadParameter("--ascii", "the out-of-core path writes binary PLY");
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
-  ooc::OocNormalsOptions o;
-  o.geometry = a.geometry;
-  o.workDir = a.tileDir.empty() ? a.output + ".tiles" : a.tileDir;
-  o.memoryBytes = outOfCoreBudgetBytes();
-  o.minTiles = a.tiles;
-  o.keepWorkDir = a.keepTiles;
-  o.progress = withTimeLeft(progressBar());
-  o.rank = mpi.rank;
-  o.ranks = mpi.ranks;
-  o.barrier = mpi.barrier();
-  say(fmt::format("{}: out of core ({}), tiles in {}{}", a.input, why, o.workDir.string(),
-                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
   ooc::OocEpsDeltaReport r;
   mpi.guard([&] { r = ooc::extractEpsDeltaOutOfCore(a.input, a.output, o, a.extract); });
   endProgress();
   if (mpi.rank != 0) return;
   const ooc::OocNormalsReport& g = r.geometry;
-  if (g.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
-  say(fmt::format("input        {} points ({}), {} tiles (largest {} points with halo){}, {} threads", g.points, a.input, g.tiles,
-                  g.tilePointsMax, g.tilesReused ? fmt::format(", {} reused", g.tilesReused) : "", currentThreadCount()));
-  say(fmt::format("halo         {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", g.haloWidenings,
-                  g.inexactPoints));
+  sayTiles(g, a.input);
   say(fmt::format("tolerances   epsilon {:.6g}{}  delta {:.6g}", r.epsilon,
                   a.extract.epsilon > 0 ? std::string() : fmt::format(" ({} x average spacing {:.6g})", a.extract.epsilonRelative, g.averageSpacing),
                   a.extract.delta));
@@ -80,8 +60,8 @@ void run(EpsDeltaArgs& a) {
   validate(o);  // before the (long) geometry stage
   validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}}, false);
-  if (a.outOfCore || a.tiles > 0 || !a.tileDir.empty() || launchedRanks() > 1) {
-    runOutOfCore(a, a.tiles > 0 ? fmt::format("--tiles {}", a.tiles) : launchedRanks() > 1 ? "started by mpirun" : "--out-of-core");
+  if (const std::string why = a.ooc.requested(); !why.empty()) {
+    runOutOfCore(a, why);
     return;
   }
   {
@@ -138,11 +118,7 @@ RegisterCommand reg(31, [](CLI::App& app) {
   b.option("epsilon")->excludes(b.option("epsilonRelative"));
   bindGeometryOptions(sub, a->geometry);
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
-  sub->add_flag("--out-of-core", a->outOfCore,
-                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
-  sub->add_option("--tiles", a->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
-  sub->add_option("--tile-dir", a->tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
-  sub->add_flag("--keep-tiles", a->keepTiles, "Keep the tile folder after a successful out-of-core run");
+  bindOutOfCoreFlags(sub, a->ooc);
   sub->callback([a] { run(*a); });
 });
 

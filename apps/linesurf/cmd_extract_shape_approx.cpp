@@ -15,7 +15,6 @@
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
-#include "linesurf/core/parallel.h"
 #include "linesurf/ooc/ooc_normals.h"
 #include "ooc_cli.h"
 
@@ -27,11 +26,7 @@ struct ShapeApproxArgs {
   GeometryOptions geometry;  // curvature on: §3.2.4.2 needs minimum-curvature directions
   ShapeApproxOptions extract;
   bool ascii = false;
-  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
-  bool outOfCore = false;
-  int tiles = 0;
-  std::string tileDir;
-  bool keepTiles = false;
+  OutOfCoreFlags ooc;  // picked by itself when the input would not fit --max-mb
 };
 
 std::string histogramText(const ShapeApproxStats& st) {
@@ -61,29 +56,14 @@ void runOutOfCore(ShapeApproxArgs& a, const std::string& why) {
     throwBadParameter("--clusters-out", "is not written out of core (clusters are cut per tile); run in memory for it");
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
-  ooc::OocNormalsOptions o;
-  o.geometry = a.geometry;
-  o.workDir = a.tileDir.empty() ? a.output + ".tiles" : a.tileDir;
-  o.memoryBytes = outOfCoreBudgetBytes();
-  o.minTiles = a.tiles;
-  o.keepWorkDir = a.keepTiles;
-  o.progress = withTimeLeft(progressBar());
-  o.rank = mpi.rank;
-  o.ranks = mpi.ranks;
-  o.barrier = mpi.barrier();
-  say(fmt::format("{}: out of core ({}), tiles in {}{}", a.input, why, o.workDir.string(),
-                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
   ooc::OocShapeApproxReport r;
   mpi.guard([&] { r = ooc::extractShapeApproxOutOfCore(a.input, a.output, o, a.extract); });
   endProgress();
   if (mpi.rank != 0) return;
   const ooc::OocNormalsReport& g = r.geometry;
   const ShapeApproxStats& st = r.stats;
-  if (g.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
-  say(fmt::format("input        {} points ({}), {} tiles (largest {} points with halo){}, {} threads", g.points, a.input, g.tiles,
-                  g.tilePointsMax, g.tilesReused ? fmt::format(", {} reused", g.tilesReused) : "", currentThreadCount()));
-  say(fmt::format("halo         {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", g.haloWidenings,
-                  g.inexactPoints));
+  sayTiles(g, a.input);
   say(fmt::format("clusters     {} (cut at tile borders); sizes {}", st.clusters, histogramText(st)));
   sayCounts(st, a.extract, a.output);
   say(fmt::format("times        bbox {:.3f} s, partition {:.3f} s, geometry tiles {:.3f} s, orientation {:.3f} s, "
@@ -97,8 +77,8 @@ void run(ShapeApproxArgs& a) {
   validate(o);  // before the (long) geometry stage
   validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}, {"--clusters-out", a.clustersOut, {".ply", ".xyz"}}}, false);
-  if (a.outOfCore || a.tiles > 0 || !a.tileDir.empty() || launchedRanks() > 1) {
-    runOutOfCore(a, a.tiles > 0 ? fmt::format("--tiles {}", a.tiles) : launchedRanks() > 1 ? "started by mpirun" : "--out-of-core");
+  if (const std::string why = a.ooc.requested(); !why.empty()) {
+    runOutOfCore(a, why);
     return;
   }
   {
@@ -165,11 +145,7 @@ RegisterCommand reg(32, [](CLI::App& app) {
   // on here (§3.2.4.2 needs minimum-curvature directions); --no-curvature: from the rectangles only
   bindOptions(sub, a->geometry, {"curvature"});
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
-  sub->add_flag("--out-of-core", a->outOfCore,
-                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
-  sub->add_option("--tiles", a->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
-  sub->add_option("--tile-dir", a->tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
-  sub->add_flag("--keep-tiles", a->keepTiles, "Keep the tile folder after a successful out-of-core run");
+  bindOutOfCoreFlags(sub, a->ooc);
   sub->callback([a] { run(*a); });
 });
 

@@ -24,11 +24,7 @@ struct NormalsArgs {
     g.delaunayNeighbours = g.curvature = false;  // --curvature turns both on
     return g;
   }();
-  // Out of core (ooc/ooc_normals.h): picked by itself when the input would not fit --max-mb.
-  bool outOfCore = false;
-  int tiles = 0;
-  std::string tileDir;
-  bool keepTiles = false;
+  OutOfCoreFlags ooc;  // picked by itself when the input would not fit --max-mb
 };
 
 void runOutOfCore(const NormalsArgs& args, const std::string& why) {
@@ -38,18 +34,7 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   std::string ext = std::filesystem::path(args.out).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext != ".ply") throwBadParameter("--output", "the out-of-core path writes .ply");
-  ooc::OocNormalsOptions o;
-  o.geometry = args.geometry;
-  o.workDir = args.tileDir.empty() ? args.out + ".tiles" : args.tileDir;
-  o.memoryBytes = outOfCoreBudgetBytes();
-  o.minTiles = args.tiles;
-  o.keepWorkDir = args.keepTiles;
-  o.progress = withTimeLeft(progressBar());
-  o.rank = mpi.rank;
-  o.ranks = mpi.ranks;
-  o.barrier = mpi.barrier();
-  say(fmt::format("{}: out of core ({}), tiles in {}{}", args.in, why, o.workDir.string(),
-                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  const ooc::OocNormalsOptions o = outOfCoreOptions(args.geometry, args.in, args.out, args.ooc, mpi, why);
   ooc::OocNormalsReport r;
   mpi.guard([&] { r = ooc::computeNormalsOutOfCore(args.in, args.out, o); });
   endProgress();
@@ -76,10 +61,8 @@ void run(const NormalsArgs& args) {
   validate(args.geometry);  // before reading the cloud
   // The path is chosen below by its own estimate (in memory or out of core).
   checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}}, /*inputsHeldWhole=*/false);
-  if (args.outOfCore || args.tiles > 0 || !args.tileDir.empty() || launchedRanks() > 1) {
-    runOutOfCore(args, args.tiles > 0            ? fmt::format("--tiles {}", args.tiles)
-                       : launchedRanks() > 1     ? std::string("started by mpirun")
-                                                 : std::string("--out-of-core"));
+  if (const std::string why = args.ooc.requested(); !why.empty()) {
+    runOutOfCore(args, why);
     return;
   }
   {
@@ -134,12 +117,7 @@ RegisterCommand reg(20, [](CLI::App& app) {
   GeometryOptions& o = args->geometry;
   // --curvature also writes vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z
   bindOptions(sub, o, {"k", "recomputeNormals", "orientNormals", "orientationPenalty", "curvature", "curvatureFit"});
-  sub->add_flag("--out-of-core", args->outOfCore,
-                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
-  sub->add_option("--tiles", args->tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
-  sub->add_option("--tile-dir", args->tileDir,
-                  "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
-  sub->add_flag("--keep-tiles", args->keepTiles, "Keep the tile folder after a successful out-of-core run");
+  bindOutOfCoreFlags(sub, args->ooc);
   sub->callback([args] { run(*args); });
 });
 

@@ -16,12 +16,53 @@
 
 #include "command.h"
 #include "linesurf/core/error.h"
+#include "linesurf/core/parallel.h"
 #include "linesurf/ooc/ooc_normals.h"
 #include "linesurf/ooc/point_stream.h"
 
 namespace linesurf::cli {
 
 double memoryBudgetBytes() { return budget().bytes(); }
+
+std::string OutOfCoreFlags::requested() const {
+  if (tiles > 0) return fmt::format("--tiles {}", tiles);
+  if (launchedRanks() > 1) return "started by mpirun";
+  if (outOfCore || !tileDir.empty()) return "--out-of-core";
+  return "";
+}
+
+void bindOutOfCoreFlags(CLI::App* sub, OutOfCoreFlags& f) {
+  sub->add_flag("--out-of-core", f.outOfCore,
+                "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
+  sub->add_option("--tiles", f.tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
+  sub->add_option("--tile-dir", f.tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
+  sub->add_flag("--keep-tiles", f.keepTiles, "Keep the tile folder after a successful out-of-core run");
+}
+
+ooc::OocNormalsOptions outOfCoreOptions(const GeometryOptions& geometry, const std::string& in, const std::string& out,
+                                        const OutOfCoreFlags& f, const MpiRun& mpi, const std::string& why) {
+  ooc::OocNormalsOptions o;
+  o.geometry = geometry;
+  o.workDir = f.tileDir.empty() ? out + ".tiles" : f.tileDir;
+  o.memoryBytes = outOfCoreBudgetBytes();
+  o.minTiles = f.tiles;
+  o.keepWorkDir = f.keepTiles;
+  o.progress = withTimeLeft(progressBar());
+  o.rank = mpi.rank;
+  o.ranks = mpi.ranks;
+  o.barrier = mpi.barrier();
+  say(fmt::format("{}: out of core ({}), tiles in {}{}", in, why, o.workDir.string(),
+                  mpi.ranks > 1 ? fmt::format(", {} MPI ranks", mpi.ranks) : ""));
+  return o;
+}
+
+void sayTiles(const ooc::OocNormalsReport& g, const std::string& in) {
+  if (g.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
+  say(fmt::format("input        {} points ({}), {} tiles (largest {} points with halo){}, {} threads", g.points, in, g.tiles,
+                  g.tilePointsMax, g.tilesReused ? fmt::format(", {} reused", g.tilesReused) : "", currentThreadCount()));
+  say(fmt::format("halo         {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", g.haloWidenings,
+                  g.inexactPoints));
+}
 
 double outOfCoreBudgetBytes() {
   // The streaming reader's and writer's buffers (8 MiB each at least) and one tile in flight: below

@@ -1,12 +1,40 @@
 #pragma once
-// The out-of-core path's CLI side, shared by `normals` and `extract eps-delta`: the memory budget
-// that decides it, the progress label with the time left, and MPI (optional, LINESURF_HAVE_MPI).
+// The out-of-core path's CLI side, shared by `normals` and the extractions: its flags, the memory
+// budget that decides it, the progress label with the time left, and MPI (optional,
+// LINESURF_HAVE_MPI).
 #include <functional>
 #include <string>
 
 #include "linesurf/core/progress.h"
+#include "linesurf/ooc/ooc_normals.h"
+
+namespace CLI {
+class App;
+}
 
 namespace linesurf::cli {
+
+struct MpiRun;
+
+/// --out-of-core, --tiles, --tile-dir, --keep-tiles.
+struct OutOfCoreFlags {
+  bool outOfCore = false;
+  int tiles = 0;
+  std::string tileDir;
+  bool keepTiles = false;
+  /// Why the command must go out of core whatever the budget ("--tiles 8", "started by mpirun",
+  /// "--out-of-core"), or empty.
+  std::string requested() const;
+};
+void bindOutOfCoreFlags(CLI::App* command, OutOfCoreFlags& flags);
+
+/// One out-of-core run's options (budget, tile folder OUT.tiles unless --tile-dir, progress, this
+/// MPI rank), after saying "IN: out of core (why), tiles in DIR".
+ooc::OocNormalsOptions outOfCoreOptions(const GeometryOptions& geometry, const std::string& in, const std::string& out,
+                                        const OutOfCoreFlags& flags, const MpiRun& mpi, const std::string& why);
+
+/// The extractions' lines on the tiles: input, tiles, reuse, halos.
+void sayTiles(const ooc::OocNormalsReport& r, const std::string& in);
 
 /// The memory budget of a run, bytes: --max-mb. (One place, so that a reworked budget
 /// mechanism changes only this.)

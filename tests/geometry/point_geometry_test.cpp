@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "geometry/detail/local_delaunay.h"
 #include "linesurf/core/error.h"
@@ -227,6 +229,86 @@ TEST(PointGeometry, IdenticalForOneAndTwoThreads) {
   EXPECT_EQ(g1.spacing, g2.spacing);
   EXPECT_EQ(g1.flags, g2.flags);
   EXPECT_EQ(g1.orientationFlips, g2.orientationFlips);
+}
+
+// The orientation's forest is the unique minimum spanning forest of the symmetrised kNN graph
+// under the order (weight, lower index, higher index), found here by Kruskal: every one of its
+// edges joins two normals that agree, and every normal is its unoriented normal up to sign. A
+// flat grid gives many equal weights, where an order that breaks ties differently would fail.
+TEST(PointGeometry, OrientationFollowsTheUniqueMinimumSpanningForest) {
+  shapes::SampleOptions so{.noise = 0.1f, .irregular = true, .seed = 4};
+  HybridModel cloud = shapes::torus(2, 0.7f, 90, 30, so);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) cloud.points.push_back({.position = Vec3f(6 + 0.05f * float(x), 0.05f * float(y), 0.0f)});
+  GeometryOptions raw = recompute();
+  raw.orientNormals = false;
+  const PointGeometry g0 = computePointGeometry(cloud, raw);
+  const PointGeometry g = computePointGeometry(cloud, recompute());
+  const size_t n = cloud.points.size();
+  const int k = g0.k;
+  const float penalty = recompute().orientationPenalty;
+  struct E {
+    float w;
+    uint32_t lo, hi;
+  };
+  std::vector<E> edges;
+  for (size_t i = 0; i < n; ++i)
+    for (int t = 0; t < k; ++t) {
+      const uint32_t j = g0.neighbours[i * size_t(k) + size_t(t)];
+      if (j == PointGeometry::kNoNeighbour) break;
+      const uint32_t lo = std::min(uint32_t(i), j), hi = std::max(uint32_t(i), j);
+      const Vec3f& a = g0.normals[lo];
+      const Vec3f& b = g0.normals[hi];
+      float w = 1.0f - std::abs(a.dot(b));
+      const Vec3f d = cloud.points[hi].position - cloud.points[lo].position;
+      const float l2 = d.squaredNorm();
+      if (l2 > 0) w += penalty * std::abs(a.dot(d)) * std::abs(b.dot(d)) / l2;
+      edges.push_back({w, lo, hi});
+    }
+  std::sort(edges.begin(), edges.end(), [](const E& a, const E& b) { return std::tie(a.w, a.lo, a.hi) < std::tie(b.w, b.lo, b.hi); });
+  size_t ties = 0;
+  for (size_t e = 1; e < edges.size(); ++e) ties += edges[e].w == edges[e - 1].w && (edges[e].lo != edges[e - 1].lo || edges[e].hi != edges[e - 1].hi);
+  EXPECT_GT(ties, 1000u);
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  size_t treeEdges = 0, disagreeing = 0;
+  for (const E& e : edges) {
+    const uint32_t a = find(e.lo), b = find(e.hi);
+    if (a == b) continue;
+    parent[std::max(a, b)] = std::min(a, b);
+    ++treeEdges;
+    disagreeing += g.normals[e.lo].dot(g.normals[e.hi]) < 0;
+  }
+  EXPECT_EQ(treeEdges, n - g.orientationComponents);
+  EXPECT_EQ(g.orientationComponents, 2u);
+  EXPECT_EQ(disagreeing, 0u);
+  size_t flipped = 0;
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_TRUE(g.normals[i] == g0.normals[i] || g.normals[i] == Vec3f(-g0.normals[i])) << i;
+    flipped += g.normals[i] != g0.normals[i];
+  }
+  EXPECT_EQ(flipped, g.orientationFlips);
+}
+
+// Normals from a file stay as they are; the points without one take their orientation from them
+// along the forest (a Prim search from all of them at once), here outward on a sphere.
+TEST(PointGeometry, PointsWithoutFileNormalsFollowTheFileNormals) {
+  HybridModel cloud = shapes::sphere(1, 2000);
+  cloud.attributes.normals = true;
+  size_t missing = 0;
+  for (size_t i = 0; i < cloud.points.size(); ++i)
+    if (i % 7 != 0) cloud.points[i].normal = Vec3f::Zero(), ++missing;  // one in seven kept
+  const PointGeometry g = computePointGeometry(cloud, GeometryOptions{});
+  EXPECT_EQ(g.orientationComponents, 1u);
+  EXPECT_GT(missing, 1000u);
+  for (size_t i = 0; i < cloud.points.size(); ++i) {
+    EXPECT_GT(g.normals[i].dot(cloud.points[i].position), 0.5f) << i;
+    if (i % 7 == 0) EXPECT_EQ(g.normals[i], cloud.points[i].normal.normalized());
+  }
 }
 
 TEST(PointGeometry, DuplicatesCountedWithoutNan) {
