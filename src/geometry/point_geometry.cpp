@@ -245,6 +245,18 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
       live[u] = off[u] + uint32_t(std::unique(first, last) - first);
     }
   }, 4096);
+  {
+    // Packed without the repeats (a third of the entries on scans), before the keys double them.
+    std::vector<uint32_t> packedOff(n + 1, 0);
+    for (size_t i = 0; i < n; ++i) packedOff[i + 1] = packedOff[i] + (live[i] - off[i]);
+    std::vector<uint32_t> packed(packedOff[n]);
+    parallelFor(0, n, [&](size_t i) {
+      std::copy(adj.begin() + off[i], adj.begin() + live[i], packed.begin() + packedOff[i]);
+      live[i] = packedOff[i + 1];
+    }, 4096);
+    adj.swap(packed);
+    off.swap(packedOff);
+  }
 
   // The minimum spanning forest by Borůvka's algorithm, parallel over points. Edges are ordered
   // by (weight, lower index, higher index), a strict total order, so the forest is unique and

@@ -1402,10 +1402,10 @@ void joinTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOff
 
 double inMemoryNormalsBytesPerPoint(int k) {
   // Model point (~64 B), neighbour rows (8k), PCA and flags (~40), symmetrised adjacency with its
-  // edge keys (16k) and the forest's per-point sets (~50) while the orientation runs, later the
-  // Delaunay scratch (8k + 4), spacing and cover radius (8), kd-tree (~8), plus the reader's copy
-  // of the file's rows while the model is built (~24). Measured: 453 B a point at k = 12 (2 M
-  // points), under the 478 this gives.
+  // edge keys (~11k, packed) and the forest's per-point sets (~50) while the orientation runs,
+  // later the Delaunay scratch (8k + 4), spacing and cover radius (8), kd-tree (~8), plus the
+  // reader's copy of the file's rows while the model is built (~24). Measured at k = 12: 386 B a
+  // point at 2 M points, 372 at 10 M, under the 478 this gives.
   return 190.0 + 24.0 * double(k);
 }
 

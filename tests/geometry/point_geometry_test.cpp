@@ -307,7 +307,9 @@ TEST(PointGeometry, PointsWithoutFileNormalsFollowTheFileNormals) {
   EXPECT_GT(missing, 1000u);
   for (size_t i = 0; i < cloud.points.size(); ++i) {
     EXPECT_GT(g.normals[i].dot(cloud.points[i].position), 0.5f) << i;
-    if (i % 7 == 0) EXPECT_EQ(g.normals[i], cloud.points[i].normal.normalized());
+    if (i % 7 == 0) {
+      EXPECT_EQ(g.normals[i], cloud.points[i].normal.normalized());
+    }
   }
 }
 

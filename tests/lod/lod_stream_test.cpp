@@ -107,8 +107,12 @@ TEST(LodStream, SameBytesAsInMemoryForAnySubtreeSizeAndThreads) {
       const std::string got = streamed(dir / "m.ply", dir / "s.lod", o, mb * 1024 * 1024, &rep);
       EXPECT_TRUE(got == want) << mb << " MiB, " << threads << " threads: " << got.size() << " vs " << want.size()
                                << " bytes";
-      if (mb < 1) EXPECT_GE(rep.chunks, 8u);
-      if (mb > 100) EXPECT_EQ(rep.chunks, 1u);
+      if (mb < 1) {
+        EXPECT_GE(rep.chunks, 8u);
+      }
+      if (mb > 100) {
+        EXPECT_EQ(rep.chunks, 1u);
+      }
     }
   }
   EXPECT_EQ(entries(dir), 2u) << "a working file was left";  // m.ply, s.lod

@@ -442,6 +442,8 @@ const std::vector<Case> kCases = {
   {"ConvertXyzOverBudget", "convert big.ply out.xyz --max-mb 1", 1, {"output", "40000 points", "--max-mb 1"}},
   {"EpsDeltaOverBudget", "extract eps-delta big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
   {"ShapeApproxOverBudget", "extract shape-approx big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
+  {"ShapeApproxClustersOutOfCore", "extract shape-approx pts.ply -o out.ply --clusters-out c.ply --tiles 2", 1,
+   {"--clusters-out", "out of core"}},
   {"RenderGeometryOverBudget", "render big.ply -o out.png --size 16x16 --max-mb 1", 1, {"big.ply", "geometry"}},
   {"MaxMbNan", "normals raw.ply -o out.ply --max-mb nan", 1, {"--max-mb", "nan"}},
   // --- One parameter cannot make unbounded work --------------------------------------------------
