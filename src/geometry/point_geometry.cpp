@@ -14,7 +14,6 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
-#include <queue>
 #include <tuple>
 
 #include "geometry/detail/local_delaunay.h"
