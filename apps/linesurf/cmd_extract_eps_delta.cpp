@@ -10,7 +10,7 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/eps_delta.h"
 #include "options_bind.h"
-#include "linesurf/ooc/ooc_normals.h"
+#include "linesurf/ooc/ooc_extract.h"
 #include "ooc_cli.h"
 
 #include <filesystem>
@@ -112,8 +112,8 @@ RegisterCommand reg(31, [](CLI::App& app) {
   EpsDeltaOptions& o = a->extract;
   CLI::App* sub = extractCommand(app)->add_subcommand(
       "eps-delta", "(epsilon, delta) error-bounded line segment extraction from a point cloud (thesis §3.1)");
-  sub->add_option("IN", a->input, "Input point cloud (.ply, .xyz; a mesh gives its vertices)")->required();
-  sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->required();
+  sub->add_option("IN", a->input, "Input point cloud (.ply, .xyz; a mesh gives its vertices)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->type_name("FILE")->required();
   const TableBinder b = bindOptions(sub, o);
   b.option("epsilon")->excludes(b.option("epsilonRelative"));
   bindGeometryOptions(sub, a->geometry);

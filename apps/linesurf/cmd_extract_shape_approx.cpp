@@ -15,7 +15,7 @@
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
-#include "linesurf/ooc/ooc_normals.h"
+#include "linesurf/ooc/ooc_extract.h"
 #include "ooc_cli.h"
 
 namespace linesurf::cli {
@@ -137,9 +137,9 @@ RegisterCommand reg(32, [](CLI::App& app) {
   ShapeApproxOptions& o = a->extract;
   CLI::App* sub = extract->add_subcommand(
       "shape-approx", "Shape-approximation extraction: normal-variation clusters, bunches of parallel segments (thesis §3.2)");
-  sub->add_option("IN", a->input, "Input point cloud (.ply, .xyz)")->required();
-  sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->required();
-  sub->add_option("--clusters-out", a->clustersOut, "Also write the cloud coloured by cluster (.ply)");
+  sub->add_option("IN", a->input, "Input point cloud (.ply, .xyz)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->type_name("FILE")->required();
+  sub->add_option("--clusters-out", a->clustersOut, "Also write the cloud coloured by cluster (.ply)")->type_name("FILE");
   bindOptions(sub, o);
   bindGeometryOptions(sub, a->geometry);
   // on here (§3.2.4.2 needs minimum-curvature directions); --no-curvature: from the rectangles only

@@ -1,4 +1,4 @@
-// The extractions out of core (ooc/ooc_normals.h), (ε,δ) and shape approximation, against the
+// The extractions out of core (ooc/ooc_extract.h), (ε,δ) and shape approximation, against the
 // in-memory extractions.
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/io/model_io.h"
-#include "linesurf/ooc/ooc_normals.h"
+#include "linesurf/ooc/ooc_extract.h"
 #include "linesurf/ooc/synthetic_scan.h"
 #include "test_util.h"
 

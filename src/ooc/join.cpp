@@ -1,0 +1,185 @@
+// The join stage of the out-of-core pipeline (see join.h): the tiles' MST orientations (§6.1)
+// made to agree through the points they share.
+#include "ooc/join.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "linesurf/core/error.h"
+#include "linesurf/core/timer.h"
+
+namespace linesurf::ooc::detail {
+namespace {
+
+struct Dsu {
+  std::vector<uint32_t> p;
+  explicit Dsu(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0u); }
+  uint32_t find(uint32_t x) {
+    while (p[x] != x) x = p[x] = p[p[x]];
+    return x;
+  }
+};
+
+/// Flip per (tile, component) node so that the tiles agree on their shared points: a maximum
+/// spanning forest of the vote graph (weight |agree - disagree|), one seed per connected part
+/// chosen by the in-memory rule (extreme points along +z, -z, +x, -x, +y, -y).
+std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOffset) {
+  const size_t T = r.tileIds.size();
+  std::vector<ResultView> views(T);
+  nodeOffset.assign(T + 1, 0);
+  for (size_t d = 0; d < T; ++d) {
+    const fs::path p = r.resultPath(r.tileIds[d]);
+    const std::string b = readRange(p, 0, fs::file_size(p));
+    views[d] = decodeResultMeta(b, p, true);
+    nodeOffset[d + 1] = nodeOffset[d] + views[d].summary.components;
+  }
+  const size_t nodes = nodeOffset[T];
+  std::map<std::pair<uint32_t, uint32_t>, std::array<uint64_t, 2>> votes;  // (lo, hi) -> agree, disagree
+  for (size_t b = 0; b < T; ++b) {
+    // The owner's interior records for the points the neighbours share with it.
+    const uint32_t tile = r.tileIds[b];
+    bool any = false;
+    for (size_t a = 0; a < T && !any; ++a) any = views[a].shared.count(tile) > 0;
+    if (!any) continue;
+    const size_t count = views[b].summary.interior;
+    Points pts;
+    decodeRecords(readRange(r.cellPath(tile), 0, count * r.recordBytes()), r.normalsIn, r.radiusIn, pts);
+    const std::string res = readRange(r.resultPath(tile), views[b].interiorOffset, count * kResultRecord);
+    for (size_t a = 0; a < T; ++a) {
+      auto it = views[a].shared.find(tile);
+      if (it == views[a].shared.end()) continue;
+      size_t j = 0;
+      for (const SharedPoint& sp : it->second) {
+        while (j < count && pts.idx[j] < sp.index) ++j;
+        if (j >= count || pts.idx[j] != sp.index) continue;
+        const InteriorResult own = decodeInterior(res.data() + j * kResultRecord);
+        const uint32_t na = uint32_t(nodeOffset[a] + sp.component), nb = uint32_t(nodeOffset[b] + own.component);
+        if (na == nb) continue;
+        const bool agree = own.normal.dot(sp.normal) >= 0;
+        auto& v = votes[{std::min(na, nb), std::max(na, nb)}];
+        ++v[agree ? 0 : 1];
+      }
+    }
+  }
+  struct Edge {
+    uint64_t strength;
+    uint32_t a, b;
+    bool flip;
+  };
+  std::vector<Edge> edges;
+  for (auto& [k, v] : votes)
+    edges.push_back({v[0] > v[1] ? v[0] - v[1] : v[1] - v[0], k.first, k.second, v[1] > v[0]});
+  std::stable_sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return x.strength > y.strength; });
+  Dsu dsu(nodes);
+  std::vector<std::vector<std::pair<uint32_t, bool>>> forest(nodes);
+  for (const Edge& e : edges) {
+    const uint32_t ra = dsu.find(e.a), rb = dsu.find(e.b);
+    if (ra == rb) continue;
+    dsu.p[std::max(ra, rb)] = std::min(ra, rb);
+    forest[e.a].push_back({e.b, e.flip});
+    forest[e.b].push_back({e.a, e.flip});
+  }
+  // Extremes per connected part, then its seed by the in-memory rule.
+  std::vector<std::array<Extreme, 6>> partExt(nodes);
+  std::vector<uint32_t> nodeTile(nodes);
+  for (size_t d = 0; d < T; ++d)
+    for (uint32_t c = 0; c < views[d].summary.components; ++c) {
+      const uint32_t node = uint32_t(nodeOffset[d] + c);
+      nodeTile[node] = uint32_t(d);
+      const uint32_t root = dsu.find(node);
+      for (size_t k = 0; k < 6; ++k) {
+        const Extreme& e = views[d].extremes[c][k];
+        Extreme& best = partExt[root][k];
+        if (e.index == UINT64_MAX) continue;
+        if (e.value > best.value || (e.value == best.value && e.index < best.index)) best = e;
+      }
+    }
+  std::vector<uint8_t> flip(nodes, 0), seen(nodes, 0);
+  std::vector<uint32_t> queue;
+  for (uint32_t node = 0; node < nodes; ++node) {
+    const uint32_t root = dsu.find(node);
+    if (root != node) continue;
+    // The seed node: the one holding the chosen extreme point.
+    const auto& pe = partExt[root];
+    if (pe[0].index != UINT64_MAX) ++rep.orientationComponents;  // parts made of halo points only are not counted
+    int chosen = -1;
+    float bestAlign = -1;
+    for (size_t k = 0; k < 6; ++k) {
+      if (pe[k].index == UINT64_MAX) continue;
+      const float align = std::abs(pe[k].normal.dot(kSeedDirs[k]));
+      if (align > bestAlign) bestAlign = align, chosen = int(k);
+      if (align >= 0.866f) break;
+    }
+    // Find the node that owns the extreme (the first node of this part whose extreme it is).
+    uint32_t seed = root;
+    bool seedFlip = false;
+    if (chosen >= 0) {
+      for (uint32_t v = 0; v < nodes; ++v) {
+        if (dsu.find(v) != root) continue;
+        const auto& e = views[nodeTile[v]].extremes[v - nodeOffset[nodeTile[v]]][size_t(chosen)];
+        if (e.index == pe[size_t(chosen)].index) {
+          seed = v;
+          seedFlip = e.normal.dot(kSeedDirs[size_t(chosen)]) < 0;
+          break;
+        }
+      }
+    }
+    flip[seed] = seedFlip;
+    seen[seed] = 1;
+    queue.assign(1, seed);
+    for (size_t h = 0; h < queue.size(); ++h) {
+      const uint32_t u = queue[h];
+      for (auto [v, rel] : forest[u])
+        if (!seen[v]) seen[v] = 1, flip[v] = uint8_t(flip[u] ^ uint8_t(rel)), queue.push_back(v);
+    }
+  }
+  for (uint8_t f : flip) rep.tileFlips += f;
+  for (auto& [k, v] : votes) rep.disagreeingVotes += (flip[k.first] ^ flip[k.second]) ? v[0] : v[1];
+  return flip;
+}
+
+}  // namespace
+
+void joinTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip) {
+  const OocNormalsOptions& o = r.o;
+  std::error_code ec;
+  Timer t;
+  // Summaries: spacing, flags, halo statistics.
+  double spacingSum = 0;
+  uint64_t spacingCount = 0;
+  for (uint32_t tile : r.tileIds) {
+    const fs::path p = r.resultPath(tile);
+    if (!fs::exists(p, ec)) throwIo(p.string(), "tile result missing (did every rank finish?)");
+  }
+  const bool orient = o.geometry.orientNormals && !(r.normalsIn && !o.geometry.recomputeNormals);
+  {
+    // The summaries (read whole: the extremes follow the interior records).
+    for (uint32_t tile : r.tileIds) {
+      const fs::path p = r.resultPath(tile);
+      const TileSummary s = readSummary(p);
+      spacingSum += s.spacingSum;
+      spacingCount += s.spacingCount;
+      rep.duplicate += s.flagCounts[0], rep.fewNeighbours += s.flagCounts[1], rep.flat += s.flagCounts[2];
+      rep.isolated += s.flagCounts[3];
+      rep.inexactPoints += s.inexact;
+      rep.haloWidenings += s.widenings;
+      rep.tilePointsMax = std::max<size_t>(rep.tilePointsMax, s.withHalo);
+    }
+  }
+  rep.averageSpacing = spacingCount > 0 ? float(spacingSum / double(spacingCount)) : 0.0f;
+  if (orient) {
+    reportProgress(o.progress, "orientation", 0.0);
+    flip = orientTiles(r, rep, nodeOffset);
+    reportProgress(o.progress, "orientation", 1.0);
+  } else {
+    nodeOffset.assign(r.tileIds.size() + 1, 0);
+    for (size_t d = 0; d < r.tileIds.size(); ++d) {
+      const TileSummary s = readSummary(r.resultPath(r.tileIds[d]));
+      nodeOffset[d + 1] = nodeOffset[d] + s.components;
+    }
+    flip.assign(nodeOffset.back(), 0);
+  }
+  rep.tOrient = t.seconds();
+}
+
+}  // namespace linesurf::ooc::detail

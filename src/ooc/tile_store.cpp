@@ -1,0 +1,204 @@
+// The tile folder's files and records (see tile_store.h; format in docs/file-format.md "Tile folder").
+#include "ooc/tile_store.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+
+#include "linesurf/core/error.h"
+
+namespace linesurf::ooc::detail {
+
+uint32_t floatBits(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return u;
+}
+float bitsFloat(uint32_t u) {
+  float f;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+
+void writeWhole(const fs::path& path, const std::string& bytes) {
+  const fs::path tmp = path.string() + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throwIo(tmp.string(), std::string("cannot create file: ") + std::strerror(errno));
+  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  const int e = errno;
+  if (std::fclose(f) != 0 || !ok) {
+    ::unlink(tmp.c_str());
+    throwIo(path.string(), std::string("write failed: ") + std::strerror(ok ? errno : e));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throwIo(path.string(), std::string("rename failed: ") + std::strerror(errno));
+}
+
+void appendBytes(const fs::path& path, const char* data, size_t n) {
+  std::FILE* f = std::fopen(path.c_str(), "ab");
+  if (!f) throwIo(path.string(), std::string("cannot open: ") + std::strerror(errno));
+  const bool ok = std::fwrite(data, 1, n, f) == n;
+  const int e = errno;
+  if (std::fclose(f) != 0 || !ok) throwIo(path.string(), std::string("write failed: ") + std::strerror(ok ? errno : e));
+}
+
+std::string readRange(const fs::path& path, uint64_t offset, uint64_t n) {
+  std::string out(n, '\0');
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throwIo(path.string(), std::string("cannot open: ") + std::strerror(errno));
+  const bool ok = std::fseek(f, long(offset), SEEK_SET) == 0 && std::fread(out.data(), 1, n, f) == n;
+  std::fclose(f);
+  if (!ok) throwIo(path.string(), "tile file shorter than its manifest says (the folder was changed during the run?)");
+  return out;
+}
+
+void decodeRecords(const std::string& bytes, bool normals, bool radius, Points& out) {
+  const size_t rs = recordSize(normals, radius), n = bytes.size() / rs;
+  const char* p = bytes.data();
+  for (size_t i = 0; i < n; ++i) {
+    out.idx.push_back(getRaw<uint64_t>(p));
+    Vec3f v;
+    std::memcpy(v.data(), p, 12), p += 12;
+    out.pos.push_back(v);
+    if (normals) {
+      std::memcpy(v.data(), p, 12), p += 12;
+      out.nrm.push_back(v);
+    }
+    if (radius) out.rad.push_back(getRaw<float>(p));
+  }
+}
+
+fs::path Run::cellPath(uint32_t t) const { return dir / "cells" / fmt::format("cell_{:06d}.bin", t); }
+fs::path Run::resultPath(uint32_t t) const { return dir / "results" / fmt::format("tile_{:06d}.res", t); }
+fs::path Run::extractPath(uint32_t t) const { return dir / "results" / fmt::format("extract_{:06d}.res", t); }
+fs::path Run::curvaturePath(uint32_t t) const { return dir / "results" / fmt::format("curv_{:06d}.res", t); }
+fs::path Run::ownGeometryPath(uint32_t t) const { return dir / "results" / fmt::format("geom_{:06d}.bin", t); }
+
+/// shared (halo) points per owner tile.
+std::string encodeResult(const TileSummary& s, const std::vector<InteriorResult>& r, const std::vector<std::array<Extreme, 6>>& ext,
+                         const std::map<uint32_t, std::vector<SharedPoint>>& shared) {
+  std::string b;
+  b.append("LSTILE01", 8);
+  putRaw(b, s);
+  for (const InteriorResult& x : r) {
+    putRaw(b, x.normal), putRaw(b, x.cover), putRaw(b, x.spacing), putRaw(b, x.component), putRaw(b, x.flags);
+    b.append(3, '\0');
+  }
+  for (const auto& e6 : ext)
+    for (const Extreme& e : e6) putRaw(b, e.value), putRaw(b, e.index), putRaw(b, e.normal);
+  putRaw(b, uint32_t(shared.size()));
+  for (const auto& [owner, pts] : shared) {
+    putRaw(b, owner), putRaw(b, uint32_t(pts.size()));
+    for (const SharedPoint& p : pts) putRaw(b, p.index), putRaw(b, p.component), putRaw(b, p.normal);
+  }
+  return b;
+}
+
+ResultView decodeResultMeta(const std::string& b, const fs::path& path, bool withShared) {
+  ResultView v;
+  if (b.size() < 8 + sizeof(TileSummary) || b.compare(0, 8, "LSTILE01") != 0) throwIo(path.string(), "not a tile result file");
+  const char* p = b.data() + 8;
+  v.summary = getRaw<TileSummary>(p);
+  v.interiorOffset = kResultHeader;
+  p += size_t(v.summary.interior) * kResultRecord;
+  const size_t extBytes = size_t(v.summary.components) * 6 * (4 + 8 + 12);
+  if (size_t(p - b.data()) + extBytes + 4 > b.size()) throwIo(path.string(), "truncated tile result file");
+  v.extremes.resize(v.summary.components);
+  for (auto& e6 : v.extremes)
+    for (Extreme& e : e6) e.value = getRaw<float>(p), e.index = getRaw<uint64_t>(p), e.normal = getRaw<Vec3f>(p);
+  if (!withShared) return v;
+  const uint32_t sections = getRaw<uint32_t>(p);
+  for (uint32_t s = 0; s < sections; ++s) {
+    const uint32_t owner = getRaw<uint32_t>(p), n = getRaw<uint32_t>(p);
+    if (size_t(p - b.data()) + size_t(n) * kSharedRecord > b.size()) throwIo(path.string(), "truncated tile result file");
+    auto& out = v.shared[owner];
+    out.resize(n);
+    for (SharedPoint& sp : out) sp.index = getRaw<uint64_t>(p), sp.component = getRaw<uint32_t>(p), sp.normal = getRaw<Vec3f>(p);
+  }
+  return v;
+}
+
+InteriorResult decodeInterior(const char* p) {
+  InteriorResult r;
+  r.normal = getRaw<Vec3f>(p), r.cover = getRaw<float>(p), r.spacing = getRaw<float>(p), r.component = getRaw<uint32_t>(p);
+  r.flags = getRaw<uint8_t>(p);
+  return r;
+}
+
+TileSummary readSummary(const fs::path& path) {
+  TileSummary s;
+  const std::string b = readRange(path, 8, sizeof(TileSummary));
+  std::memcpy(&s, b.data(), sizeof s);
+  return s;
+}
+
+namespace {
+
+template <class T>
+void putColumn(std::string& s, const std::vector<T>& v) {
+  s.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+template <class T>
+void getColumn(const std::string& s, size_t& at, size_t n, std::vector<T>& v, const fs::path& path) {
+  if (at + n * sizeof(T) > s.size()) throwIo(path.string(), "tile geometry file is truncated");
+  v.resize(n);
+  if (n) std::memcpy(static_cast<void*>(v.data()), s.data() + at, n * sizeof(T));
+  at += n * sizeof(T);
+}
+
+}  // namespace
+
+std::string encodeOwnGeometry(const OwnGeometry& og) {
+  std::string s = "LSGEO001";
+  putRaw(s, uint64_t(og.size())), putRaw(s, uint64_t(og.star.size())), putRaw(s, uint8_t(!og.minDir.empty()));
+  putColumn(s, og.idx), putColumn(s, og.pos), putColumn(s, og.normal), putColumn(s, og.radius), putColumn(s, og.spacing);
+  putColumn(s, og.variation), putColumn(s, og.component), putColumn(s, og.flags), putColumn(s, og.minDir);
+  putColumn(s, og.maxDir), putColumn(s, og.starOffsets), putColumn(s, og.star);
+  return s;
+}
+
+OwnGeometry decodeOwnGeometry(const fs::path& path) {
+  const std::string s = readRange(path, 0, fs::file_size(path));
+  if (s.size() < 25 || s.compare(0, 8, "LSGEO001") != 0) throwIo(path.string(), "not a tile geometry file");
+  const char* q = s.data() + 8;
+  const uint64_t m = getRaw<uint64_t>(q), stars = getRaw<uint64_t>(q);
+  const bool curvature = getRaw<uint8_t>(q) != 0;
+  if (m > s.size() || stars > s.size()) throwIo(path.string(), "tile geometry file is damaged");
+  size_t at = 25;
+  OwnGeometry og;
+  getColumn(s, at, m, og.idx, path), getColumn(s, at, m, og.pos, path), getColumn(s, at, m, og.normal, path);
+  getColumn(s, at, m, og.radius, path), getColumn(s, at, m, og.spacing, path), getColumn(s, at, m, og.variation, path);
+  getColumn(s, at, m, og.component, path), getColumn(s, at, m, og.flags, path);
+  getColumn(s, at, curvature ? m : 0, og.minDir, path), getColumn(s, at, curvature ? m : 0, og.maxDir, path);
+  getColumn(s, at, m + 1, og.starOffsets, path), getColumn(s, at, stars, og.star, path);
+  if (at != s.size() || og.starOffsets.back() != stars) throwIo(path.string(), "tile geometry file is damaged");
+  for (size_t j = 0; j < m; ++j)
+    if (og.starOffsets[j] > og.starOffsets[j + 1]) throwIo(path.string(), "tile geometry file is damaged");
+  for (uint32_t v : og.star)
+    if (v >= m) throwIo(path.string(), "tile geometry file is damaged");
+  return og;
+}
+
+void writeOrientation(const Run& r, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip, float avg) {
+  std::string b;
+  putRaw(b, uint64_t(nodeOffset.size()));
+  for (size_t v : nodeOffset) putRaw(b, uint64_t(v));
+  b.append(reinterpret_cast<const char*>(flip.data()), flip.size());
+  putRaw(b, avg);
+  writeWhole(r.orientationPath(), b);
+}
+
+void readOrientation(const Run& r, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip, float& avg) {
+  const fs::path p = r.orientationPath();
+  const std::string b = readRange(p, 0, fs::file_size(p));
+  const char* q = b.data();
+  nodeOffset.resize(size_t(getRaw<uint64_t>(q)));
+  for (size_t& v : nodeOffset) v = size_t(getRaw<uint64_t>(q));
+  flip.assign(q, q + nodeOffset.back());
+  q += nodeOffset.back();
+  avg = getRaw<float>(q);
+}
+
+}  // namespace linesurf::ooc::detail
