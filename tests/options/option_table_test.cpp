@@ -422,17 +422,19 @@ TEST(ViewerOptions, ThePageTakesTheTablesViewerFieldsWithTheStructsDefaults) {
   for (auto it = d.begin(); it != d.end(); ++it) got.insert(it.key());
   EXPECT_EQ(got, want) << "the page's defaults are exactly the tables' viewer fields";
 
-  // The script reads each of them (meta.defaults as D) and no other; its shader constants come
-  // from the page too (no copy of the renderer's limits).
-  std::ifstream js(std::filesystem::path(LINESURF_SOURCE_DIR) / "web" / "viewer.js");
+  // The script (its modules, web/modules/*.js) reads each of them (meta.defaults as D) and no
+  // other; its shader constants come from the page too (no copy of the renderer's limits).
   std::stringstream ss;
-  ss << js.rdbuf();
+  const std::filesystem::path modules = std::filesystem::path(LINESURF_SOURCE_DIR) / "web" / "modules";
+  for (const auto& entry : std::filesystem::directory_iterator(modules))
+    if (entry.path().extension() == ".js") ss << std::ifstream(entry.path()).rdbuf() << '\n';
   const std::string script = ss.str();
+  ASSERT_NE(script.find("meta.defaults"), std::string::npos) << "web/modules/ holds the viewer's script";
   std::set<std::string> used;
   const std::regex ref("\\bD\\.([A-Za-z]+)");
   for (auto it = std::sregex_iterator(script.begin(), script.end(), ref); it != std::sregex_iterator(); ++it)
     used.insert((*it)[1].str());
-  EXPECT_EQ(used, want) << "web/viewer.js reads the page's defaults by the tables' names";
+  EXPECT_EQ(used, want) << "web/modules/*.js read the page's defaults by the tables' names";
   EXPECT_EQ(script.find("24.0"), std::string::npos) << "kMaxStretch is passed in, not copied";
   ASSERT_TRUE(meta.contains("constants"));
   EXPECT_GT(meta["constants"]["maxStretch"].get<float>(), 1.0f);
