@@ -1,0 +1,1 @@
+import('./a.js').then((a) => a.f());

@@ -1,0 +1,2 @@
+export function greet(x) { return 'hello ' + x; }
+export class Greeter { say(s) { return s; } }

@@ -1,0 +1,4 @@
+import { f } from './a.js';
+if (f) {
+  export const g = 1;
+}

@@ -1,0 +1,2 @@
+import { n } from './a.js';
+console.log(n);

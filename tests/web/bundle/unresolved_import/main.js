@@ -1,0 +1,2 @@
+import { nope } from './a.js';
+nope();
