@@ -112,11 +112,11 @@ void run(const NormalsArgs& args) {
 RegisterCommand reg(20, [](CLI::App& app) {
   auto args = std::make_shared<NormalsArgs>();
   CLI::App* sub = app.add_subcommand("normals", "Estimate oriented normals (and curvature) of a point cloud (thesis §6.1)");
-  sub->add_option("IN", args->in, "Input point cloud (.ply, .xyz)")->required();
-  sub->add_option("-o,--output", args->out, "Output .ply with normals (and curvature properties)")->required();
+  sub->add_option("IN", args->in, "Input point cloud (.ply, .xyz)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", args->out, "Output .ply with normals (and curvature properties)")->type_name("FILE")->required();
   GeometryOptions& o = args->geometry;
   // --curvature also writes vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z
-  bindOptions(sub, o, {"k", "recomputeNormals", "orientNormals", "orientationPenalty", "curvature", "curvatureFit"});
+  bindOptions(sub, o, {"k", "recomputeNormals", "orientNormals", "orientationPenalty", "orient", "viewpoint", "curvature", "curvatureFit"});
   bindOutOfCoreFlags(sub, args->ooc);
   sub->callback([args] { run(*args); });
 });

@@ -10,7 +10,7 @@
 namespace linesurf::cli {
 
 void bindGeometryOptions(CLI::App* sub, GeometryOptions& o) {
-  bindOptions(sub, o, {"k", "recomputeNormals", "orientationPenalty"});
+  bindOptions(sub, o, {"k", "recomputeNormals", "orientationPenalty", "orient", "viewpoint"});
 }
 
 CloudWithGeometry readCloudWithGeometry(const std::string& path, GeometryOptions options) {

@@ -71,10 +71,12 @@ def read_mesh(path: str) -> Mesh: ...
 def write(path: str, model: Union[Model, Mesh, ArrayLike], *, ascii: bool = False) -> None: ...
 
 def geometry(model: PointsLike, *, k: int = 12, recompute_normals: bool = False, orient_normals: bool = True,
-             orientation_penalty: float = 0.5, delaunay_neighbours: bool = False, curvature: bool = False,
+             orientation_penalty: float = 0.5, orient: str = "auto", viewpoint: Sequence[float] = (0, 0, 0),
+             delaunay_neighbours: bool = False, curvature: bool = False,
              curvature_fit: str = "taubin") -> SimpleNamespace: ...
 def normals(points: PointsLike, *, k: int = 12, recompute_normals: bool = False, orient_normals: bool = True,
-            orientation_penalty: float = 0.5) -> npt.NDArray[np.float32]: ...
+            orientation_penalty: float = 0.5, orient: str = "auto",
+            viewpoint: Sequence[float] = (0, 0, 0)) -> npt.NDArray[np.float32]: ...
 def neighbours(points: PointsLike, k: int = 12) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.float32]]: ...
 def curvature(points: PointsLike, k: int = 12, curvature_fit: str = "taubin", **options: Any) -> Tuple[
     npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
@@ -99,6 +101,8 @@ def extract_eps_delta(
     k: int = ...,
     recompute_normals: bool = ...,
     orientation_penalty: float = ...,
+    orient: str = ...,
+    viewpoint: Sequence[float] = ...,
 ) -> SimpleNamespace: ...
 def extract_shape_approx(
     cloud: PointsLike,
@@ -117,6 +121,8 @@ def extract_shape_approx(
     k: int = ...,
     recompute_normals: bool = ...,
     orientation_penalty: float = ...,
+    orient: str = ...,
+    viewpoint: Sequence[float] = ...,
     curvature: bool = ...,
 ) -> SimpleNamespace: ...
 def extract_contour(

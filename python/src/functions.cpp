@@ -42,12 +42,21 @@ E enumFrom(const std::string& value, const char* field, std::initializer_list<st
   throwBadOption(field, "expected one of " + choices + ", got '" + value + "'");
 }
 
-GeometryOptions geometryOptions(int k, bool recompute, bool orient, float penalty) {
+GeometryOptions geometryOptions(int k, bool recompute, bool orient, float penalty, const std::string& side,
+                                const std::vector<float>& viewpoint) {
   GeometryOptions o;
   o.k = k;
   o.recomputeNormals = recompute;
   o.orientNormals = orient;
   o.orientationPenalty = penalty;
+  std::initializer_list<std::pair<const char*, OrientSide>> sides = {{"auto", OrientSide::Auto},
+                                                                     {"outward", OrientSide::Outward},
+                                                                     {"up", OrientSide::Up},
+                                                                     {"towards", OrientSide::Towards},
+                                                                     {"away-from", OrientSide::AwayFrom}};
+  o.orient = enumFrom<OrientSide>(side, "orient", sides);
+  if (viewpoint.size() != 3) throwBadOption("viewpoint", "expected 3 numbers x y z, got " + std::to_string(viewpoint.size()));
+  o.viewpoint = Vec3f(viewpoint[0], viewpoint[1], viewpoint[2]);
   validate(o);
   return o;
 }
@@ -106,8 +115,8 @@ bool needsPreparation(const HybridModel& m, float radiusScale) {
 }
 
 // The §6.1 fields the point extractions take as keywords (as the CLI's extract commands).
-const std::set<std::string> kExtractGeometry = {"k", "recomputeNormals", "orientationPenalty"};
-const std::set<std::string> kShapeGeometry = {"k", "recomputeNormals", "orientationPenalty", "curvature"};
+const std::set<std::string> kExtractGeometry = {"k", "recomputeNormals", "orientationPenalty", "orient", "viewpoint"};
+const std::set<std::string> kShapeGeometry = {"k", "recomputeNormals", "orientationPenalty", "orient", "viewpoint", "curvature"};
 
 std::unique_ptr<ThreadLimit>& threadLimit() {
   static std::unique_ptr<ThreadLimit> limit;
@@ -157,9 +166,10 @@ void bindFunctions(py::module_& m) {
   m.def(
       "geometry",
       [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty,
-         bool delaunay_neighbours, bool curvature, const std::string& curvature_fit) {
+         const std::string& orient, const std::vector<float>& viewpoint, bool delaunay_neighbours, bool curvature,
+         const std::string& curvature_fit) {
         ModelArg a = modelArg(model);
-        GeometryOptions o = geometryOptions(k, recompute_normals, orient_normals, orientation_penalty);
+        GeometryOptions o = geometryOptions(k, recompute_normals, orient_normals, orientation_penalty, orient, viewpoint);
         o.delaunayNeighbours = delaunay_neighbours || curvature;
         o.curvature = curvature;
         o.curvatureFit = enumFrom<CurvatureFit>(curvature_fit, "curvatureFit",
@@ -172,7 +182,8 @@ void bindFunctions(py::module_& m) {
         return namespaceOf(geometryDict(g));
       },
       py::arg("model"), py::kw_only(), py::arg("k") = GeometryOptions{}.k, py::arg("recompute_normals") = GeometryOptions{}.recomputeNormals,
-      py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty, py::arg("delaunay_neighbours") = false,
+      py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty,
+      py::arg("orient") = "auto", py::arg("viewpoint") = std::vector<float>{0, 0, 0}, py::arg("delaunay_neighbours") = false,
       py::arg("curvature") = false, py::arg("curvature_fit") = "taubin",
       R"doc(The §6.1 geometry of a point cloud (a Model or an (N, 3) array), computed once:
 
@@ -183,9 +194,10 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
 (N,), min_curvature_dir, max_curvature_dir (N, 3). Returned as a SimpleNamespace.)doc");
   m.def(
       "normals",
-      [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty) {
+      [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty,
+         const std::string& orient, const std::vector<float>& viewpoint) {
         ModelArg a = modelArg(model);
-        GeometryOptions o = geometryOptions(k, recompute_normals, orient_normals, orientation_penalty);
+        GeometryOptions o = geometryOptions(k, recompute_normals, orient_normals, orientation_penalty, orient, viewpoint);
         o.delaunayNeighbours = false;
         o.curvature = false;
         PointGeometry g;
@@ -197,8 +209,11 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
       },
       py::arg("points"), py::kw_only(), py::arg("k") = GeometryOptions{}.k, py::arg("recompute_normals") = GeometryOptions{}.recomputeNormals,
       py::arg("orient_normals") = GeometryOptions{}.orientNormals, py::arg("orientation_penalty") = GeometryOptions{}.orientationPenalty,
+      py::arg("orient") = "auto", py::arg("viewpoint") = std::vector<float>{0, 0, 0},
       "Unit normals (N, 3) float32 of a point cloud (Model or (N, 3) array) by PCA over the k nearest\n"
-      "neighbours (Hoppe 1992), consistently oriented by a minimum spanning tree (thesis §6.1).");
+      "neighbours (Hoppe 1992), consistently oriented by a minimum spanning tree (thesis §6.1), each connected\n"
+      "component facing the side `orient` chooses: auto (outward for objects, up for terrain), outward, up,\n"
+      "towards or away-from `viewpoint` (x, y, z).");
   m.def("_prepare_options", [] {
     py::list l;
     optionSpecs(l, PrepareOptions{});

@@ -10,12 +10,12 @@
 #include <numeric>
 #include <tuple>
 
+#include "geometry/detail/orientation_side.h"
 #include "linesurf/geometry/point_geometry.h"
 
 namespace linesurf::detail {
 namespace {
 constexpr uint32_t kNone = PointGeometry::kNoNeighbour;
-constexpr float kInf = std::numeric_limits<float>::infinity();
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -23,7 +23,7 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // kNN graph with weights 1 - |n_i . n_j| (+ the penalty of GeometryOptions::orientationPenalty);
 // a minimum spanning forest (Borůvka, parallel), oriented from one seed per connected component
 // (see docs/decisions.md for the seed rule).
-void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, PointGeometry& g,
+void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, const SideChoice& side, PointGeometry& g,
                    const std::vector<uint8_t>& fixedNormal, std::vector<uint32_t>* componentOut) {
   const size_t n = pos.size();
   // Symmetrised adjacency (CSR): row i = the kNN row of i and every j that lists i, sorted, a
@@ -205,7 +205,8 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
   g.orientationComponents = compStart.size() - 1;
   if (componentOut) *componentOut = comp;
 
-  // Orientation along the forest from its roots: each component's fixed normals, else its seed.
+  // Orientation along the forest from its roots: each component's fixed normals, else its
+  // lowest-index point; then the side rule turns the components without fixed normals.
   std::vector<uint32_t> treeOff(n + 1, 0), treeAdj(2 * tree.size());
   for (const auto& [a, c] : tree) ++treeOff[a + 1], ++treeOff[c + 1];
   for (size_t i = 0; i < n; ++i) treeOff[i + 1] += treeOff[i];
@@ -213,8 +214,7 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
     std::vector<uint32_t> at(treeOff.begin(), treeOff.end() - 1);
     for (const auto& [a, c] : tree) treeAdj[at[a]++] = c, treeAdj[at[c]++] = a;
   }
-  size_t flips = 0;
-  std::vector<uint8_t> done(n, 0);
+  std::vector<uint8_t> done(n, 0), negated(n, 0), unfixed(compStart.size() - 1, 0);
   std::vector<uint32_t> queue;
   for (size_t c = 0; c + 1 < compStart.size(); ++c) {
     const uint32_t* members = order.data() + compStart[c];
@@ -223,33 +223,7 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
     queue.clear();
     for (size_t t = 0; t < size; ++t)
       if (fixedNormal[members[t]]) queue.push_back(members[t]);
-    if (queue.empty()) {
-      // Seed: the points extreme along +z, -z, +x, -x, +y, -y; the first whose normal is within
-      // 30 degrees of its direction (else the best aligned) is oriented along that direction.
-      // On a closed surface the outward normal at an extreme point along d is d itself.
-      static const std::array<Vec3f, 6> dirs = {Vec3f(0, 0, 1), Vec3f(0, 0, -1), Vec3f(1, 0, 0),
-                                                Vec3f(-1, 0, 0), Vec3f(0, 1, 0), Vec3f(0, -1, 0)};
-      uint32_t seed = members[0];
-      Vec3f seedDir = dirs[0];
-      float bestAlign = -1;
-      for (const Vec3f& d : dirs) {
-        uint32_t ext = members[0];
-        float most = -kInf;
-        for (size_t t = 0; t < size; ++t) {
-          const uint32_t u = members[t];
-          const float v = pos[u].dot(d);
-          if (v > most || (v == most && u < ext)) most = v, ext = u;
-        }
-        const float align = std::abs(g.normals[ext].dot(d));
-        if (align > bestAlign) bestAlign = align, seed = ext, seedDir = d;
-        if (align >= 0.866f) break;
-      }
-      if (g.normals[seed].dot(seedDir) < 0) {
-        g.normals[seed] = -g.normals[seed];
-        ++flips;
-      }
-      queue.push_back(seed);
-    }
+    if (queue.empty()) unfixed[c] = 1, queue.push_back(members[0]);
     for (uint32_t u : queue) done[u] = 1;
     for (size_t h = 0; h < queue.size(); ++h) {
       const uint32_t u = queue[h];
@@ -259,12 +233,24 @@ void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, P
         done[v] = 1;
         if (!fixedNormal[v] && g.normals[v].dot(g.normals[u]) < 0) {
           g.normals[v] = -g.normals[v];
-          ++flips;
+          negated[v] = 1;
         }
         queue.push_back(v);
       }
     }
   }
+  if (side.decide) {
+    Bounds3f bounds;
+    for (const Vec3f& p : pos) bounds.extend(p);
+    const std::vector<SideSummary> sides =
+        sideSummaries(side.rule, side.viewpoint, SideGrid(bounds), pos, g.normals, comp, compStart.size() - 1);
+    std::vector<uint8_t> turn(sides.size(), 0);
+    for (size_t c = 0; c < sides.size(); ++c) turn[c] = unfixed[c] && flipForSide(sides[c], side.rule);
+    for (size_t i = 0; i < n; ++i)
+      if (turn[comp[i]]) g.normals[i] = -g.normals[i], negated[i] ^= 1;
+  }
+  size_t flips = 0;
+  for (uint8_t f : negated) flips += f;
   g.orientationFlips = flips;
 }
 

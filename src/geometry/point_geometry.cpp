@@ -290,6 +290,7 @@ void validate(const GeometryOptions& options) {
   if (options.k < 3) throwBadOption("k", "must be at least 3 (got " + std::to_string(options.k) + ")");
   if (options.k > 256) throwBadOption("k", "must be at most 256 (got " + std::to_string(options.k) + ")");
   requireRange("orientationPenalty", options.orientationPenalty, 0, 1e6);
+  if (!options.viewpoint.allFinite()) throwBadOption("viewpoint", "must be finite");
 }
 
 PointGeometry computePointGeometry(const HybridModel& cloud, const GeometryOptions& options) {
@@ -346,7 +347,9 @@ PointGeometry detail::computePointGeometryTile(const HybridModel& cloud, const G
                           std::any_of(fixedNormal.begin(), fixedNormal.end(), [](uint8_t f) { return f == 0; });
   if (needOrient) {
     reportProgress(progress, "orientation", 0.0);
-    detail::orientNormals(pos, k, options.orientationPenalty, g, fixedNormal, extras ? &extras->component : nullptr);
+    // A tile of an out-of-core run leaves the side to the join, which sees the whole component.
+    const detail::SideChoice side{options.orient, options.viewpoint, !extras};
+    detail::orientNormals(pos, k, options.orientationPenalty, side, g, fixedNormal, extras ? &extras->component : nullptr);
     reportProgress(progress, "orientation", 1.0);
   }
   g.times.orientation = timer.seconds();

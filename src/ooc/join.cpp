@@ -11,6 +11,8 @@
 namespace linesurf::ooc::detail {
 namespace {
 
+using linesurf::detail::mergeSides;
+
 struct Dsu {
   std::vector<uint32_t> p;
   explicit Dsu(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0u); }
@@ -21,8 +23,8 @@ struct Dsu {
 };
 
 /// Flip per (tile, component) node so that the tiles agree on their shared points: a maximum
-/// spanning forest of the vote graph (weight |agree - disagree|), one seed per connected part
-/// chosen by the in-memory rule (extreme points along +z, -z, +x, -x, +y, -y).
+/// spanning forest of the vote graph (weight |agree - disagree|); each connected part then faces
+/// the side the in-memory rule chooses for it.
 std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vector<size_t>& nodeOffset) {
   const size_t T = r.tileIds.size();
   std::vector<ResultView> views(T);
@@ -79,59 +81,29 @@ std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vecto
     forest[e.a].push_back({e.b, e.flip});
     forest[e.b].push_back({e.a, e.flip});
   }
-  // Extremes per connected part, then its seed by the in-memory rule.
-  std::vector<std::array<Extreme, 6>> partExt(nodes);
-  std::vector<uint32_t> nodeTile(nodes);
-  for (size_t d = 0; d < T; ++d)
-    for (uint32_t c = 0; c < views[d].summary.components; ++c) {
-      const uint32_t node = uint32_t(nodeOffset[d] + c);
-      nodeTile[node] = uint32_t(d);
-      const uint32_t root = dsu.find(node);
-      for (size_t k = 0; k < 6; ++k) {
-        const Extreme& e = views[d].extremes[c][k];
-        Extreme& best = partExt[root][k];
-        if (e.index == UINT64_MAX) continue;
-        if (e.value > best.value || (e.value == best.value && e.index < best.index)) best = e;
-      }
-    }
+  // Each part oriented from its first node, then turned to the side the rule chooses from the
+  // sum of its nodes' side summaries (the in-memory rule over the same points, so the same side).
   std::vector<uint8_t> flip(nodes, 0), seen(nodes, 0);
   std::vector<uint32_t> queue;
+  std::vector<uint32_t> nodeTile(nodes);
+  for (size_t d = 0; d < T; ++d)
+    for (uint32_t c = 0; c < views[d].summary.components; ++c) nodeTile[nodeOffset[d] + c] = uint32_t(d);
   for (uint32_t node = 0; node < nodes; ++node) {
-    const uint32_t root = dsu.find(node);
-    if (root != node) continue;
-    // The seed node: the one holding the chosen extreme point.
-    const auto& pe = partExt[root];
-    if (pe[0].index != UINT64_MAX) ++rep.orientationComponents;  // parts made of halo points only are not counted
-    int chosen = -1;
-    float bestAlign = -1;
-    for (size_t k = 0; k < 6; ++k) {
-      if (pe[k].index == UINT64_MAX) continue;
-      const float align = std::abs(pe[k].normal.dot(kSeedDirs[k]));
-      if (align > bestAlign) bestAlign = align, chosen = int(k);
-      if (align >= 0.866f) break;
-    }
-    // Find the node that owns the extreme (the first node of this part whose extreme it is).
-    uint32_t seed = root;
-    bool seedFlip = false;
-    if (chosen >= 0) {
-      for (uint32_t v = 0; v < nodes; ++v) {
-        if (dsu.find(v) != root) continue;
-        const auto& e = views[nodeTile[v]].extremes[v - nodeOffset[nodeTile[v]]][size_t(chosen)];
-        if (e.index == pe[size_t(chosen)].index) {
-          seed = v;
-          seedFlip = e.normal.dot(kSeedDirs[size_t(chosen)]) < 0;
-          break;
-        }
-      }
-    }
-    flip[seed] = seedFlip;
-    seen[seed] = 1;
-    queue.assign(1, seed);
+    if (dsu.find(node) != node) continue;
+    seen[node] = 1;
+    queue.assign(1, node);
     for (size_t h = 0; h < queue.size(); ++h) {
       const uint32_t u = queue[h];
       for (auto [v, rel] : forest[u])
         if (!seen[v]) seen[v] = 1, flip[v] = uint8_t(flip[u] ^ uint8_t(rel)), queue.push_back(v);
     }
+    SideSummary side;
+    std::sort(queue.begin(), queue.end());
+    for (uint32_t v : queue) mergeSides(side, views[nodeTile[v]].sides[v - nodeOffset[nodeTile[v]]], flip[v] != 0);
+    if (side.empty()) continue;  // parts made of halo points only are not counted
+    ++rep.orientationComponents;
+    if (linesurf::detail::flipForSide(side, r.o.geometry.orient))
+      for (uint32_t v : queue) flip[v] ^= 1;
   }
   for (uint8_t f : flip) rep.tileFlips += f;
   for (auto& [k, v] : votes) rep.disagreeingVotes += (flip[k.first] ^ flip[k.second]) ? v[0] : v[1];

@@ -21,6 +21,8 @@ json argumentsJson(const OocNormalsOptions& o, const TileExtraction* extraction)
               {"k", g.k},
               {"orientation_penalty_bits", floatBits(g.orientationPenalty)},
               {"orient", g.orientNormals},
+              {"orient_side", int(g.orient)},
+              {"viewpoint_bits", {floatBits(g.viewpoint.x()), floatBits(g.viewpoint.y()), floatBits(g.viewpoint.z())}},
               {"recompute", g.recomputeNormals},
               {"memory_bytes", o.memoryBytes},
               {"curvature", g.curvature && (!extraction || extraction->usesCurvature())},

@@ -161,7 +161,6 @@ void processTile(const Run& r, uint32_t tile) {
     if (!oriented) comps = 1;
     std::vector<InteriorResult> res;
     res.reserve(n);
-    std::vector<std::array<Extreme, 6>> ext(comps);
     std::map<uint32_t, std::vector<SharedPoint>> shared;
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> votesOf;
     for (size_t i = 0; i < n; ++i) {
@@ -187,11 +186,14 @@ void processTile(const Run& r, uint32_t tile) {
       if (x.flags & kPointFewNeighbours) ++sum.flagCounts[1];
       if (x.flags & kPointFlatNeighbourhood) ++sum.flagCounts[2];
       if (x.flags & kPointIsolated) ++sum.flagCounts[3];
-      for (size_t d = 0; d < 6; ++d) {
-        const float v = tg.all.pos[i].dot(kSeedDirs[d]);
-        Extreme& e = ext[comp][d];
-        if (v > e.value || (v == e.value && gi < e.index)) e.value = v, e.index = gi, e.normal = geo.normals[i];
-      }
+    }
+    // What the tile's own points say about each component's side: the join adds the pieces up.
+    std::vector<SideSummary> sides(comps);
+    if (oriented) {
+      std::vector<uint8_t> own(n);
+      for (size_t i = 0; i < n; ++i) own[i] = tg.owner[i] == tile;
+      sides = linesurf::detail::sideSummaries(r.o.geometry.orient, r.o.geometry.viewpoint, linesurf::detail::SideGrid(r.bounds),
+                                              tg.all.pos, geo.normals, extras.component, comps, tg.all.idx, own);
     }
     sum.interior = uint32_t(res.size());
     sum.components = comps;
@@ -206,7 +208,7 @@ void processTile(const Run& r, uint32_t tile) {
       writeWhole(r.curvaturePath(tile), c);
     }
     if (r.extracting()) writeWhole(r.ownGeometryPath(tile), encodeOwnGeometry(ownGeometry(tg, tile, r.tileCurvature())));
-    writeWhole(r.resultPath(tile), encodeResult(sum, res, ext, shared));
+    writeWhole(r.resultPath(tile), encodeResult(sum, res, sides, shared));
   }
 }
 

@@ -76,17 +76,19 @@ fs::path Run::curvaturePath(uint32_t t) const { return dir / "results" / fmt::fo
 fs::path Run::ownGeometryPath(uint32_t t) const { return dir / "results" / fmt::format("geom_{:06d}.bin", t); }
 
 /// shared (halo) points per owner tile.
-std::string encodeResult(const TileSummary& s, const std::vector<InteriorResult>& r, const std::vector<std::array<Extreme, 6>>& ext,
+std::string encodeResult(const TileSummary& s, const std::vector<InteriorResult>& r, const std::vector<SideSummary>& sides,
                          const std::map<uint32_t, std::vector<SharedPoint>>& shared) {
   std::string b;
-  b.append("LSTILE01", 8);
+  b.append("LSTILE02", 8);
   putRaw(b, s);
   for (const InteriorResult& x : r) {
     putRaw(b, x.normal), putRaw(b, x.cover), putRaw(b, x.spacing), putRaw(b, x.component), putRaw(b, x.flags);
     b.append(3, '\0');
   }
-  for (const auto& e6 : ext)
-    for (const Extreme& e : e6) putRaw(b, e.value), putRaw(b, e.index), putRaw(b, e.normal);
+  for (const SideSummary& side : sides) {
+    putRaw(b, side.vote), putRaw(b, side.firstIndex), putRaw(b, side.firstNormal), putRaw(b, uint32_t(side.envelope.size()));
+    for (const auto& e : side.envelope) putRaw(b, e.key), putRaw(b, e.value), putRaw(b, e.index), putRaw(b, e.vote);
+  }
   putRaw(b, uint32_t(shared.size()));
   for (const auto& [owner, pts] : shared) {
     putRaw(b, owner), putRaw(b, uint32_t(pts.size()));
@@ -97,16 +99,25 @@ std::string encodeResult(const TileSummary& s, const std::vector<InteriorResult>
 
 ResultView decodeResultMeta(const std::string& b, const fs::path& path, bool withShared) {
   ResultView v;
-  if (b.size() < 8 + sizeof(TileSummary) || b.compare(0, 8, "LSTILE01") != 0) throwIo(path.string(), "not a tile result file");
+  if (b.size() < 8 + sizeof(TileSummary) || b.compare(0, 8, "LSTILE02") != 0) throwIo(path.string(), "not a tile result file");
   const char* p = b.data() + 8;
   v.summary = getRaw<TileSummary>(p);
   v.interiorOffset = kResultHeader;
   p += size_t(v.summary.interior) * kResultRecord;
-  const size_t extBytes = size_t(v.summary.components) * 6 * (4 + 8 + 12);
-  if (size_t(p - b.data()) + extBytes + 4 > b.size()) throwIo(path.string(), "truncated tile result file");
-  v.extremes.resize(v.summary.components);
-  for (auto& e6 : v.extremes)
-    for (Extreme& e : e6) e.value = getRaw<float>(p), e.index = getRaw<uint64_t>(p), e.normal = getRaw<Vec3f>(p);
+  auto need = [&](size_t bytes) {
+    if (size_t(p - b.data()) + bytes > b.size()) throwIo(path.string(), "truncated tile result file");
+  };
+  v.sides.resize(v.summary.components);
+  for (SideSummary& side : v.sides) {
+    need(kSideRecord);
+    side.vote = getRaw<int64_t>(p), side.firstIndex = getRaw<uint64_t>(p), side.firstNormal = getRaw<Vec3f>(p);
+    const uint32_t entries = getRaw<uint32_t>(p);
+    need(size_t(entries) * kSideEntryRecord);
+    side.envelope.resize(entries);
+    for (auto& e : side.envelope)
+      e.key = getRaw<uint32_t>(p), e.value = getRaw<float>(p), e.index = getRaw<uint64_t>(p), e.vote = getRaw<int32_t>(p);
+  }
+  need(4);
   if (!withShared) return v;
   const uint32_t sections = getRaw<uint32_t>(p);
   for (uint32_t s = 0; s < sections; ++s) {

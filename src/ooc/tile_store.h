@@ -16,6 +16,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "geometry/detail/orientation_side.h"
 #include "linesurf/core/math.h"
 #include "linesurf/ooc/ooc_normals.h"
 #include "linesurf/ooc/point_stream.h"
@@ -31,7 +32,7 @@ inline constexpr double kHaloShare = 1.35;      ///< tile points with halo / int
 inline constexpr int kTilesInFlight = 2;        ///< tiles processed at once (each parallel inside)
 inline constexpr uint32_t kVotesPerPair = 1024;  ///< shared points kept per (neighbour tile, component)
 inline constexpr const char* kFormat = "linesurf tile folder";
-inline constexpr int kVersion = 1;
+inline constexpr int kVersion = 2;
 inline constexpr size_t kExtractStats = 16;  ///< counters in a tile extraction file
 
 uint32_t floatBits(float f);
@@ -144,14 +145,9 @@ struct Run {
 };
 
 // --- per-tile results -----------------------------------------------------------------------------
-struct Extreme {
-  float value = -std::numeric_limits<float>::infinity();
-  uint64_t index = UINT64_MAX;
-  Vec3f normal = Vec3f::Zero();
-};
-/// The in-memory orientation's seed directions (§6.1): extreme points along +z, -z, +x, -x, +y, -y.
-inline const std::array<Vec3f, 6> kSeedDirs = {Vec3f(0, 0, 1), Vec3f(0, 0, -1), Vec3f(1, 0, 0),
-                                               Vec3f(-1, 0, 0), Vec3f(0, 1, 0), Vec3f(0, -1, 0)};
+/// What a tile's piece of a component says about the component's side, over the tile's own
+/// points (geometry/detail/orientation_side.h): the join adds up a component's pieces.
+using SideSummary = linesurf::detail::SideSummary;
 
 struct InteriorResult {  // 28 bytes on disk
   Vec3f normal;
@@ -162,6 +158,8 @@ struct InteriorResult {  // 28 bytes on disk
 inline constexpr size_t kResultRecord = 28;
 inline constexpr size_t kSharedRecord = 24;  // u64 index, u32 component, float n[3]
 inline constexpr size_t kCurvatureRecord = 32;
+inline constexpr size_t kSideRecord = 8 + 8 + 12 + 4;   // vote, first index, first normal, entries
+inline constexpr size_t kSideEntryRecord = 4 + 4 + 8 + 4;  // key, value, index, vote
 
 struct TileSummary {
   uint32_t tile = 0, interior = 0, components = 0;
@@ -180,15 +178,15 @@ struct SharedPoint {
   Vec3f normal;
 };
 
-/// Result file layout: summary, interior records, per component 6 extremes, then sections of
-/// shared (halo) points per owner tile.
-std::string encodeResult(const TileSummary& s, const std::vector<InteriorResult>& r, const std::vector<std::array<Extreme, 6>>& ext,
+/// Result file layout: summary, interior records, per component its side summary, then sections
+/// of shared (halo) points per owner tile.
+std::string encodeResult(const TileSummary& s, const std::vector<InteriorResult>& r, const std::vector<SideSummary>& sides,
                          const std::map<uint32_t, std::vector<SharedPoint>>& shared);
 
 struct ResultView {
   TileSummary summary;
   size_t interiorOffset = 0;  // byte offset of the interior records
-  std::vector<std::array<Extreme, 6>> extremes;
+  std::vector<SideSummary> sides;  ///< per component
   std::map<uint32_t, std::vector<SharedPoint>> shared;
 };
 

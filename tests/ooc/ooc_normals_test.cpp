@@ -1,6 +1,7 @@
 // Out-of-core normals (ooc/ooc_normals.h) against the in-memory path, and the streaming I/O.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -42,6 +43,31 @@ ooc::OocNormalsOptions tiled(const fs::path& dir, int tiles) {
   o.minTiles = tiles;
   o.keepWorkDir = true;
   return o;
+}
+
+// An open sheet scanned from above, in tiles: the join sums the tiles' side votes to the
+// in-memory rule's, so the file is the in-memory one and the normals face up.
+TEST(OocNormals, TerrainInTilesFacesUpAsInMemory) {
+  const fs::path d = test::scratchDir("ooc_terrain");
+  HybridModel sheet;
+  uint64_t s = 12345;
+  auto next = [&s] {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return float(double(s >> 11) * (1.0 / 9007199254740992.0));
+  };
+  for (int i = 0; i < 120000; ++i) {
+    const float x = 100 * next(), y = 100 * next();
+    const float z = 2.0f * std::sin(0.11f * x) * std::cos(0.07f * y) + 0.05f * (next() - 0.5f);
+    sheet.points.push_back({.position = Vec3f(x, y, z)});
+  }
+  writeModel(d / "terrain.ply", sheet);
+  const HybridModel ref = inMemoryNormals(d / "terrain.ply", d / "mem.ply");
+  const ooc::OocNormalsReport r = ooc::computeNormalsOutOfCore(d / "terrain.ply", d / "ooc.ply", tiled(d / "tiles", 12));
+  EXPECT_GE(r.tiles, 9u);
+  EXPECT_TRUE(slurp(d / "ooc.ply") == slurp(d / "mem.ply"));
+  size_t up = 0;
+  for (const Point& p : ref.points) up += p.normal.z() > 0;
+  EXPECT_GE(double(up), 0.99 * double(ref.points.size()));
 }
 
 TEST(OocNormals, ForcedTilesMatchTheInMemoryPath) {

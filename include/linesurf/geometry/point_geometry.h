@@ -29,6 +29,23 @@ enum class CurvatureFit {
   Quadric,
 };
 
+/// Which side of each connected component its oriented normals face (the MST of stage 2 makes
+/// them agree within the component; docs/decisions.md "Orientation").
+enum class OrientSide {
+  /// Outward for closed objects, up for terrain and roofs scanned from above: per column of the
+  /// bounding box along each axis direction, the farthest point votes that its normal faces that
+  /// direction; the view from above counts twice.
+  Auto,
+  /// The column votes alone, every direction alike (closed objects).
+  Outward,
+  /// The mean normal points up (+z).
+  Up,
+  /// The normals face `viewpoint` (a room scanned from inside, a facade from the street).
+  Towards,
+  /// The normals face away from `viewpoint`.
+  AwayFrom,
+};
+
 struct GeometryOptions {
   int k = 12;                      ///< neighbours per point (stage 1), >= 3
   bool recomputeNormals = false;   ///< recompute even when the cloud has normals
@@ -37,6 +54,8 @@ struct GeometryOptions {
   /// discourages edges along the normals, i.e. across thin parts between two sheets. 0 gives
   /// Hoppe's weight. Default 0.5 (docs/decisions.md).
   float orientationPenalty = 0.5f;
+  OrientSide orient = OrientSide::Auto;     ///< the side each component's normals face
+  Vec3f viewpoint = Vec3f::Zero();          ///< for OrientSide::Towards and AwayFrom (the sensor)
   bool delaunayNeighbours = true;  ///< stage 3
   bool curvature = true;           ///< stage 4 (needs stage 3)
   /// Hole-free radii (docs/decisions.md "Spacing and the cover radius"): PointGeometry::coverRadius

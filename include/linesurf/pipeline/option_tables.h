@@ -40,6 +40,14 @@ inline std::span<const EnumName<CurvatureFit>> enumNames(CurvatureFit) {
   static constexpr EnumName<CurvatureFit> k[] = {{"taubin", CurvatureFit::Taubin}, {"quadric", CurvatureFit::Quadric}};
   return k;
 }
+inline std::span<const EnumName<OrientSide>> enumNames(OrientSide) {
+  static constexpr EnumName<OrientSide> k[] = {{"auto", OrientSide::Auto},
+                                               {"outward", OrientSide::Outward},
+                                               {"up", OrientSide::Up},
+                                               {"towards", OrientSide::Towards},
+                                               {"away-from", OrientSide::AwayFrom}};
+  return k;
+}
 
 /// Text of the mode-dependent z threshold default (defaultZThreshold).
 std::string zThresholdDefaultText();
@@ -148,6 +156,10 @@ void describeOptions(GeometryOptions& o, V&& v) {
   v(o.orientNormals, {"orientNormals", "Orient computed normals by a minimum spanning tree", {}, kUseCliPython, "--no-orient"});
   v(o.orientationPenalty, {"orientationPenalty", "MST orientation: penalty on edges along the normals (0 = Hoppe's weight)",
                            closedRange(0, 1e6)});
+  v(o.orient, {"orient",
+               "Side the oriented normals face: auto (outward for objects, up for terrain), outward, up (+z), towards or "
+               "away-from --viewpoint"});
+  v(o.viewpoint, {"viewpoint", "Sensor position x y z for --orient towards / away-from, object units"});
   v(o.curvature, {"curvature", "Curvature (§6.1.2; needs the local Delaunay neighbours)"});
   v(o.curvatureFit, {"curvatureFit", "taubin (thesis §6.1.2) or quadric (height-function fit)"});
 }

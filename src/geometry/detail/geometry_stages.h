@@ -16,6 +16,7 @@
 namespace linesurf {
 struct PointGeometry;
 enum class CurvatureFit;
+enum class OrientSide;
 }  // namespace linesurf
 
 namespace linesurf::detail {
@@ -52,10 +53,20 @@ inline Vec3f canonicalDirection(Vec3f d) {
 }
 
 // Stage 2b, consistent orientation (orientation.cpp):
+/// The side rule of orientNormals; decide = false leaves each component as its lowest-index
+/// point's normal has it (a tile of an out-of-core run: its join decides for the whole component).
+struct SideChoice {
+  OrientSide rule;
+  Vec3f viewpoint;
+  bool decide = true;
+};
+
 /// Orients g.normals by a minimum spanning forest of the symmetrised kNN graph (Hoppe 1992),
-/// from one seed per connected component; points with fixedNormal[i] keep theirs. Sets
-/// g.orientationFlips; componentOut (optional) gets each point's component.
-void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, PointGeometry& g,
+/// propagated from each component's lowest-index point, then turns each component without fixed
+/// normals to the side `side` chooses (geometry/detail/orientation_side.h); points with
+/// fixedNormal[i] keep theirs and orient their components. Sets g.orientationFlips;
+/// componentOut (optional) gets each point's component.
+void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, const SideChoice& side, PointGeometry& g,
                    const std::vector<uint8_t>& fixedNormal, std::vector<uint32_t>* componentOut);
 
 // Stage 4, principal curvatures and directions (curvature.cpp):
