@@ -52,9 +52,9 @@ void run(const CompareArgs& args) {
 RegisterCommand reg(60, [](CLI::App& app) {
   auto args = std::make_shared<CompareArgs>();
   CLI::App* sub = app.add_subcommand("compare", "Compare two images: mse, PSNR, nccm, SSIM, absolute differences (thesis §7)");
-  sub->add_option("A", args->a, "First image (reference)")->required();
-  sub->add_option("B", args->b, "Second image")->required();
-  sub->add_option("--diff", args->diff, "Write a difference heat-map PNG");
+  sub->add_option("A", args->a, "First image (reference)")->type_name("FILE")->required();
+  sub->add_option("B", args->b, "Second image")->type_name("FILE")->required();
+  sub->add_option("--diff", args->diff, "Write a difference heat-map PNG")->type_name("FILE");
   sub->add_option("--saturate", args->saturate, "Grey-level difference shown as white in the heat-map")->check(CLI::Range(1e-3, 1e6));
   sub->add_flag("--json", args->json, "Machine-readable output");
   sub->callback([args] { run(*args); });

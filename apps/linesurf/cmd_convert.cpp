@@ -48,7 +48,7 @@ void runConvert(const ConvertArgs& a) {
 RegisterCommand reg(11, [](CLI::App& app) {
   auto args = std::make_shared<ConvertArgs>();
   CLI::App* sub = app.add_subcommand("convert", "Convert between .ply, .obj and .xyz (mesh->mesh, points->points, mesh->points)");
-  sub->add_option("input", args->in, "Input model (.ply, .obj, .xyz)")->required();
+  sub->add_option("input", args->in, "Input model (.ply, .obj, .xyz)")->type_name("FILE")->required();
   sub->add_option("output", args->out, "Output model (.ply, .obj, .xyz); a mesh written as .xyz keeps its vertices")->required();
   sub->add_flag("--ascii", args->ascii, "Write ascii PLY instead of binary little-endian");
   sub->add_flag("--points", args->points, "Write a mesh's vertices as a point cloud (drop the faces)");

@@ -178,9 +178,9 @@ RegisterCommand reg(70, [](CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "experiment", "Run the thesis's §7 experiments (Tables 1-5) on every model of a folder: counts, data reduction, "
                     "image quality and render speedup; writes results.json, results.md and index.html");
-  sub->add_option("DATA_DIR", a->dataDir, "Folder of models (.ply/.obj/.xyz; a PLY with faces is a mesh)")
+  sub->add_option("DATA_DIR", a->dataDir, "Folder of models (.ply/.obj/.xyz; a PLY with faces is a mesh)")->type_name("DIR")
       ->required()->check(CLI::ExistingDirectory);
-  sub->add_option("-o,--output", a->outDir, "Output folder")->required();
+  sub->add_option("-o,--output", a->outDir, "Output folder")->type_name("FILE")->required();
   sub->add_option("--views", a->views, "Views per point cloud, spread over the sphere (thesis: 50)")
       ->capture_default_str()->check(CLI::Range(1, 100000));
   sub->add_option("--mesh-views", a->meshViews, "Views per mesh (thesis: 20)")->capture_default_str()->check(CLI::Range(1, 100000));

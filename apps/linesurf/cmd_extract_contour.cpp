@@ -96,8 +96,8 @@ RegisterCommand reg(33, [](CLI::App& app) {
   ContourOptions& o = a->extract;
   CLI::App* sub = extract->add_subcommand(
       "contour", "Cut a triangle mesh with two perpendicular families of contour planes (thesis §3.3)");
-  sub->add_option("MESH", a->mesh, "Triangle mesh (.ply, or .obj with .mtl and texture image)")->required();
-  sub->add_option("-o,--output", a->output, "Output model (.ply)")->required();
+  sub->add_option("MESH", a->mesh, "Triangle mesh (.ply, or .obj with .mtl and texture image)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", a->output, "Output model (.ply)")->type_name("FILE")->required();
   bindOptions(sub, o);  // --flat: the thesis's one normal per segment (--no-endpoint-normals)
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY instead of binary");
   sub->callback([a] { run(*a); });

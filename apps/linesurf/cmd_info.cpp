@@ -71,7 +71,7 @@ void runInfo(const InfoArgs& a) {
 RegisterCommand reg(10, [](CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* sub = app.add_subcommand("info", "Show what a model file holds (kind, counts, bounds, attributes, spacing)");
-  sub->add_option("file", args->file, "Model file (.ply, .obj, .xyz)")->required();
+  sub->add_option("file", args->file, "Model file (.ply, .obj, .xyz)")->type_name("FILE")->required();
   sub->add_flag("--json", args->json, "Print JSON instead of text");
   sub->callback([args] { runInfo(*args); });
 });

@@ -114,8 +114,8 @@ RegisterCommand reg(42, [](CLI::App& app) {
   lodCmd->require_subcommand(1);
   CLI::App* sub = lodCmd->add_subcommand(
       "build", "Build an octree of the model whose inner nodes hold merged splats (render it with --budget)");
-  sub->add_option("MODEL", a->model, "Point cloud or hybrid model (.ply, .obj, .xyz)")->required();
-  sub->add_option("-o,--output", a->output, "Output hierarchy (.lod)")->required();
+  sub->add_option("MODEL", a->model, "Point cloud or hybrid model (.ply, .obj, .xyz)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", a->output, "Output hierarchy (.lod)")->type_name("FILE")->required();
   bind(sub, "leafSize", a->build.leafSize, "A node of at most this many primitives is a leaf, [16, 1048576]");
   bind(sub, "grid", a->build.grid, "Inner nodes keep at most one merged splat per cell of a GRID^3 grid, [2, 256]");
   bind(sub, "k", a->prepare.k, "Neighbours for normals/radii of raw scans (§6.1), [3, 256]");
@@ -123,7 +123,7 @@ RegisterCommand reg(42, [](CLI::App& app) {
                 "Build from the file in bounded memory (--max-mb; chosen by itself when the model would not fit). "
                 "Binary PLY whose points carry normals and radii");
   sub->add_option("--work-dir", a->workDir,
-                  "Folder for the out-of-core build's working files (about the model's size; default: the output's)");
+                  "Folder for the out-of-core build's working files (about the model's size; default: the output's)")->type_name("DIR");
   sub->callback([a] { run(*a); });
 });
 

@@ -209,9 +209,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   RenderOptions& o = a->render;
   ViewOptions& v = a->view;
   CLI::App* sub = app.add_subcommand("render", "Render a point or hybrid model by EWA splatting (thesis §4-§6.2) to PNG");
-  sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")
+  sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")->type_name("FILE")
       ->required();
-  sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->capture_default_str();
+  sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->type_name("FILE")->capture_default_str();
   // Every flag of the camera, the preparation, the renderer and the mesh rasteriser comes from
   // the option tables (pipeline/option_tables.h).
   bindOptions(sub, v);
@@ -221,9 +221,9 @@ RegisterCommand reg(40, [](CLI::App& app) {
   sub->add_option("--budget", a->budget,
                   "With a .lod hierarchy: draw at most N splats a view, nodes chosen coarse to fine by their projected "
                   "size (default: every leaf, the full model)");
-  sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)");
-  sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG");
-  sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB");
+  sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)")->type_name("FILE");
+  sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG")->type_name("FILE");
+  sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB")->type_name("FILE");
   sub->add_option("--primitive", a->primitive,
                   "What a mesh file is drawn as: mesh (anti-aliased triangles, the ground truth), points (its "
                   "vertices as splats) or auto (mesh when the file has faces)")->capture_default_str();

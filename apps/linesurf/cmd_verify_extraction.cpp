@@ -54,8 +54,8 @@ RegisterCommand reg(35, [](CLI::App& app) {
   auto args = std::make_shared<VerifyArgs>();
   CLI::App* sub = app.add_subcommand(
       "verify-extraction", "Prove the (epsilon, delta) bound of an extracted hybrid model (thesis §3.1); needs --provenance");
-  sub->add_option("INPUT", args->input, "The point cloud the model was extracted from")->required();
-  sub->add_option("HYBRID", args->hybrid, "The hybrid model written by `extract eps-delta --provenance`")->required();
+  sub->add_option("INPUT", args->input, "The point cloud the model was extracted from")->type_name("FILE")->required();
+  sub->add_option("HYBRID", args->hybrid, "The hybrid model written by `extract eps-delta --provenance`")->type_name("FILE")->required();
   auto& v = args->verify;
   sub->add_option_function<double>("--epsilon", [&v](double e) { requireRange("epsilon", e, 0, 1e30), v.epsilon = e; },
                                    "Distance tolerance, >= 0 (default: as recorded in HYBRID)");

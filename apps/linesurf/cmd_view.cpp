@@ -120,7 +120,7 @@ RegisterCommand reg(45, [](CLI::App& app) {
                   "Point cloud, hybrid or line model (.ply, .xyz; a mesh shows its vertices), or a .lod hierarchy "
                   "(linesurf lod build)")
       ->required();  // a missing file is reported after the options are checked, as render does
-  a->outputOption = sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)");
+  a->outputOption = sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)")->type_name("FILE");
   // The page's defaults: the option tables' viewer fields (pipeline/option_tables.h).
   bindOptions(sub, a->page.view, {}, kUseViewer);
   bindOptions(sub, a->page.render, {}, kUseViewer);

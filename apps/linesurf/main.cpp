@@ -43,12 +43,16 @@ int main(int argc, char** argv) {
         const OptionSpec spec{"threads", "", closedRange(0, 1024)};
         g.threads = cli::parseNumber<int>(spec, t);
         requireRange(spec.name, g.threads, 0, 1024, "(0 = all cores)");
-      }, "Worker threads (0 = all cores), [0, 1024]");
+      }, "Worker threads (0 = all cores), [0, 1024]")
+      ->type_name("INT");
   app.add_option_function<std::string>("--max-mb", [&g](const std::string& t) {
         const OptionSpec spec{"maxMb", "", closedRange(1, 1e9)};
         g.maxMegabytes = cli::parseNumber<double>(spec, t);
         requireRange(spec.name, g.maxMegabytes, 1, 1e9, "MiB");
-      }, "Largest image buffer or output a command may make, estimated before the work, MiB, [1, 1e9]")
+      }, "Memory and output budget, MiB: the largest image, buffer or output a command may make (estimated before "
+         "the work), and the memory beyond which normals, the point extractions and lod build go out of core and "
+         "size their tiles, [1, 1e9]")
+      ->type_name("MiB")
       ->default_str(fmt::format("{}", g.maxMegabytes));
   for (auto& reg : cli::registeredCommands()) reg(app);
   // Thread limit must exist before any subcommand callback runs.

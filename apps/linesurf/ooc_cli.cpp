@@ -34,8 +34,11 @@ std::string OutOfCoreFlags::requested() const {
 void bindOutOfCoreFlags(CLI::App* sub, OutOfCoreFlags& f) {
   sub->add_flag("--out-of-core", f.outOfCore,
                 "Process the cloud in tiles streamed from disk (chosen by itself when it would not fit --max-mb)");
-  sub->add_option("--tiles", f.tiles, "Out of core with at least N tiles (implies --out-of-core)")->check(CLI::Range(1, 1000000));
-  sub->add_option("--tile-dir", f.tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)");
+  sub->add_option("--tiles", f.tiles, "Out of core with at least N tiles (implies --out-of-core), [1, 1000000]")
+      ->check(CLI::Range(1, 1000000).description(""))
+      ->type_name("N");
+  sub->add_option("--tile-dir", f.tileDir, "Working folder of the out-of-core path (default OUT.tiles; a killed run resumes from it)")
+      ->type_name("DIR");
   sub->add_flag("--keep-tiles", f.keepTiles, "Keep the tile folder after a successful out-of-core run");
 }
 

@@ -1,4 +1,4 @@
-// The self-contained WebGL2 viewer page (see viewer_page.h; the page itself is web/viewer.*).
+// The self-contained WebGL2 viewer page (see viewer_page.h; the page itself is web/viewer.html and web/modules/).
 #include "linesurf/view/viewer_page.h"
 
 #include <algorithm>

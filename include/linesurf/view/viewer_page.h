@@ -2,7 +2,8 @@
 /// `linesurf view`: one self-contained HTML page that draws a point, segment or hybrid model with
 /// WebGL2 on the GPU (GPU line-segment splatting, the future work of thesis §9.3). The page holds
 /// the model (base64 of float32 / int16 / uint8 arrays), the viewer's JavaScript and GLSL
-/// (web/viewer.js), and needs no network access and no server: it opens from file://.
+/// (web/modules/, bundled into one script at build time), and needs no network access and no
+/// server: it opens from file://.
 ///
 /// The page draws what `linesurf render` draws, with the same conventions (camera.h) and the same
 /// defaults (render_options.h): object-space EWA point splats (§4.2.2) and line-segment splats
