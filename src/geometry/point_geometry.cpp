@@ -30,6 +30,11 @@ namespace {
 using detail::forBlocks;
 using detail::householderTangents;
 constexpr uint32_t kNone = PointGeometry::kNoNeighbour;
+/// A point whose spacing exceeds this many times the median spacing of its neighbours stands off
+/// the surface (no point of the shared clean models does: their largest ratio is 3.2, on al)...
+constexpr float kOffSurfaceRatio = 4.0f;
+/// ...and its disc is at most this many times that median, the cap its own spacing would give.
+constexpr float kNeighbourBound = 3.0f;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 struct CloudAdaptor {
@@ -277,6 +282,42 @@ void computeDelaunay(const std::vector<Vec3f>& pos, const KdTree* tree, const st
 }
 
 
+/// The cover radius of a point off the surface bounded by its neighbours' spacing (beyond the
+/// thesis; docs/decisions.md "Spacing and the cover radius"): an outlier's own spacing is its
+/// distance to the surface, so 3 x its own spacing drew it as a disc of that size; the median of
+/// its neighbours' spacing is the surface's. The median, not the largest: a cluster of up to k/2
+/// outliers does not vouch for itself. A tile's point reads its neighbours' spacing, so its reach
+/// grows by their k-balls (the halo must hold those too for the tile to reproduce the radius).
+void boundByNeighbours(PointGeometry& g, std::vector<float>* reach) {
+  const size_t n = g.spacing.size(), k = size_t(g.k);
+  auto kth = [&](size_t j) {
+    for (size_t t = k; t-- > 0;)
+      if (g.neighbours[j * k + t] != kNone) return g.neighbourDistances[j * k + t];
+    return 0.0f;
+  };
+  std::vector<float> grown(reach ? n : 0);
+  parallelForRange(0, n, [&](size_t b, size_t e) {
+    std::vector<float> s;
+    for (size_t i = b; i < e; ++i) {
+      s.clear();
+      float far = 0;
+      for (size_t t = 0; t < k && g.neighbours[i * k + t] != kNone; ++t) {
+        const uint32_t j = g.neighbours[i * k + t];
+        s.push_back(g.spacing[j]);
+        if (reach) far = std::max(far, g.neighbourDistances[i * k + t] + kth(j));
+      }
+      if (reach) grown[i] = far;
+      if (s.empty()) continue;
+      std::nth_element(s.begin(), s.begin() + ptrdiff_t(s.size() / 2), s.end());
+      const float median = s[s.size() / 2];
+      if (median > 0 && g.spacing[i] > kOffSurfaceRatio * median)
+        g.coverRadius[i] = std::min(g.coverRadius[i], kNeighbourBound * median);
+    }
+  }, 4096);
+  if (reach)
+    for (size_t i = 0; i < n; ++i) (*reach)[i] = std::max((*reach)[i], grown[i]);
+}
+
 }  // namespace
 
 size_t PointGeometry::countFlag(PointFlag f) const {
@@ -390,6 +431,7 @@ PointGeometry detail::computePointGeometryTile(const HybridModel& cloud, const G
   g.averageSpacing = counted > 0 ? float(total / double(counted)) : 0.0f;
   for (size_t i = 0; i < g.coverRadius.size(); ++i)  // a degenerate star must not blow a disc up
     g.coverRadius[i] = std::min(g.coverRadius[i], 3.0f * (g.spacing[i] > 0 ? g.spacing[i] : g.averageSpacing));
+  if (!g.coverRadius.empty()) boundByNeighbours(g, extras ? &extras->reach : nullptr);
   g.times.spacing = timer.seconds();
   return g;
 }

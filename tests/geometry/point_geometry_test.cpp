@@ -413,6 +413,29 @@ TEST(PointGeometry, ApplyWritesNormalsRadiiAndCurvatureProperties) {
     EXPECT_EQ(cloud.pointProperties.at(name).size(), cloud.points.size()) << name;
 }
 
+// A point off the surface takes the surface's scale for its disc, not its distance to it: single
+// outliers and a cluster of four, 10-25 spacings out, get at most 3 x their neighbours' median
+// spacing; the surface's own radii stay as they were without them.
+TEST(PointGeometry, OutliersGetNoGiantDiscs) {
+  const HybridModel clean = shapes::sphere(1, 20000, {.irregular = true, .seed = 2});
+  GeometryOptions o = recompute();
+  o.delaunayNeighbours = o.curvature = false;
+  const PointGeometry g0 = computePointGeometry(clean, o);
+  HybridModel cloud = clean;
+  const float s = g0.averageSpacing;
+  for (int t = 0; t < 30; ++t) {  // spread over the sphere (a Fibonacci lattice), apart from each other
+    const float z = 1 - (2 * float(t) + 1) / 30, r = std::sqrt(1 - z * z), phi = 2.39996f * float(t);
+    cloud.points.push_back({.position = (1.0f + (10.0f + 0.33f * float(t)) * s) * Vec3f(r * std::cos(phi), r * std::sin(phi), z)});
+  }
+  for (int t = 0; t < 4; ++t) cloud.points.push_back({.position = Vec3f(0.6f, 0.0f, 0.8f) * (1.0f + 25 * s) + Vec3f(0, 0.3f * s * float(t), 0)});
+  const PointGeometry g = computePointGeometry(cloud, o);
+  for (size_t i = 0; i < clean.points.size(); ++i) ASSERT_EQ(g.coverRadius[i], g0.coverRadius[i]) << i;
+  for (size_t i = clean.points.size(); i < cloud.points.size(); ++i) {
+    EXPECT_LE(g.coverRadius[i], 3.0f * 1.5f * s) << i;           // the surface's scale...
+    EXPECT_GT(3.0f * g.spacing[i], 5.0f * g.coverRadius[i]) << i;  // ...not 3 x its own spacing
+  }
+}
+
 TEST(PointGeometry, CoverRadiusIsTheLargestStarCircumradius) {
   // A regular square grid: every star is the 4 (or 8, co-circular) grid neighbours, every star
   // triangle a right isosceles one with circumradius h / sqrt(2): cover radius 1.1 h / sqrt(2).
