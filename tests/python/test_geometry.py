@@ -1,5 +1,6 @@
 """§6.1 geometry through Python: normals of an analytic sphere, neighbours, curvature, spacing."""
 import numpy as np
+import pytest
 
 import linesurf
 from conftest import fibonacci_sphere
@@ -46,3 +47,18 @@ def test_prepare_adds_normals_and_radii(igea):
     assert igea.normals is None  # the input is not changed
     assert p.normals.shape == igea.points.shape and p.radii.shape == (len(igea.points),)
     assert np.all(p.radii > 0)
+
+
+def test_orient_chooses_each_components_side():
+    pts = fibonacci_sphere(5000, radius=1.0)
+    outward = np.sum(linesurf.normals(pts) * pts, axis=1)
+    assert np.all(outward > 0)  # auto: a closed object faces outward
+    inward = np.sum(linesurf.normals(pts, orient="towards", viewpoint=(0.1, 0, 0)) * pts, axis=1)
+    assert np.all(inward < 0)  # a room seen from its scanner faces the scanner
+    rng = np.random.default_rng(5)
+    sheet = np.column_stack([rng.uniform(0, 10, 4000), rng.uniform(0, 10, 4000), rng.normal(0, 0.01, 4000)])
+    assert np.all(linesurf.normals(sheet)[:, 2] > 0)  # terrain faces up
+    assert np.all(linesurf.normals(sheet, orient="away-from", viewpoint=(5, 5, 3))[:, 2] < 0)
+    for bad in [dict(orient="sideways"), dict(orient="towards", viewpoint=(0, 0)), dict(viewpoint=(0, float("nan"), 0))]:
+        with pytest.raises(ValueError):
+            linesurf.normals(pts, **bad)
