@@ -23,7 +23,7 @@ import re
 import sys
 from collections import defaultdict
 
-MODULE_ORDER = ["core", "io", "geometry", "extract", "ooc", "render", "lod", "pipeline", "view", "eval", "apps"]
+MODULE_ORDER = ["core", "io", "geometry", "surface", "extract", "ooc", "render", "lod", "pipeline", "view", "eval", "apps"]
 MAX_RENDER_FILE_LINES = 700
 MAX_RENDER_FUNCTION_LINES = 150
 SOURCE_EXT = (".h", ".hpp", ".cpp", ".cc")

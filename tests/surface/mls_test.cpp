@@ -1,0 +1,129 @@
+// The MLS surface of a point model (surface/mls.h): exact derivatives against finite
+// differences, projection onto shapes with known surfaces, curvature with known answers.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "linesurf/core/error.h"
+#include "linesurf/surface/mls.h"
+#include "shapes.h"
+
+namespace linesurf {
+namespace {
+
+HybridModel noRadii(HybridModel m) {
+  for (Point& p : m.points) p.radius = 0;
+  m.attributes.radii = false;
+  return m;
+}
+
+TEST(MlsSurface, GradientAndHessianAreExact) {
+  const MlsSurface s(shapes::sphere(1, 4000, {.irregular = true, .seed = 3}));
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> g(0, 1);
+  for (int t = 0; t < 50; ++t) {
+    const Vec3d x = Vec3d(g(rng), g(rng), g(rng)).normalized() * (1 + 0.02 * g(rng));
+    const MlsSample a = s.evaluate(x);
+    ASSERT_TRUE(a.valid());
+    const double e = 1e-5;
+    for (int d = 0; d < 3; ++d) {
+      const Vec3d dx = e * Vec3d::Unit(d);
+      const MlsSample p = s.evaluate(x + dx), m = s.evaluate(x - dx);
+      EXPECT_NEAR(a.gradient[d], (p.value - m.value) / (2 * e), 1e-5 * (1 + a.gradient.norm())) << t;
+      const Vec3d col = (p.gradient - m.gradient) / (2 * e);
+      for (int r = 0; r < 3; ++r) EXPECT_NEAR(a.hessian(r, d), col[r], 1e-4 * (1 + a.hessian.norm())) << t;
+      const Vec3d ncol = (p.normalField - m.normalField) / (2 * e);
+      for (int r = 0; r < 3; ++r)
+        EXPECT_NEAR(a.normalJacobian(r, d), ncol[r], 1e-4 * (1 + a.normalJacobian.norm())) << t;
+    }
+    EXPECT_LT((a.hessian - a.hessian.transpose()).norm(), 1e-9 * (1 + a.hessian.norm()));
+  }
+}
+
+// Median and largest of |k - 1/r| over projections of points near a sphere of radius 2 (20,000
+// samples, noise 0.05 spacing), and the largest distance of a projection from the sphere.
+struct SphereFigures {
+  double kMedian = 0, kMax = 0, distance = 0;
+};
+
+SphereFigures sphereFigures(bool irregular) {
+  const MlsSurface s(shapes::sphere(2, 20000, {.noise = 0.05f, .irregular = irregular, .seed = 5}));
+  std::mt19937_64 rng(2);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<double> err;
+  SphereFigures f;
+  for (int t = 0; t < 200; ++t) {
+    const Vec3d dir = Vec3d(g(rng), g(rng), g(rng)).normalized();
+    const MlsProjection p = s.project(dir * (2 + 0.05 * g(rng)));
+    EXPECT_TRUE(p.converged) << t;
+    EXPECT_LE(p.iterations, 8);
+    f.distance = std::max(f.distance, std::abs(p.point.norm() - 2));
+    EXPECT_GT(p.normal.dot(p.point.normalized()), 0.999) << t;
+    const MlsCurvature c = s.curvature(p.point);
+    EXPECT_TRUE(c.valid);
+    EXPECT_NEAR(c.dirMin.dot(c.normal), 0, 1e-9);
+    EXPECT_NEAR(c.dirMin.cross(c.dirMax).dot(c.normal), 1, 1e-9);
+    err.push_back(std::max(std::abs(c.kMin - 0.5), std::abs(c.kMax - 0.5)));
+  }
+  std::sort(err.begin(), err.end());
+  f.kMedian = err[err.size() / 2], f.kMax = err.back();
+  EXPECT_GT(s.evaluate(Vec3d(0, 0, 2.05)).value, 0);  // positive where the normals face
+  EXPECT_LT(s.evaluate(Vec3d(0, 0, 1.95)).value, 0);
+  return f;
+}
+
+TEST(MlsSurface, ProjectsOntoASphereAndReadsItsCurvature) {
+  const double spacing = std::sqrt(4 * 3.14159265 * 4 / 20000);
+  const SphereFigures even = sphereFigures(false);
+  EXPECT_LT(even.distance, 0.15 * spacing);  // IMLS's bias on a curved surface, within the noise
+  EXPECT_LT(even.kMax, 0.05);                // 1 / r within 10% everywhere
+  EXPECT_LT(even.kMedian, 0.01);
+  // Random (Poisson) sampling clumps and the weights follow the clumps: the curvature is rougher
+  // (23% off at the median), the surface as close.
+  const SphereFigures random = sphereFigures(true);
+  EXPECT_LT(random.distance, 0.15 * spacing);
+  EXPECT_LT(random.kMedian, 0.125);
+}
+
+TEST(MlsSurface, CylinderCurvatureAndDirections) {
+  const MlsSurface s(noRadii(shapes::cylinder(1, 6, 200, 300)));
+  for (double z : {-1.0, 0.0, 1.5})
+    for (double a : {0.3, 2.0, 4.4}) {
+      const MlsProjection p = s.project(Vec3d(1.03 * std::cos(a), 1.03 * std::sin(a), z));
+      ASSERT_TRUE(p.converged);
+      EXPECT_NEAR(std::hypot(p.point.x(), p.point.y()), 1, 1e-3);
+      const MlsCurvature c = s.curvature(p.point);
+      EXPECT_NEAR(c.kMin, 0, 0.02);
+      EXPECT_NEAR(c.kMax, 1, 0.05);
+      EXPECT_GT(std::abs(c.dirMin.z()), 0.999);  // the minimum direction is the axis
+    }
+}
+
+TEST(MlsSurface, FarFromTheSourcesProjectionFails) {
+  const MlsSurface s(shapes::plane(1, 1, 40, 40));
+  const MlsProjection far = s.project(Vec3d(0, 0, 5));
+  EXPECT_FALSE(far.converged);
+  EXPECT_FALSE(s.evaluate(Vec3d(0, 0, 5)).valid());
+  EXPECT_FALSE(s.curvature(Vec3d(0, 0, 5)).valid);
+  const MlsProjection near = s.project(Vec3d(0.1, -0.2, 0.02));
+  EXPECT_TRUE(near.converged);
+  EXPECT_NEAR(near.point.z(), 0, 1e-6);
+  EXPECT_NEAR(s.curvature(near.point).kMax, 0, 1e-6);
+}
+
+TEST(MlsSurface, BadModelsAndOptionsAreRefused) {
+  HybridModel m = shapes::plane(1, 1, 10, 10);
+  MlsOptions o;
+  o.supportScale = 0.5f;
+  EXPECT_THROW(MlsSurface(m, o), Error);
+  m.attributes.normals = false;
+  EXPECT_THROW(MlsSurface{m}, Error);
+  EXPECT_THROW(MlsSurface{HybridModel{}}, Error);
+  m = shapes::plane(1, 1, 10, 10);
+  m.points[3].normal = Vec3f(0, 0, 2);
+  EXPECT_THROW(MlsSurface{m}, Error);
+}
+
+}  // namespace
+}  // namespace linesurf
