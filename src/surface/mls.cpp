@@ -79,8 +79,9 @@ MlsSurface::MlsSurface(const HybridModel& model, const MlsOptions& options) : im
     const Point& p = model.points[i];
     m.cloud.pts[i] = p.position;
     m.normal[i] = p.normal.cast<double>();
-    // An outlier's spacing is its distance to the surface: 4 x the median bounds its reach.
-    const double s = std::clamp(double(g.spacing[i]), 0.25 * medianSpacing, 4.0 * medianSpacing);
+    // An outlier's spacing is its distance to the surface, and the largest support is every
+    // query's radius: 2 x the median bounds both.
+    const double s = std::clamp(double(g.spacing[i]), 0.25 * medianSpacing, 2.0 * medianSpacing);
     const double h = double(options.supportScale) * s;
     m.h2[i] = h * h;
     m.reach = std::max(m.reach, h);
