@@ -4,6 +4,8 @@
 // model's size, today's picture of the model.
 #include <fmt/format.h>
 
+#include <filesystem>
+
 #include "command.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
@@ -71,6 +73,11 @@ void run(LodArgs& a) {
   lod::validate(a.build);
   validate(a.prepare);
   checkFiles({a.model}, {{"--output", a.output, {".lod"}}}, /*inputsHeldWhole=*/false);
+  if (!a.workDir.empty()) {  // before the work, not when its first file is written
+    std::error_code ec;
+    if (!std::filesystem::is_directory(a.workDir, ec))
+      throwBadParameter("--work-dir", "'" + a.workDir + "' is not an existing folder");
+  }
   if (a.outOfCore || !a.workDir.empty()) {
     runStreaming(a, a.outOfCore ? "--out-of-core" : "--work-dir");
     return;

@@ -218,9 +218,15 @@ RegisterCommand reg(40, [](CLI::App& app) {
   bindOptions(sub, a->prepare);
   bindOptions(sub, o);
   bindOptions(sub, a->mesh);
-  sub->add_option("--budget", a->budget,
-                  "With a .lod hierarchy: draw at most N splats a view, nodes chosen coarse to fine by their projected "
-                  "size (default: every leaf, the full model)");
+  // Read as every table option is (options_bind.h): a decimal integer in range, so that -1, 2^64,
+  // "" or 0x10 are refused naming the flag instead of read as something else.
+  sub->add_option_function<std::string>("--budget", [a](const std::string& t) {
+        a->budget = parseNumber<uint64_t>(OptionSpec{"budget", "", closedRange(0, 1e15)}, t);
+        requireRange("budget", double(a->budget), 0, 1e15, "splats (0 = every leaf)");
+      },
+      "With a .lod hierarchy: draw at most N splats a view, nodes chosen coarse to fine by their projected "
+      "size (0, the default: every leaf, the full model), [0, 1e15]")
+      ->type_name("N");
   sub->add_option("--depth-out", a->depthOut, "Also write the depth buffer as a grey PNG (near = white)")->type_name("FILE");
   sub->add_option("--alpha-out", a->alphaOut, "Also write the coverage alpha as a PNG")->type_name("FILE");
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB")->type_name("FILE");

@@ -439,7 +439,15 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
           const std::string path = py::str(py::module_::import("os").attr("fspath")(model));
           uint64_t b = UINT64_MAX;  // every leaf
           if (!budget.is_none()) {
-            const long long n = budget.cast<long long>();
+            // An integer, not a float or a bool that pybind11 would refuse with a RuntimeError.
+            if (!py::isinstance<py::int_>(budget) || py::isinstance<py::bool_>(budget))
+              throwBadOption("budget", "must be an integer number of splats (None: every leaf)");
+            long long n = 0;
+            try {
+              n = budget.cast<long long>();
+            } catch (const py::cast_error&) {
+              throwBadOption("budget", "must be at most 1e15 splats");
+            }
             if (n < 1) throwBadOption("budget", "must be >= 1 splats (None: every leaf)");
             b = uint64_t(n);
           }

@@ -296,6 +296,18 @@ TEST(Lod, CliRendersAHierarchyWithABudget) {
   r = test::runCli("-q render " + q + "s.ply' -o " + q + "d.png' --budget 1000");
   EXPECT_EQ(r.exitCode, 1) << r.out;  // a budget needs a hierarchy
   EXPECT_FALSE(std::filesystem::exists(dir / "d.png"));
+  // A budget is a decimal count: no sign, no hex, no empty text, nothing past 1e15.
+  for (const char* bad : {"-1", "18446744073709551616", "''", "0x10", "1e3", "2000000000000000"}) {
+    r = test::runCli("-q render " + q + "s.lod' -o " + q + "e.png' --size 64x64 --budget " + bad);
+    EXPECT_EQ(r.exitCode, 1) << bad << ": " << r.out;
+    EXPECT_NE(r.out.find("budget"), std::string::npos) << bad << ": " << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir / "e.png")) << bad;
+  }
+  // A working folder that does not exist is refused before the build, not after it.
+  r = test::runCli("-q lod build " + q + "s.ply' -o " + q + "w.lod' --work-dir " + q + "missing'");
+  EXPECT_EQ(r.exitCode, 1) << r.out;
+  EXPECT_NE(r.out.find("--work-dir"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "w.lod"));
 }
 
 // A hierarchy larger than --max-mb renders with a budget that fits (only the view's nodes are

@@ -59,3 +59,11 @@ def test_a_truncated_hierarchy_draws_the_rest_and_warns(hybrid, tmp_path):
         img = linesurf.render(str(path), size=(128, 128), budget=1000)  # the coarse nodes are drawn
     assert any("node" in str(w.message) for w in caught)
     assert img.shape == (128, 128, 4)
+
+
+def test_meaningless_budgets_raise_value_error(hybrid, tmp_path):
+    path = str(tmp_path / "m.lod")
+    linesurf.lod_build(hybrid, path)
+    for bad in [1.5, True, -1, 0, 2 ** 64, "10"]:
+        with pytest.raises(ValueError, match="budget"):
+            linesurf.render(path, size=(64, 64), budget=bad)
