@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <thread>
 
 #ifdef LINESURF_HAVE_MPI
 #include <mpi.h>
@@ -140,7 +141,10 @@ std::function<void()> MpiRun::barrier() const {
 }
 void MpiRun::guard(const std::function<void()>& f) const {
   if (!active) return f();
-  auto stop = [](const std::string& message, int code) {
+  auto stop = [this](const std::string& message, int code) {
+    // A bad input fails every rank alike: rank 0 speaks and its abort ends the others before they
+    // repeat it; an error of one rank's own tiles is still said, by that rank, a moment later.
+    if (rank != 0) std::this_thread::sleep_for(std::chrono::milliseconds(500));
     std::fprintf(stderr, "%s\n", message.c_str());
     std::fflush(stderr);
     MPI_Abort(MPI_COMM_WORLD, code);

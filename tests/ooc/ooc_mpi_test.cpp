@@ -79,6 +79,17 @@ TEST(OocMpi, ThreeRanksWriteWhatOneProcessWrites) {
   EXPECT_EQ(bad.exitCode, 2) << bad.out;
   EXPECT_NE(bad.out.find("truncated binary body"), std::string::npos) << bad.out;
   EXPECT_FALSE(fs::exists(d / "bad.ply"));
+  // ...said once, by one rank, not once a rank.
+  auto count = [](const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count(bad.out, "truncated binary body"), 1u) << bad.out;
+  const auto missing = shell(mpirun + LINESURF_CLI + " normals '" + (d / "none.ply").string() + "' -o '" +
+                             (d / "bad.ply").string() + "' --tiles 4");
+  EXPECT_EQ(missing.exitCode, 2) << missing.out;
+  EXPECT_EQ(count(missing.out, "none.ply: no such file"), 1u) << missing.out;
 }
 
 }  // namespace
