@@ -51,6 +51,8 @@ Kind kindOf(const std::filesystem::path& path) {
   if (ext == ".ply") return Kind::Ply;
   if (ext == ".obj") return Kind::Obj;
   if (ext == ".xyz") return Kind::Xyz;
+  // A .lod file reaches here only when its first bytes are not the hierarchy's magic.
+  if (ext == ".lod") throwBadInput(path.string(), "", "not a level-of-detail hierarchy (no .lod magic at its start)");
   throwBadInput(path.string(), "", "unknown file extension '" + path.extension().string() +
                                        "' (supported: .ply, .obj, .xyz)");
 }

@@ -303,6 +303,12 @@ TEST(Lod, CliRendersAHierarchyWithABudget) {
     EXPECT_NE(r.out.find("budget"), std::string::npos) << bad << ": " << r.out;
     EXPECT_FALSE(std::filesystem::exists(dir / "e.png")) << bad;
   }
+  // info describes what render reads: the hierarchy's counts and table.
+  r = test::runCli("info " + q + "s.lod'");
+  EXPECT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("level-of-detail hierarchy"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("points:     " + std::to_string(m.points.size())), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("segments:   " + std::to_string(m.segments.size())), std::string::npos) << r.out;
   // A working folder that does not exist is refused before the build, not after it.
   r = test::runCli("-q lod build " + q + "s.ply' -o " + q + "w.lod' --work-dir " + q + "missing'");
   EXPECT_EQ(r.exitCode, 1) << r.out;
