@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "linesurf/core/error.h"
@@ -26,6 +27,39 @@ struct Cloud {
 };
 using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud, 3, uint32_t>;
 
+/// A polynomial in the segment parameter s, degree < 12 (the integrands reach degree 10).
+struct Poly {
+  std::array<double, 12> c{};
+  int degree = 0;
+};
+Poly operator*(const Poly& a, const Poly& b) {
+  Poly r;
+  r.degree = a.degree + b.degree;
+  for (int i = 0; i <= a.degree; ++i)
+    for (int j = 0; j <= b.degree; ++j) r.c[size_t(i + j)] += a.c[size_t(i)] * b.c[size_t(j)];
+  return r;
+}
+Poly operator*(double k, Poly a) {
+  for (int i = 0; i <= a.degree; ++i) a.c[size_t(i)] *= k;
+  return a;
+}
+Poly operator+(Poly a, const Poly& b) {
+  a.degree = std::max(a.degree, b.degree);
+  for (int i = 0; i <= b.degree; ++i) a.c[size_t(i)] += b.c[size_t(i)];
+  return a;
+}
+Poly linear(double c0, double c1) {
+  Poly p;
+  p.c[0] = c0, p.c[1] = c1, p.degree = 1;
+  return p;
+}
+/// The integral of p over [a, b].
+double integral(const Poly& p, double a, double b) {
+  double r = 0, pa = a, pb = b;
+  for (int k = 0; k <= p.degree; ++k, pa *= a, pb *= b) r += p.c[size_t(k)] * (pb - pa) / double(k + 1);
+  return r;
+}
+
 }  // namespace
 
 void validate(const MlsOptions& o) {
@@ -41,6 +75,17 @@ struct MlsSurface::Impl {
   std::vector<double> area, h2;  ///< a_i, h_i^2
   double reach = 0;              ///< the largest h_i: every query's radius
   std::unique_ptr<Tree> tree;
+  /// Segment sources: endpoints, endpoint normals (the one normal twice without endpoint
+  /// normals), strip weight per unit parameter (2 r L), h^2; a tree over their midpoints, queried
+  /// with the support plus the longest half-length.
+  struct SegmentSource {
+    Vec3d p0, d, n0, n1;
+    double weight = 0, h2 = 0;
+  };
+  std::vector<SegmentSource> segments;
+  Cloud midpoints;
+  std::unique_ptr<Tree> segmentTree;
+  double segmentReach = 0;
 
   /// The sources whose support holds x, in index order (a sum's order independent of the tree).
   void inReach(const Vec3d& x, std::vector<std::pair<uint32_t, float>>& found) const {
@@ -59,20 +104,42 @@ MlsSurface::MlsSurface(const HybridModel& model, const MlsOptions& options) : im
   Impl& m = *impl_;
   m.options = options;
   const size_t n = model.points.size();
-  if (n == 0) throwBadParameter("model", "has no points");
-  if (!model.attributes.normals) throwBadParameter("model", "has no normals (an MLS surface needs oriented points)");
+  if (n == 0 && model.segments.empty()) throwBadParameter("model", "has no points and no segments");
+  if (n > 0 && !model.attributes.normals) throwBadParameter("model", "has no normals (an MLS surface needs oriented points)");
+  for (size_t j = 0; j < model.segments.size(); ++j) {
+    const Segment& sg = model.segments[j];
+    if (!sg.p0.allFinite() || !sg.p1.allFinite() || !sg.normal.allFinite() || !(sg.radius > 0) || !std::isfinite(sg.radius))
+      throwBadParameter("model", "segment " + std::to_string(j) + " has a non-finite endpoint or normal, or no radius");
+  }
   for (size_t i = 0; i < n; ++i) {
     const Point& p = model.points[i];
     if (!p.position.allFinite() || !p.normal.allFinite() || std::abs(p.normal.squaredNorm() - 1.0f) > 1e-3f)
       throwBadParameter("model", "point " + std::to_string(i) + " has a non-finite position or a normal that is not unit");
   }
-  // The spacing of §6.1 stage 5 (the file's normals kept, nothing else computed).
-  GeometryOptions go;
-  go.orientNormals = go.delaunayNeighbours = go.curvature = go.coverRadius = false;
-  const PointGeometry g = computePointGeometry(model, go);
-  std::vector<float> sorted(g.spacing);
-  std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(n / 2), sorted.end());
-  const double medianSpacing = sorted[n / 2] > 0 ? sorted[n / 2] : std::max(g.averageSpacing, 1e-30f);
+  // The spacing of §6.1 stage 5 (the file's normals kept, nothing else computed); a model of
+  // segments alone takes its strips' half-widths for it.
+  PointGeometry g;
+  double medianSpacing = 0;
+  if (n >= 2) {
+    HybridModel points;
+    points.points = model.points;
+    points.attributes = model.attributes;
+    GeometryOptions go;
+    go.orientNormals = go.delaunayNeighbours = go.curvature = go.coverRadius = false;
+    g = computePointGeometry(points, go);
+    std::vector<float> sorted(g.spacing);
+    std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(n / 2), sorted.end());
+    medianSpacing = sorted[n / 2] > 0 ? sorted[n / 2] : g.averageSpacing;
+  } else {
+    g.spacing.assign(n, 0.0f);
+  }
+  if (!(medianSpacing > 0) && !model.segments.empty()) {
+    std::vector<float> r;
+    for (const Segment& sg : model.segments) r.push_back(sg.radius);
+    std::nth_element(r.begin(), r.begin() + ptrdiff_t(r.size() / 2), r.end());
+    medianSpacing = r[r.size() / 2];
+  }
+  if (!(medianSpacing > 0)) throwBadParameter("model", "has no spacing (coincident points)");
   m.cloud.pts.resize(n);
   m.normal.resize(n), m.area.resize(n), m.h2.resize(n);
   for (size_t i = 0; i < n; ++i) {
@@ -88,15 +155,41 @@ MlsSurface::MlsSurface(const HybridModel& model, const MlsOptions& options) : im
     const double r = p.radius > 0 ? double(p.radius) : s;
     m.area[i] = r * r;
   }
-  m.tree = std::make_unique<Tree>(3, m.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  m.tree->buildIndex();
+  if (n > 0) {
+    m.tree = std::make_unique<Tree>(3, m.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    m.tree->buildIndex();
+  }
+  // A segment is a strip of half-width r: its spacing across is about r, so its support is
+  // supportScale x r (clamped as the points'); its weight per unit parameter is the strip's area.
+  double longest = 0;
+  for (const Segment& sg : model.segments) {
+    Impl::SegmentSource src;
+    src.p0 = sg.p0.cast<double>();
+    src.d = (sg.p1 - sg.p0).cast<double>();
+    const bool ends = model.attributes.endpointNormals && sg.normal0 != Vec3f::Zero() && sg.normal1 != Vec3f::Zero();
+    src.n0 = (ends ? sg.normal0 : sg.normal).cast<double>().normalized();
+    src.n1 = (ends ? sg.normal1 : sg.normal).cast<double>().normalized();
+    const double r = std::clamp(double(sg.radius), 0.25 * medianSpacing, 2.0 * medianSpacing);
+    const double h = double(options.supportScale) * r;
+    src.h2 = h * h;
+    src.weight = 2 * double(sg.radius) * src.d.norm();
+    m.segmentReach = std::max(m.segmentReach, h);
+    longest = std::max(longest, src.d.norm());
+    m.segments.push_back(src);
+    m.midpoints.pts.push_back((0.5f * (sg.p0 + sg.p1)));
+  }
+  m.segmentReach += 0.5 * longest;
+  if (!m.segments.empty()) {
+    m.segmentTree = std::make_unique<Tree>(3, m.midpoints, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    m.segmentTree->buildIndex();
+  }
 }
 
 MlsSurface::~MlsSurface() = default;
 MlsSurface::MlsSurface(MlsSurface&&) noexcept = default;
 MlsSurface& MlsSurface::operator=(MlsSurface&&) noexcept = default;
 
-size_t MlsSurface::sources() const { return impl_->cloud.pts.size(); }
+size_t MlsSurface::sources() const { return impl_->cloud.pts.size() + impl_->segments.size(); }
 
 MlsSample MlsSurface::evaluate(const Vec3d& x) const {
   const Impl& m = *impl_;
@@ -122,6 +215,67 @@ MlsSample MlsSurface::evaluate(const Vec3d& x) const {
     hN += hphi * di + gphi * nrm.transpose() + nrm * gphi.transpose(), hD += hphi;
     s.normalField += phi * nrm, s.normalJacobian += nrm * gphi.transpose();
     ++s.sources;
+  }
+  if (m.segmentTree) {
+    thread_local std::vector<std::pair<uint32_t, float>> near;
+    near.clear();
+    const float q[3] = {float(x.x()), float(x.y()), float(x.z())};
+    nanoflann::SearchParams params;
+    params.sorted = false;
+    m.segmentTree->radiusSearch(q, float(m.segmentReach * m.segmentReach), near, params);
+    std::sort(near.begin(), near.end());
+    for (const auto& [j, unused] : near) {
+      const Impl::SegmentSource& sg = m.segments[j];
+      // Along the segment p(s) = p0 + s d, t(s) = |x - p(s)|^2 / h^2 = A - 2 B s + C s^2 and
+      // u = 1 - t is a quadratic; the kernel u^4 and every term below are polynomials in s,
+      // integrated exactly over the part of [0, 1] inside the support. The support's ends move
+      // with x, but u^4 and its first derivatives vanish there, so the derivatives pass under
+      // the integral.
+      const Vec3d r0 = x - sg.p0;
+      const double A = r0.squaredNorm() / sg.h2, B = sg.d.dot(r0) / sg.h2, C = sg.d.squaredNorm() / sg.h2;
+      double lo = 0, hi = 1;
+      if (C > 0) {
+        const double disc = B * B - C * (A - 1);
+        if (disc <= 0) continue;
+        const double root = std::sqrt(disc);
+        lo = std::max(0.0, (B - root) / C), hi = std::min(1.0, (B + root) / C);
+      } else if (A >= 1) {
+        continue;
+      }
+      if (!(hi > lo)) continue;
+      Poly u;
+      u.c[0] = 1 - A, u.c[1] = 2 * B, u.c[2] = -C, u.degree = 2;
+      const Poly u2 = u * u, u3 = u2 * u, u4 = u2 * u2;
+      // grad u = -(2 / h^2)(r0 - s d), componentwise linear in s; n(s) = n0 + s (n1 - n0).
+      std::array<Poly, 3> gu, nn;
+      for (int i = 0; i < 3; ++i) {
+        gu[size_t(i)] = linear(-2 * r0[i] / sg.h2, 2 * sg.d[i] / sg.h2);
+        nn[size_t(i)] = linear(sg.n0[i], sg.n1[i] - sg.n0[i]);
+      }
+      // d(s) = n(s) . (x - p(s)) = n(s) . (r0 - s d).
+      Poly dist;
+      for (int i = 0; i < 3; ++i) dist = dist + nn[size_t(i)] * linear(r0[i], -sg.d[i]);
+      const double w = sg.weight;
+      auto I = [&](const Poly& p) { return w * integral(p, lo, hi); };
+      const Poly phiD = u4 * dist;
+      N += I(phiD), D += I(u4);
+      std::array<Poly, 3> gphi;
+      for (int i = 0; i < 3; ++i) gphi[size_t(i)] = 4.0 * (u3 * gu[size_t(i)]);
+      for (int i = 0; i < 3; ++i) {
+        gD[i] += I(gphi[size_t(i)]);
+        gN[i] += I(gphi[size_t(i)] * dist + u4 * nn[size_t(i)]);
+        s.normalField[i] += I(u4 * nn[size_t(i)]);
+        for (int k = 0; k < 3; ++k) {
+          // H phi = 12 u^2 grad u grad u^T + 4 u^3 H u, H u = -(2 / h^2) I.
+          Poly hphi = 12.0 * (u2 * gu[size_t(i)] * gu[size_t(k)]);
+          if (i == k) hphi = hphi + (-8.0 / sg.h2) * u3;
+          hD(i, k) += I(hphi);
+          hN(i, k) += I(hphi * dist + gphi[size_t(i)] * nn[size_t(k)] + nn[size_t(i)] * gphi[size_t(k)]);
+          s.normalJacobian(i, k) += I(nn[size_t(i)] * gphi[size_t(k)]);
+        }
+      }
+      ++s.sources;
+    }
   }
   s.weight = D;
   if (!(D > 0)) return s;
@@ -164,8 +318,12 @@ double MlsSurface::localSupport(const Vec3d& x) const {
   const float q[3] = {float(x.x()), float(x.y()), float(x.z())};
   uint32_t idx = 0;
   float d2 = 0;
-  m.tree->knnSearch(q, 1, &idx, &d2);
-  return std::sqrt(m.h2[idx]);
+  if (m.tree) {
+    m.tree->knnSearch(q, 1, &idx, &d2);
+    return std::sqrt(m.h2[idx]);
+  }
+  m.segmentTree->knnSearch(q, 1, &idx, &d2);
+  return std::sqrt(m.segments[idx].h2);
 }
 
 MlsProjection MlsSurface::project(const Vec3d& x0) const {

@@ -112,6 +112,88 @@ TEST(MlsSurface, FarFromTheSourcesProjectionFails) {
   EXPECT_NEAR(s.curvature(near.point).kMax, 0, 1e-6);
 }
 
+// A segment's terms are integrated in closed form: against a fine midpoint rule along it, and
+// its derivatives against central differences.
+TEST(MlsSurface, SegmentSourcesIntegrateExactly) {
+  HybridModel m;
+  Segment sg;
+  sg.p0 = Vec3f(-0.3f, 0.1f, 0), sg.p1 = Vec3f(0.5f, -0.2f, 0.05f);
+  sg.normal0 = Vec3f(0.1f, 0, 1).normalized(), sg.normal1 = Vec3f(-0.2f, 0.1f, 1).normalized();
+  sg.normal = (sg.normal0 + sg.normal1).normalized();
+  sg.radius = 0.1f;
+  m.segments.push_back(sg);
+  m.attributes.endpointNormals = true;
+  const MlsSurface s(m);
+  const double h = 3 * 0.1, h2 = h * h, w = 2 * 0.1 * (sg.p1 - sg.p0).cast<double>().norm();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int checked = 0;
+  for (int t = 0; t < 40; ++t) {
+    // Near the strip, within half the support (and past its ends now and then).
+    const double q0 = 0.5 + 0.6 * u(rng);
+    const Vec3d x = sg.p0.cast<double>() * (1 - q0) + sg.p1.cast<double>() * q0 + 0.5 * h * Vec3d(u(rng), u(rng), u(rng)) / 1.8;
+    const MlsSample a = s.evaluate(x);
+    if (!a.valid()) continue;
+    ++checked;
+    double N = 0, D = 0;
+    const int steps = 200000;
+    for (int k = 0; k < steps; ++k) {
+      const double q = (k + 0.5) / steps;
+      const Vec3d p = (sg.p0.cast<double>() * (1 - q) + sg.p1.cast<double>() * q);
+      const Vec3d n = sg.normal0.cast<double>() * (1 - q) + sg.normal1.cast<double>() * q;
+      const double tt = (x - p).squaredNorm() / h2;
+      if (tt >= 1) continue;
+      const double phi = w * std::pow(1 - tt, 4) / steps;
+      N += phi * n.dot(x - p), D += phi;
+    }
+    EXPECT_NEAR(a.weight, D, 1e-5 * D) << t;
+    EXPECT_NEAR(a.value, N / D, 1e-6) << t;
+    const double e = 1e-5;
+    for (int d = 0; d < 3; ++d) {
+      const Vec3d dx = e * Vec3d::Unit(d);
+      const MlsSample p = s.evaluate(x + dx), q = s.evaluate(x - dx);
+      EXPECT_NEAR(a.gradient[d], (p.value - q.value) / (2 * e), 1e-5 * (1 + a.gradient.norm())) << t;
+      const Vec3d col = (p.gradient - q.gradient) / (2 * e);
+      const Vec3d ncol = (p.normalField - q.normalField) / (2 * e);
+      for (int r = 0; r < 3; ++r) {
+        EXPECT_NEAR(a.hessian(r, d), col[r], 1e-4 * (1 + a.hessian.norm())) << t;
+        EXPECT_NEAR(a.normalJacobian(r, d), ncol[r], 1e-4 * (1 + a.normalJacobian.norm())) << t;
+      }
+    }
+  }
+  EXPECT_GT(checked, 20);
+}
+
+// A cylinder drawn as segments along its axis (a line model) implies the cylinder.
+TEST(MlsSurface, ALineModelImpliesItsSurface) {
+  HybridModel m;
+  const int around = 120;
+  for (int a = 0; a < around; ++a)
+    for (int z = 0; z < 6; ++z) {
+      const double th = 2 * 3.14159265358979 * a / around;
+      Segment sg;
+      const Vec3f n(float(std::cos(th)), float(std::sin(th)), 0);
+      sg.p0 = n + Vec3f(0, 0, -3.0f + float(z));
+      sg.p1 = n + Vec3f(0, 0, -2.0f + float(z));
+      sg.normal = n;
+      sg.radius = float(3.14159265358979 / around);  // strips that meet around the circle
+      m.segments.push_back(sg);
+    }
+  const MlsSurface s(m);
+  for (double z : {-1.2, 0.3, 1.7})
+    for (double a : {0.2, 2.5, 4.0}) {
+      const MlsProjection p = s.project(Vec3d(0.96 * std::cos(a), 0.96 * std::sin(a), z));
+      ASSERT_TRUE(p.converged);
+      EXPECT_NEAR(std::hypot(p.point.x(), p.point.y()), 1, 2e-3);
+      const MlsCurvature c = s.curvature(p.point);
+      // The support (3 x the half-width) spans 1.5 strips: the normal field ripples between
+      // the lines, and the curvature with it.
+      EXPECT_NEAR(c.kMax, 1, 0.1);
+      EXPECT_NEAR(c.kMin, 0, 0.03);
+      EXPECT_GT(std::abs(c.dirMin.z()), 0.999);
+    }
+}
+
 TEST(MlsSurface, BadModelsAndOptionsAreRefused) {
   HybridModel m = shapes::plane(1, 1, 10, 10);
   MlsOptions o;

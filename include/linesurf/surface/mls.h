@@ -7,7 +7,7 @@
 ///   phi_i(x) = (1 - |x - p_i|^2 / h_i^2)^4 inside the support |x - p_i| < h_i, else 0,
 ///
 /// with a_i = r_i^2 (the splat's radius, else the point's spacing), h_i = supportScale x the
-/// point's spacing. f is a signed distance near the surface, positive on the side the normals
+/// point's spacing; a segment adds the same terms integrated along its length. f is a signed distance near the surface, positive on the side the normals
 /// face; the surface is f = 0. Its gradient and Hessian are exact (closed form), so are the
 /// principal curvatures and directions of its level sets, and projection is Newton's step along
 /// the gradient. The kernel is a polynomial in the squared distance so that line-segment sources
@@ -70,8 +70,11 @@ struct MlsProjection {
 
 class MlsSurface {
  public:
-  /// The model's points are the sources: they need normals (attributes.normals; unit, oriented);
-  /// their radii (else their spacing) give the areas; segments are not sources yet.
+  /// The model's points and segments are the sources. Points need normals (attributes.normals;
+  /// unit, oriented); their radii (else their spacing) give the areas. A segment is its strip:
+  /// weight 2 x radius per unit length, support supportScale x radius, its normal interpolated
+  /// linearly between its endpoint normals where the model has them; its terms are integrated
+  /// along it in closed form.
   explicit MlsSurface(const HybridModel& model, const MlsOptions& options = {});
   ~MlsSurface();
   MlsSurface(MlsSurface&&) noexcept;
