@@ -32,7 +32,7 @@ void run(const SmoothArgs& a) {
   checkFiles({a.in}, {{"--output", a.out, {".ply", ".xyz"}}});
   HybridModel model = readModel(a.in);
   if (model.points.empty()) throw Error(Error::Kind::BadInput, a.in, "", "holds no points");
-  if (!model.segments.empty()) throw Error(Error::Kind::BadInput, a.in, "", "is a hybrid model: segments are not MLS sources yet");
+  if (!model.segments.empty()) throw Error(Error::Kind::BadInput, a.in, "", "is a hybrid model: smooth projects the points of a cloud");
   checkGeometry(a.in, model.points.size(), a.geometry.k);
   checkModelOutput("--output", a.out, model.points.size(), 0);
   GeometryOptions o = a.geometry;
