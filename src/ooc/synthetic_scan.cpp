@@ -8,17 +8,13 @@
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/ooc/point_stream.h"
+#include "ooc/scan_hash.h"
 
 namespace linesurf::ooc {
 namespace {
 
-inline uint64_t splitmix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-inline double unit(uint64_t x) { return double(x >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+using detail::splitmix;
+using detail::unit;
 
 constexpr int kOctaves = 6, kWaves = 3;
 struct Wave {

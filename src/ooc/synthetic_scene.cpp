@@ -14,6 +14,7 @@
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/ooc/point_stream.h"
+#include "ooc/scan_hash.h"
 
 namespace linesurf::ooc {
 namespace {
@@ -21,14 +22,8 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The hashing of synthetic_scan.cpp: every deviate of point i comes from (seed, i).
-inline uint64_t splitmix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-inline double unit(uint64_t x) { return double(x >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+using detail::splitmix;
+using detail::unit;
 
 /// Uniform deviates in [0, 1) from one hash, in a fixed order.
 struct Draws {
