@@ -29,6 +29,7 @@ from ._linesurf import (  # noqa: F401
     set_threads,
     thread_count,
     lod_build,
+    mls_project,
     verify,
     write,
     write_png,

@@ -21,6 +21,7 @@
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/pipeline/verify_job.h"
 #include "linesurf/render/renderer.h"
+#include "linesurf/surface/mls.h"
 #include "model.h"
 #include "options.h"
 
@@ -192,6 +193,49 @@ normals (N, 3) unit, MST-oriented (kept from the model unless recompute_normals)
 (N, 3), surface_variation (N,), spacing (N,) and average_spacing, flags (N,) uint8; with
 delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: k_min, k_max
 (N,), min_curvature_dir, max_curvature_dir (N, 3). Returned as a SimpleNamespace.)doc");
+  // --- the MLS surface (§9.1) ----------------------------------------------------------------
+  m.def(
+      "mls_project",
+      [](py::object model, py::object points, float support_scale, bool curvature) {
+        ModelArg a = modelArg(model);
+        MlsOptions o;
+        o.supportScale = support_scale;
+        validate(o);
+        const FloatArray q = floatArray(points, "points", {3});
+        const size_t n = size_t(q.n);
+        std::vector<MlsProjection> moved(n);
+        std::vector<MlsCurvature> bend(curvature ? n : 0);
+        {
+          py::gil_scoped_release release;
+          const MlsSurface surface(*a.model, o);
+          parallelForRange(0, n, [&](size_t b, size_t e) {
+            for (size_t i = b; i < e; ++i) {
+              moved[i] = surface.project(Vec3d(q.at(py::ssize_t(i), 0), q.at(py::ssize_t(i), 1), q.at(py::ssize_t(i), 2)));
+              if (curvature) bend[i] = surface.curvature(moved[i].point);
+            }
+          }, 256);
+        }
+        py::dict d;
+        d["points"] = vec3Array(n, [&](size_t i) { return Vec3f(moved[i].point.cast<float>()); });
+        d["normals"] = vec3Array(n, [&](size_t i) { return Vec3f(moved[i].normal.cast<float>()); });
+        auto ok = py::array_t<bool>(py::ssize_t(n));
+        for (size_t i = 0; i < n; ++i) ok.mutable_data()[i] = moved[i].converged;
+        d["converged"] = ok;
+        if (curvature) {
+          std::vector<float> kMin(n), kMax(n);
+          for (size_t i = 0; i < n; ++i) kMin[i] = float(bend[i].kMin), kMax[i] = float(bend[i].kMax);
+          d["k_min"] = floatVector(kMin), d["k_max"] = floatVector(kMax);
+          d["min_curvature_dir"] = vec3Array(n, [&](size_t i) { return Vec3f(bend[i].dirMin.cast<float>()); });
+          d["max_curvature_dir"] = vec3Array(n, [&](size_t i) { return Vec3f(bend[i].dirMax.cast<float>()); });
+        }
+        return namespaceOf(d);
+      },
+      py::arg("model"), py::arg("points"), py::kw_only(), py::arg("support_scale") = MlsOptions{}.supportScale,
+      py::arg("curvature") = false,
+      "Projects points (N, 3) onto the MLS surface of a model's oriented points and segments (thesis §9.1,\n"
+      "Kolluri's IMLS; segments integrated along their length): points, normals (N, 3) float32 and\n"
+      "converged (N,) bool (a failed projection: the last iterate); with curvature, k_min, k_max (N,) and\n"
+      "min_curvature_dir, max_curvature_dir (N, 3) of the surface there. A SimpleNamespace.");
   m.def(
       "normals",
       [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty,

@@ -144,8 +144,10 @@ HybridModel makeModel(py::object points, py::object segments, const py::kwargs& 
   HybridModel m;
   if (!points.is_none()) setPoints(m, points);
   if (!segments.is_none()) setSegments(m, segments);
+  // A column not given (None) is left alone: point and segment normals share one attribute flag,
+  // so a None segment_normals would clear the normals just given to the points.
   for (const Column& c : kColumns)
-    if (columns.contains(c.name)) setColumn(m, c, columns[c.name]);
+    if (columns.contains(c.name) && !columns[c.name].is_none()) setColumn(m, c, columns[c.name]);
   return m;
 }
 

@@ -137,3 +137,9 @@ def test_uniform_masses_cancel_in_the_normalised_blend(santa_path):
     np.testing.assert_array_equal(linesurf.render(santa, size=(96, 96)), plain)  # every weight x3: the same blend
     santa.point_masses = np.where(np.arange(len(santa.points)) % 2 == 0, 0.2, 5.0)
     assert np.abs(linesurf.render(santa, size=(96, 96)) - plain).max() > 0.01
+
+
+def test_a_model_of_points_keeps_the_normals_it_is_given():
+    pts = np.eye(3, dtype=np.float32)
+    m = linesurf.Model(points=pts, normals=pts)  # segment_normals left out: None must not clear them
+    assert m.normals is not None and np.array_equal(m.normals, pts)

@@ -62,3 +62,17 @@ def test_orient_chooses_each_components_side():
     for bad in [dict(orient="sideways"), dict(orient="towards", viewpoint=(0, 0)), dict(viewpoint=(0, float("nan"), 0))]:
         with pytest.raises(ValueError):
             linesurf.normals(pts, **bad)
+
+
+def test_mls_projection_lands_on_a_sphere():
+    pts = fibonacci_sphere(8000, radius=1.0)
+    model = linesurf.Model(points=pts, normals=pts)
+    rng = np.random.default_rng(3)
+    q = fibonacci_sphere(200, radius=1.0) * (1 + 0.02 * rng.standard_normal((200, 1)))
+    r = linesurf.mls_project(model, q, curvature=True)
+    assert r.converged.all()
+    assert np.abs(np.linalg.norm(r.points, axis=1) - 1).max() < 5e-3  # IMLS: within 0.13 spacing
+    assert np.all(np.sum(r.normals * r.points, axis=1) > 0.999)
+    assert np.abs(np.median(r.k_max) - 1) < 0.05 and np.abs(np.median(r.k_min) - 1) < 0.05
+    with pytest.raises(ValueError):
+        linesurf.mls_project(model, q, support_scale=0.5)
