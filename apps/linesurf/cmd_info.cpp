@@ -97,6 +97,9 @@ void runInfo(const InfoArgs& a) {
     }
     j["properties"] = s.properties;
     j["averageSpacing"] = s.averageSpacing;
+    if (s.radiusMax > 0)
+      j["radii"] = {{"min", s.radiusMin}, {"median", s.radiusMedian}, {"max", s.radiusMax}, {"above10xMedian", s.radiiAbove10xMedian}};
+    else j["radii"] = nullptr;
     if (s.textureWidth > 0) j["texture"] = {{"width", s.textureWidth}, {"height", s.textureHeight}};
     else j["texture"] = nullptr;
     j["comments"] = s.comments;
@@ -117,6 +120,9 @@ void runInfo(const InfoArgs& a) {
   for (const auto& p : s.properties) props += (props.empty() ? "" : " ") + p;
   out += fmt::format("  properties: {}\n", props.empty() ? "(positions only)" : props);
   out += fmt::format("  spacing:    {:.6g} (mean nearest-neighbour distance)\n", s.averageSpacing);
+  if (s.radiusMax > 0)
+    out += fmt::format("  radii:      min {:.6g}  median {:.6g}  max {:.6g} ({:.1f} x the median); {} above 10 x the median\n",
+                       s.radiusMin, s.radiusMedian, s.radiusMax, s.radiusMax / s.radiusMedian, s.radiiAbove10xMedian);
   if (s.textureWidth > 0) out += fmt::format("  texture:    {}x{}\n", s.textureWidth, s.textureHeight);
   else out += "  texture:    none\n";
   for (const auto& c : s.comments) out += fmt::format("  comment:    {}\n", c);

@@ -113,6 +113,16 @@ ModelSummary summarizeFile(const std::filesystem::path& path) {
   std::vector<Vec3f> pos(m.points.size());
   for (size_t i = 0; i < pos.size(); ++i) pos[i] = m.points[i].position;
   s.averageSpacing = averageSpacing(pos);
+  if (m.attributes.radii && !m.points.empty()) {
+    std::vector<float> r(m.points.size());
+    for (size_t i = 0; i < r.size(); ++i) r[i] = m.points[i].radius;
+    const auto [lo, hi] = std::minmax_element(r.begin(), r.end());
+    s.radiusMin = *lo, s.radiusMax = *hi;
+    std::vector<float> sorted = r;
+    std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(sorted.size() / 2), sorted.end());
+    s.radiusMedian = sorted[sorted.size() / 2];
+    for (float x : r) s.radiiAbove10xMedian += x > 10 * s.radiusMedian;
+  }
   if (m.texture) s.textureWidth = m.texture->width, s.textureHeight = m.texture->height;
   s.comments = m.comments;
   return s;

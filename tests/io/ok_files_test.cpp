@@ -103,6 +103,22 @@ TEST(OkFiles, AverageSpacingOfKnownPoints) {
   EXPECT_EQ(averageSpacing({Vec3f(1, 1, 1)}), 0.0);
 }
 
+TEST(OkFiles, RadiusSpreadOfAModelWithRadii) {
+  HybridModel m;
+  for (int i = 0; i < 21; ++i) m.points.push_back({.position = Vec3f(float(i), 0, 0), .radius = i == 20 ? 50.0f : 1.0f + 0.1f * float(i % 3)});
+  m.attributes.radii = true;
+  const auto dir = test::scratchDir("io_radii");
+  writeModel(dir / "r.ply", m);
+  const ModelSummary s = summarizeFile(dir / "r.ply");
+  EXPECT_FLOAT_EQ(s.radiusMin, 1.0f);
+  EXPECT_FLOAT_EQ(s.radiusMedian, 1.1f);
+  EXPECT_FLOAT_EQ(s.radiusMax, 50.0f);
+  EXPECT_EQ(s.radiiAbove10xMedian, 1u);
+  EXPECT_EQ(summarizeFile(ok("points.xyz")).radiusMax, 0.0f);  // no radii: no spread
+  const test::CliResult r = test::runCli("info '" + (dir / "r.ply").string() + "'");
+  EXPECT_NE(r.out.find("1 above 10 x the median"), std::string::npos) << r.out;
+}
+
 TEST(OkFiles, CliInfoTextAndJson) {
   test::CliResult r = test::runCli("info '" + ok("mesh_texcoords.ply").string() + "'");
   EXPECT_EQ(r.exitCode, 0) << r.out;

@@ -20,6 +20,10 @@ struct ModelSummary {
   Bounds3f bounds;
   std::vector<std::string> properties;  ///< present attributes: normals, colors, radii, texcoords, extra names
   double averageSpacing = 0;            ///< over points (or mesh vertices)
+  /// The points' splat radii when the file carries them (else all 0): their spread, and how many
+  /// exceed 10 x the median (an outlier drawn as a disc larger than the scan's detail).
+  float radiusMin = 0, radiusMedian = 0, radiusMax = 0;
+  size_t radiiAbove10xMedian = 0;
   int textureWidth = 0, textureHeight = 0;  ///< 0 when untextured
   std::vector<std::string> comments;
 };
