@@ -49,12 +49,7 @@ void run(const CleanArgs& a) {
   const OutlierReport r = findOutliers(g, pos, a.outliers);
   const double findTime = findTimer.seconds();
   writeModel(a.out, withoutOutliers(model, r));
-  if (!a.outliersOut.empty()) {
-    OutlierReport inverse = r;
-    for (uint8_t& k : inverse.kind) k = k == kNotOutlier ? uint8_t(kOffSurface) : uint8_t(kNotOutlier);
-    inverse.total = model.points.size() - r.total;
-    writeModel(a.outliersOut, withoutOutliers(model, inverse));
-  }
+  if (!a.outliersOut.empty()) writeModel(a.outliersOut, withoutOutliers(model, r, /*outliers=*/true));
   const size_t n = model.points.size();
   say(fmt::format("{}: {} points, k = {}, {} threads", a.in, n, g.k, currentThreadCount()));
   say(fmt::format("outliers       {} ({:.3f}%): {} off the surface, {} isolated, {} floaters (a point may be more than one)",

@@ -2,6 +2,8 @@
 // surface/mls.h), with the surface's normal and, with --curvature, its principal curvatures.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "command.h"
 #include "options_bind.h"
 #include "linesurf/core/error.h"
@@ -44,13 +46,18 @@ void run(const SmoothArgs& a) {
   const size_t n = model.points.size();
   std::vector<MlsProjection> moved(n);
   std::vector<MlsCurvature> bend(a.curvature ? n : 0);
+  // In 64 pieces, each parallel inside, so that the bar moves.
   const ProgressFn bar = progressBar();
-  parallelForRange(0, n, [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      moved[i] = surface.project(model.points[i].position.cast<double>());
-      if (a.curvature) bend[i] = surface.curvature(moved[i].point);
-    }
-  }, 1024);
+  const size_t step = (n + 63) / 64;
+  for (size_t first = 0; first < n; first += step) {
+    parallelForRange(first, std::min(n, first + step), [&](size_t b, size_t e) {
+      for (size_t i = b; i < e; ++i) {
+        moved[i] = surface.project(model.points[i].position.cast<double>());
+        if (a.curvature) bend[i] = surface.curvature(moved[i].point);
+      }
+    }, 256);
+    reportProgress(bar, "projection", double(std::min(n, first + step)) / double(n));
+  }
   endProgress();
   size_t converged = 0;
   double shift = 0;

@@ -5,7 +5,6 @@
 #include <signal.h>
 
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -14,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "command.h"
+#include "ooc_cli.h"
 #include "options_bind.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
@@ -21,18 +21,11 @@
 #include "linesurf/io/atomic_file.h"
 
 namespace {
-/// This process's rank when mpirun started it (0 otherwise).
-int launchedRank() {
-  for (const char* v : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"})
-    if (const char* r = std::getenv(v)) return std::atoi(r);
-  return 0;
-}
-
 void printError(const std::string& message) {
   linesurf::cli::endProgress();
   // The errors that reach here come before the ranks split the work (the out-of-core path's own
   // are reported by the rank that meets them): every rank meets the same one, and rank 0 says it.
-  if (launchedRank() != 0) return;
+  if (linesurf::cli::launchedRank() != 0) return;
   std::fprintf(stderr, "%s\n", linesurf::oneLine(message).c_str());
 }
 }  // namespace

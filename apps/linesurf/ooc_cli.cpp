@@ -116,6 +116,12 @@ ProgressFn withTimeLeft(ProgressFn bar) {
   };
 }
 
+int launchedRank() {
+  for (const char* v : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"})
+    if (const char* r = std::getenv(v)) return std::atoi(r);
+  return 0;
+}
+
 int launchedRanks() {
   for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
     if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));

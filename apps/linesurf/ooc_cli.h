@@ -50,6 +50,8 @@ ProgressFn withTimeLeft(ProgressFn bar);
 
 /// Processes an MPI launcher started (mpirun sets OMPI_COMM_WORLD_SIZE / PMI_SIZE), else 1.
 int launchedRanks();
+/// This process's rank when mpirun started it (0 otherwise).
+int launchedRank();
 
 /// MPI for the length of one out-of-core run: this process's rank, the barrier between phases.
 /// Without MPI in the build, constructing it under mpirun throws "built without MPI; install

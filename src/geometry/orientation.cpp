@@ -21,8 +21,8 @@ constexpr uint32_t kNone = PointGeometry::kNoNeighbour;
 // ---------------------------------------------------------------------------------------------
 // Stage 2b: consistent orientation by a minimum spanning tree (Hoppe 1992) over the symmetrised
 // kNN graph with weights 1 - |n_i . n_j| (+ the penalty of GeometryOptions::orientationPenalty);
-// a minimum spanning forest (Borůvka, parallel), oriented from one seed per connected component
-// (see docs/decisions.md for the seed rule).
+// a minimum spanning forest (Borůvka, parallel), propagated from each component's lowest-index
+// point and then turned to the side its rule chooses (orientation_side.h; docs/decisions.md).
 void orientNormals(const std::vector<Vec3f>& pos, int k, float tangentPenalty, const SideChoice& side, PointGeometry& g,
                    const std::vector<uint8_t>& fixedNormal, std::vector<uint32_t>* componentOut) {
   const size_t n = pos.size();

@@ -11,17 +11,12 @@
 namespace linesurf {
 namespace {
 
-float median(std::vector<float>& v) {
-  std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() / 2), v.end());
-  return v[v.size() / 2];
+/// The element at v.size() / parts in ascending order (parts 2: the median).
+float quantile(std::vector<float>& v, size_t parts) {
+  std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() / parts), v.end());
+  return v[v.size() / parts];
 }
-
-/// The lower quartile: at an edge or a crease, the neighbours on the point's own side (about half)
-/// see it in their plane, while a cluster of outliers is a few of its k neighbours.
-float lowerQuartile(std::vector<float>& v) {
-  std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() / 4), v.end());
-  return v[v.size() / 4];
-}
+float median(std::vector<float>& v) { return quantile(v, 2); }
 
 }  // namespace
 
@@ -63,7 +58,9 @@ OutlierReport findOutliers(const PointGeometry& g, const std::vector<Vec3f>& pos
       uint8_t kind = kNotOutlier;
       // The mean distance to the k nearest of points spread over a plane at spacing h is about
       // 0.376 sqrt(k) h: the threshold is in spacings h, whatever k.
-      if (lowerQuartile(offset) > o.offSurface * local / (0.376f * std::sqrt(float(k)))) kind |= kOffSurface;
+      // The lower quartile: at an edge or a crease, the neighbours on the point's own side (about
+      // half) see it in their plane, while a cluster of outliers is a few of its k neighbours.
+      if (quantile(offset, 4) > o.offSurface * local / (0.376f * std::sqrt(float(k)))) kind |= kOffSurface;
       if (g.spacing[i] > o.isolated * local) kind |= kIsolatedPoint;
       if (cloudMedian > 0 && g.spacing[i] > o.sparse * cloudMedian && g.surfaceVariation[i] > o.floaterVariation) kind |= kFloater;
       r.kind[i] = kind;
@@ -78,19 +75,20 @@ OutlierReport findOutliers(const PointGeometry& g, const std::vector<Vec3f>& pos
   return r;
 }
 
-HybridModel withoutOutliers(const HybridModel& cloud, const OutlierReport& report) {
+HybridModel withoutOutliers(const HybridModel& cloud, const OutlierReport& report, bool outliers) {
   if (!cloud.segments.empty()) throwBadParameter("cloud", "has segments: remove outliers before an extraction");
   if (report.kind.size() != cloud.points.size()) throwBadParameter("report", "does not belong to the cloud");
   HybridModel out;
   out.attributes = cloud.attributes;
   out.comments = cloud.comments;
-  out.points.reserve(cloud.points.size() - report.total);
+  auto kept = [&](size_t i) { return (report.kind[i] != kNotOutlier) == outliers; };
+  out.points.reserve(outliers ? report.total : cloud.points.size() - report.total);
   for (size_t i = 0; i < cloud.points.size(); ++i)
-    if (report.kind[i] == kNotOutlier) out.points.push_back(cloud.points[i]);
+    if (kept(i)) out.points.push_back(cloud.points[i]);
   // Every per-point column follows its points.
-  auto keep = [&](const auto& column, auto& kept) {
+  auto keep = [&](const auto& column, auto& into) {
     for (size_t i = 0; i < column.size(); ++i)
-      if (report.kind[i] == kNotOutlier) kept.push_back(column[i]);
+      if (kept(i)) into.push_back(column[i]);
   };
   if (cloud.pointShadingNormals.size() == cloud.points.size()) keep(cloud.pointShadingNormals, out.pointShadingNormals);
   for (const auto& [name, column] : cloud.pointProperties)

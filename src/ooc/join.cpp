@@ -97,8 +97,7 @@ std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vecto
       for (auto [v, rel] : forest[u])
         if (!seen[v]) seen[v] = 1, flip[v] = uint8_t(flip[u] ^ uint8_t(rel)), queue.push_back(v);
     }
-    SideSummary side;
-    std::sort(queue.begin(), queue.end());
+    SideSummary side;  // the pieces add up in any order
     for (uint32_t v : queue) mergeSides(side, views[nodeTile[v]].sides[v - nodeOffset[nodeTile[v]]], flip[v] != 0);
     if (side.empty()) continue;  // parts made of halo points only are not counted
     ++rep.orientationComponents;

@@ -121,12 +121,16 @@ MlsSurface::MlsSurface(const HybridModel& model, const MlsOptions& options) : im
   PointGeometry g;
   double medianSpacing = 0;
   if (n >= 2) {
-    HybridModel points;
-    points.points = model.points;
-    points.attributes = model.attributes;
     GeometryOptions go;
     go.orientNormals = go.delaunayNeighbours = go.curvature = go.coverRadius = false;
-    g = computePointGeometry(points, go);
+    if (model.segments.empty()) {
+      g = computePointGeometry(model, go);
+    } else {  // the points' spacing among themselves (the segments would widen the duplicate tolerance)
+      HybridModel points;
+      points.points = model.points;
+      points.attributes = model.attributes;
+      g = computePointGeometry(points, go);
+    }
     std::vector<float> sorted(g.spacing);
     std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(n / 2), sorted.end());
     medianSpacing = sorted[n / 2] > 0 ? sorted[n / 2] : g.averageSpacing;

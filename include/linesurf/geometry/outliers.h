@@ -42,8 +42,8 @@ struct OutlierReport {
 /// Deterministic for any thread count.
 OutlierReport findOutliers(const PointGeometry& geometry, const std::vector<Vec3f>& positions, const OutlierOptions& o = {});
 
-/// The cloud without the points `report` marks (attributes kept; segments refused: a hybrid
-/// model's provenance would no longer match).
-HybridModel withoutOutliers(const HybridModel& cloud, const OutlierReport& report);
+/// The cloud without the points `report` marks, or with `outliers` those points alone (attributes
+/// kept; segments refused: a hybrid model's provenance would no longer match).
+HybridModel withoutOutliers(const HybridModel& cloud, const OutlierReport& report, bool outliers = false);
 
 }  // namespace linesurf
