@@ -26,9 +26,10 @@ void runConvert(const ConvertArgs& a) {
   WriteOptions wo;
   wo.encoding = a.ascii ? PlyEncoding::Ascii : PlyEncoding::BinaryLittleEndian;
   const std::string outExt = lowerExt(a.out);
-  checkFiles({a.in}, {{"output", a.out, {".ply", ".obj", ".xyz"}}});
+  checkFiles({a.in}, {{"output", a.out, {".ply", ".obj", ".xyz", ".las"}}});
   const char* enc = outExt == ".ply" ? (a.ascii ? " (ascii PLY)" : " (binary PLY)") : "";
-  if (fileHoldsMesh(a.in) && !a.points && outExt != ".xyz") {
+  // .xyz and .las hold points: a mesh written so keeps its vertices.
+  if (fileHoldsMesh(a.in) && !a.points && outExt != ".xyz" && outExt != ".las") {
     TriangleMesh m = readMesh(a.in);
     checkSize("output", modelFileBytes(m.positions.size(), 0, a.ascii) + double(m.faces.size()) * (a.ascii ? 40.0 : 13.0),
               fmt::format("writing a mesh of {} vertices and {} faces", m.positions.size(), m.faces.size()));
@@ -37,7 +38,7 @@ void runConvert(const ConvertArgs& a) {
                     m.cornerUVs.empty() ? "" : ", texcoords", enc));
     return;
   }
-  if (outExt == ".obj") throwBadParameter(a.out, "points and segments are written as .ply or .xyz, not .obj");
+  if (outExt == ".obj") throwBadParameter(a.out, "points and segments are written as .ply, .xyz or .las, not .obj");
   HybridModel m = readModel(a.in);
   checkSize("output", modelFileBytes(m.points.size(), m.segments.size(), outExt == ".xyz" || a.ascii),
             fmt::format("writing {} points and {} segments", m.points.size(), m.segments.size()));
@@ -47,9 +48,9 @@ void runConvert(const ConvertArgs& a) {
 
 RegisterCommand reg(11, [](CLI::App& app) {
   auto args = std::make_shared<ConvertArgs>();
-  CLI::App* sub = app.add_subcommand("convert", "Convert between .ply, .obj and .xyz (mesh->mesh, points->points, mesh->points)");
-  sub->add_option("input", args->in, "Input model (.ply, .obj, .xyz)")->type_name("FILE")->required();
-  sub->add_option("output", args->out, "Output model (.ply, .obj, .xyz); a mesh written as .xyz keeps its vertices")->required();
+  CLI::App* sub = app.add_subcommand("convert", "Convert between .ply, .obj, .xyz and .las (mesh->mesh, points->points, mesh->points)");
+  sub->add_option("input", args->in, "Input model (.ply, .obj, .xyz, .las)")->type_name("FILE")->required();
+  sub->add_option("output", args->out, "Output model (.ply, .obj, .xyz, .las); a mesh written as .xyz or .las keeps its vertices")->required();
   sub->add_flag("--ascii", args->ascii, "Write ascii PLY instead of binary little-endian");
   sub->add_flag("--points", args->points, "Write a mesh's vertices as a point cloud (drop the faces)");
   sub->callback([args] { runConvert(*args); });

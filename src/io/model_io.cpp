@@ -9,6 +9,7 @@
 #include "io/detail/readers.h"
 #include "linesurf/core/error.h"
 #include "linesurf/io/atomic_file.h"
+#include "linesurf/io/las_io.h"
 #include "linesurf/io/model_validate.h"
 
 namespace linesurf {
@@ -43,7 +44,9 @@ std::string readFileBytes(const std::filesystem::path& path, size_t maxBytes) {
 
 namespace {
 
-enum class Kind { Ply, Obj, Xyz };
+enum class Kind { Ply, Obj, Xyz, Las, Laz };
+
+constexpr const char* kLazRefused = "LAZ is compressed LAS; decompress it first, e.g. with laszip/PDAL, to .las";
 
 Kind kindOf(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
@@ -51,10 +54,12 @@ Kind kindOf(const std::filesystem::path& path) {
   if (ext == ".ply") return Kind::Ply;
   if (ext == ".obj") return Kind::Obj;
   if (ext == ".xyz") return Kind::Xyz;
+  if (ext == ".las") return Kind::Las;
+  if (ext == ".laz") return Kind::Laz;
   // A .lod file reaches here only when its first bytes are not the hierarchy's magic.
   if (ext == ".lod") throwBadInput(path.string(), "", "not a level-of-detail hierarchy (no .lod magic at its start)");
   throwBadInput(path.string(), "", "unknown file extension '" + path.extension().string() +
-                                       "' (supported: .ply, .obj, .xyz)");
+                                       "' (supported: .ply, .obj, .xyz, .las)");
 }
 
 HybridModel meshVerticesAsPoints(const TriangleMesh& mesh) {
@@ -107,6 +112,8 @@ HybridModel readModelUnchecked(const std::filesystem::path& path) {
     }
     case Kind::Obj: return meshVerticesAsPoints(detail::readObj(path));
     case Kind::Xyz: return detail::xyzToModel(detail::readFileBytes(path), path.string());
+    case Kind::Las: return detail::lasToModel(detail::readFileBytes(path), path.string());
+    case Kind::Laz: detail::readFileBytes(path, 0); throwBadInput(path.string(), "", kLazRefused);
   }
   return {};
 }
@@ -122,6 +129,10 @@ TriangleMesh readMeshUnchecked(const std::filesystem::path& path) {
     case Kind::Xyz:
       detail::readFileBytes(path);  // missing file / directory first
       throwBadInput(path.string(), "", "an .xyz file holds points, not a mesh");
+    case Kind::Las:
+      detail::readFileBytes(path, 0);
+      throwBadInput(path.string(), "", "a .las file holds points, not a mesh");
+    case Kind::Laz: detail::readFileBytes(path, 0); throwBadInput(path.string(), "", kLazRefused);
   }
   return {};
 }
@@ -131,6 +142,8 @@ bool fileHoldsMesh(const std::filesystem::path& path) {
   switch (kindOf(path)) {
     case Kind::Obj: return detail::objHasFaces(detail::readFileBytes(path));
     case Kind::Xyz: detail::readFileBytes(path); return false;
+    case Kind::Las: detail::readFileBytes(path, 0); return false;
+    case Kind::Laz: detail::readFileBytes(path, 0); throwBadInput(path.string(), "", kLazRefused);
     case Kind::Ply: break;
   }
   // Only the header is needed: try the first 64 KiB, the whole file when the header is longer.
@@ -148,7 +161,9 @@ void writeModel(const std::filesystem::path& path, const HybridModel& model, con
         throwBadParameter(path.string(), "an .xyz file cannot hold line segments (write .ply)");
       if (model.points.empty()) throwIo(path.string(), "an .xyz file needs at least one point (write .ply)");
       return detail::writeXyz(path, model);
-    case Kind::Obj: throwBadParameter(path.string(), "points and segments are written as .ply or .xyz, not .obj");
+    case Kind::Las: return writeLasModel(path, model);
+    case Kind::Obj: throwBadParameter(path.string(), "points and segments are written as .ply, .xyz or .las, not .obj");
+    case Kind::Laz: throwBadParameter(path.string(), "LAZ (compressed LAS) is not written: write .las and compress it with laszip/PDAL");
   }
 }
 
@@ -158,6 +173,8 @@ void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh, cons
     case Kind::Ply: return detail::writePlyMesh(path, mesh, options);
     case Kind::Obj: return detail::writeObj(path, mesh);
     case Kind::Xyz: throwBadParameter(path.string(), "a mesh is written as .ply or .obj, not .xyz");
+    case Kind::Las:
+    case Kind::Laz: throwBadParameter(path.string(), "a mesh is written as .ply or .obj, not " + path.extension().string());
   }
 }
 

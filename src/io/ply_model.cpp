@@ -407,6 +407,8 @@ TriangleMesh plyToMesh(std::string_view bytes, const std::string& path, const st
   return mesh;
 }
 
+bool isPlyExtraPropertyName(std::string_view name) { return validExtraPropertyName(name) && !kPointNames.count(name); }
+
 bool plyHoldsMesh(std::string_view headerBytes, const std::string& path) {
   Header h = parseHeader(headerBytes, path);
   return h.find("face") >= 0;

@@ -92,7 +92,7 @@ BAD_FILE_TEST(XyzNonNumeric, "non_numeric.xyz", "line 3: 'x' is not a number")
 BAD_FILE_TEST(XyzWrongColumns, "wrong_columns.xyz", "line 2: expected 3 (x y z) or 6 (x y z nx ny nz) numbers, found 4")
 BAD_FILE_TEST(XyzEmpty, "empty.xyz", "line 2: no points in the file")
 BAD_FILE_TEST(ObjFaceOutOfRange, "face_out_of_range.obj", "face 1: vertex index out of range (the file has 3 vertices)")
-BAD_FILE_TEST(UnknownExtension, "model.stl", "unknown file extension '.stl' (supported: .ply, .obj, .xyz)")
+BAD_FILE_TEST(UnknownExtension, "model.stl", "unknown file extension '.stl' (supported: .ply, .obj, .xyz, .las)")
 BAD_FILE_TEST(Directory, "directory.ply", "is a directory, not a file")
 BAD_FILE_TEST(NonexistentFile, "no_such_file.ply", "no such file")
 

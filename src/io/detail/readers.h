@@ -26,6 +26,11 @@ TriangleMesh plyToMesh(std::string_view bytes, const std::string& name, const st
 bool plyHoldsMesh(std::string_view headerBytes, const std::string& name);
 void writePlyModel(const std::filesystem::path& path, const HybridModel& model, const WriteOptions& options);
 void writePlyMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options);
+/// Whether the PLY writer takes `name` for an extra vertex property (not a standard one).
+bool isPlyExtraPropertyName(std::string_view name);
+
+/// LAS from bytes (las_io.cpp), before validateModel.
+HybridModel lasToModel(std::string_view bytes, const std::string& name);
 
 TriangleMesh readObj(const std::filesystem::path& path);
 /// Whether an OBJ has a face line ('f'); one without is a point cloud of its vertices.
