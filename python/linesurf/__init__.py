@@ -73,6 +73,7 @@ render = _keyword_function("render", ["model"], [("depth", False), ("alpha", Fal
 prepare = _keyword_function("prepare", ["model"])
 extract_eps_delta = _keyword_function("extract_eps_delta", ["cloud"])
 extract_shape_approx = _keyword_function("extract_shape_approx", ["cloud"])
+extract_curvature_lines = _keyword_function("extract_curvature_lines", ["cloud"])
 extract_contour = _keyword_function("extract_contour", ["mesh"])
 
 __version__ = "0.1.0"

@@ -127,6 +127,28 @@ def extract_shape_approx(
     viewpoint: Sequence[float] = ...,
     curvature: bool = ...,
 ) -> SimpleNamespace: ...
+def extract_curvature_lines(
+    cloud: PointsLike,
+    *,
+    epsilon: float = ...,
+    epsilon_relative: float = ...,
+    delta: float = ...,
+    family: str = ...,
+    separation: float = ...,
+    min_separation: float = ...,
+    width_scale: float = ...,
+    step: float = ...,
+    min_length: float = ...,
+    smoothing_iterations: int = ...,
+    field_data_weight: float = ...,
+    support_scale: float = ...,
+    provenance: bool = ...,
+    k: int = ...,
+    recompute_normals: bool = ...,
+    orientation_penalty: float = ...,
+    orient: str = ...,
+    viewpoint: Sequence[float] = ...,
+) -> SimpleNamespace: ...
 def extract_contour(
     mesh: Mesh,
     *,

@@ -10,6 +10,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/eval/image_metrics.h"
 #include "linesurf/extract/contour.h"
+#include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/extract/verify.h"
@@ -375,6 +376,55 @@ replaced points (needed by verify()).)doc");
 method: "greedy" (§3.2.3.1) or "hierarchical" (§3.2.3.2) normal-variation clustering with
 tolerance delta_n on ||n(C) - n_j||^2. Returns a namespace with model, stats (dict: clusters,
 segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)doc");
+  m.def("_extract_curvature_lines_options", [] {
+    py::list l;
+    optionSpecs(l, CurvatureLineOptions{});
+    optionSpecs(l, GeometryOptions{}, kExtractGeometry);
+    return l;
+  });
+  m.def(
+      "_extract_curvature_lines",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
+        CurvatureLineOptions o;
+        GeometryOptions go;
+        applyOptions(kw, o);
+        applyOptions(kw, go, kExtractGeometry);
+        rejectUnknown(kw);
+        go.curvature = go.delaunayNeighbours = false;  // the MLS surface gives the curvature
+        validate(o);
+        validate(go);
+        ModelArg a = modelArg(model, "cloud");
+        if (!a.model->segments.empty()) throwBadOption("model", "already holds segments; extraction needs a point cloud");
+        if (a.model->points.empty()) throwBadOption("model", "holds no points");
+        CurvatureLineStats st;
+        HybridModel out;
+        {
+          py::gil_scoped_release release;
+          PointGeometry geo = computePointGeometry(*a.model, go);
+          out = extractCurvatureLines(*a.model, geo, o, &st);
+        }
+        out.comments.push_back(std::string("curvature-lines: normals=") +
+                               (a.model->attributes.normals && !go.recomputeNormals ? "file" : "computed"));
+        py::dict stats;
+        stats["input_points"] = st.inputPoints, stats["kept_points"] = st.keptPoints, stats["segments"] = st.segments;
+        stats["replaced_points"] = st.replacedPoints, stats["lines"] = st.lines, stats["closed_lines"] = st.closedLines;
+        stats["short_lines"] = st.shortLines, stats["line_length"] = st.lineLength;
+        stats["mean_chain_length"] = st.meanChainLength(), stats["mean_separation"] = st.meanSeparation;
+        stats["epsilon"] = st.epsilon, stats["delta"] = st.delta, stats["average_spacing"] = st.averageSpacing;
+        stats["data_reduction"] = st.dataReduction(), stats["chain_data_reduction"] = st.chainDataReduction();
+        py::dict r;
+        r["model"] = out;
+        r["stats"] = stats;
+        return namespaceOf(r);
+      },
+      py::arg("cloud"), py::arg("options") = py::dict(),
+      R"doc(Lines of curvature traced on the MLS surface, thesis §9.2 (= `linesurf extract curvature-lines`).
+
+family: "min" (the straightest lines), "max" or "both"; separation: the largest line spacing in
+average spacings (narrower where the strip would leave epsilon of the surface). Returns a
+namespace with model (chains of segments with shared endpoints, plus the points no strip covers)
+and stats (dict: lines, segments, kept_points, mean_chain_length, data_reduction, ...).)doc");
   m.def("_extract_contour_options", [] {
     py::list l;
     optionSpecs(l, ContourOptions{});

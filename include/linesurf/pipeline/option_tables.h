@@ -12,10 +12,12 @@
 
 #include "linesurf/core/option_table.h"
 #include "linesurf/extract/contour.h"
+#include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/pipeline/render_job.h"
+#include "linesurf/render/drawing.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/render_options.h"
 
@@ -31,9 +33,19 @@ inline std::span<const EnumName<SegmentMethod>> enumNames(SegmentMethod) {
       {"screen", SegmentMethod::ScreenSpace}, {"approx", SegmentMethod::Approx}, {"reference", SegmentMethod::Reference}};
   return k;
 }
+inline std::span<const EnumName<DrawStyle>> enumNames(DrawStyle) {
+  static constexpr EnumName<DrawStyle> k[] = {
+      {"splat", DrawStyle::Splat}, {"lines", DrawStyle::Lines}, {"hatch", DrawStyle::Hatch}};
+  return k;
+}
 inline std::span<const EnumName<ClusteringMethod>> enumNames(ClusteringMethod) {
   static constexpr EnumName<ClusteringMethod> k[] = {{"greedy", ClusteringMethod::Greedy},
                                                      {"hierarchical", ClusteringMethod::Hierarchical}};
+  return k;
+}
+inline std::span<const EnumName<CurvatureFamily>> enumNames(CurvatureFamily) {
+  static constexpr EnumName<CurvatureFamily> k[] = {
+      {"min", CurvatureFamily::Min}, {"max", CurvatureFamily::Max}, {"both", CurvatureFamily::Both}};
   return k;
 }
 inline std::span<const EnumName<CurvatureFit>> enumNames(CurvatureFit) {
@@ -138,6 +150,24 @@ void describeOptions(RenderOptions& o, V&& v) {
   v(o.tileSize, {"tileSize", "Screen tile side in pixels", closedRange(8, 1024)});
 }
 
+/// Drawings from the segments (thesis §9.4, §9.5); render/drawing.h says why each default.
+template <typename V>
+void describeOptions(DrawingOptions& o, V&& v) {
+  v.group("drawing", "Drawings from the segments (§9.4, §9.5): strokes, hatching, silhouettes");
+  v(o.style, {"style",
+              "splat (shaded EWA splatting), lines (every visible segment as an ink stroke) or hatch (stroke density "
+              "follows the shaded tone); lines and hatch also write .svg"});
+  v(o.strokeWidth, {"strokeWidth", "Width of every stroke, pixels", closedRange(0.1, 64)});
+  v(BackgroundRef{o.paper}, {"paper", "Paper colour: white, black, transparent, #rrggbb or R,G,B[,A] in [0, 1]"});
+  v(BackgroundRef{o.ink}, {"ink", "Ink colour: black, white, #rrggbb or R,G,B[,A] in [0, 1]"});
+  v(o.toneLevels, {"toneLevels", "Hatch: tones the shaded luminance is quantised to (0 = continuous)", closedRange(0, 256)});
+  v(o.strokeDepthTolerance, {"strokeDepthTolerance",
+                             "A stroke is visible within this many segment radii of the splat depth", aboveRange(0, 100)});
+  v(o.silhouettes, {"silhouettes", "Draw silhouettes from the depth and normal buffers"});
+  v(o.crossHatch, {"crossHatch", "Hatch: a second family across the strokes where they cannot reach the tone"});
+  v(o.strokeSeed, {"strokeSeed", "Seed of the strokes' order within a level of their nested priorities", atLeast(0)});
+}
+
 /// Triangle meshes drawn as the ground truth.
 template <typename V>
 void describeOptions(MeshRenderOptions& o, V&& v) {
@@ -207,6 +237,30 @@ void describeOptions(ShapeApproxOptions& o, V&& v) {
                            closedRange(0, 1)});
   v(o.provenance, {"provenance", "Record the input points each segment replaced"});
   v(o.endpointNormals, {"endpointNormals", "Smooth line models: each segment carries the normals at its two ends"});
+}
+
+/// Lines of curvature traced on the MLS surface, thesis §9.2.
+template <typename V>
+void describeOptions(CurvatureLineOptions& o, V&& v) {
+  v.group("curvature-lines", "Lines of curvature (§9.2)");
+  v(o.epsilon, {"epsilon", "Distance tolerance, object space (0 = --epsilon-relative x the average spacing)",
+                closedRange(0, 1e30)});
+  v(o.epsilonRelative, {"epsilonRelative", "Distance tolerance as a fraction of the average neighbour spacing (§7.2)",
+                        OptionRange{0, 1e6, true, false}, kUseCliPython, "--epsilon-rel"});
+  v(o.delta, {"delta", "Normal tolerance on 1 - n_i.n_j along a segment (0.004 ~ 5.13 deg, §7.2)", closedRange(0, 2)});
+  v(o.family, {"family", "Which lines: min (least curvature, the straightest), max, or both (a crossing net)"});
+  v(o.separation, {"separation", "Largest line separation d_sep, average spacings (flat regions)", closedRange(1, 100)});
+  v(o.minSeparation, {"minSeparation", "Smallest line separation, average spacings (at most --separation)",
+                      closedRange(0.25, 100)});
+  v(o.widthScale, {"widthScale", "Strip half-width as a multiple of d_sep / 2 (overlap of adjacent strips)",
+                   closedRange(1, 3)});
+  v(o.step, {"step", "Integration step, average spacings", OptionRange{0, 4, true, false}});
+  v(o.minLength, {"minLength", "Drop lines shorter than this many d_sep (their points stay points)", closedRange(0, 100)});
+  v(o.smoothingIterations, {"smoothingIterations", "Jacobi iterations smoothing the cross field", closedRange(0, 1000)});
+  v(o.fieldDataWeight, {"fieldDataWeight", "Weight of the principal direction against the neighbours, per unit anisotropy",
+                        closedRange(0, 1e6)});
+  v(o.supportScale, {"supportScale", "MLS kernel support, spacings", closedRange(1.5, 10)});
+  v(o.provenance, {"provenance", "Record the input points each segment replaced (for verify-extraction)"});
 }
 
 /// Contour-plane extraction from a mesh, thesis §3.3.

@@ -1,0 +1,102 @@
+// The cross field of the curvature-line extraction (thesis §9.2; see detail/cross_field.h).
+#include "detail/cross_field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+
+#include "linesurf/core/parallel.h"
+#include "linesurf/surface/mls.h"
+
+namespace linesurf::detail {
+namespace {
+
+/// A tangent frame at n, fixed by n alone (so every pass sees the same angles).
+void tangentFrame(const Vec3f& n, Vec3f& e1, Vec3f& e2) {
+  const Vec3f a = n.cwiseAbs();
+  Vec3f helper = a.x() <= a.y() && a.x() <= a.z() ? Vec3f::UnitX() : (a.y() <= a.z() ? Vec3f::UnitY() : Vec3f::UnitZ());
+  e1 = (helper - helper.dot(n) * n).normalized();
+  e2 = n.cross(e1);
+}
+
+/// exp(4 i theta) of direction d in the frame (e1, e2), d first projected onto the plane.
+std::complex<double> fourfold(const Vec3f& d, const Vec3f& e1, const Vec3f& e2) {
+  const double theta = std::atan2(double(d.dot(e2)), double(d.dot(e1)));
+  return std::polar(1.0, 4.0 * theta);
+}
+
+}  // namespace
+
+CrossField computeCrossField(const HybridModel& cloud, const PointGeometry& g, const MlsSurface& surface,
+                             int iterations, double dataWeight) {
+  const size_t n = cloud.points.size();
+  CrossField f;
+  f.axis.assign(n, Vec3f::Zero());
+  f.normal = g.normals;
+  f.coherence.assign(n, 0.0f);
+  f.kMin.assign(n, 0.0f), f.kMax.assign(n, 0.0f);
+  f.minDir.assign(n, Vec3f::Zero());
+  std::vector<Vec3f> e1(n), e2(n);
+  std::vector<std::complex<double>> data(n), z(n), next(n);
+  std::vector<uint8_t> bad(n, 0);
+  const double k0 = 0.002 / std::max(double(g.averageSpacing), 1e-30);
+  parallelFor(0, n, [&](size_t i) {
+    tangentFrame(g.normals[i], e1[i], e2[i]);
+    const MlsCurvature c = surface.curvature(cloud.points[i].position.cast<double>());
+    if (!c.valid || !std::isfinite(c.kMin) || !std::isfinite(c.kMax)) {
+      bad[i] = 1;
+      data[i] = 0;
+      return;
+    }
+    f.kMin[i] = float(c.kMin), f.kMax[i] = float(c.kMax);
+    f.minDir[i] = c.dirMin.cast<float>();
+    const double aniso = std::abs(c.kMax - c.kMin) / (std::abs(c.kMax) + std::abs(c.kMin) + k0);
+    data[i] = dataWeight * aniso * fourfold(f.minDir[i], e1[i], e2[i]);
+  });
+  for (size_t i = 0; i < n; ++i) f.invalid += bad[i];
+  z = data;
+  // Points with no direction at all (a plane) start from the frame's own axis: the smoothing
+  // then makes the field as parallel as the frames allow.
+  for (size_t i = 0; i < n; ++i)
+    if (std::abs(z[i]) < 1e-12) z[i] = 1e-6;
+  const int k = g.k;
+  auto axisOf = [&](const std::vector<std::complex<double>>& zz, size_t j) {
+    const double theta = std::arg(zz[j]) / 4.0;
+    return Vec3f(float(std::cos(theta)) * e1[j] + float(std::sin(theta)) * e2[j]);
+  };
+  std::vector<Vec3f> axes(n);
+  for (int it = 0; it <= iterations; ++it) {
+    parallelFor(0, n, [&](size_t i) { axes[i] = axisOf(z, i); });
+    if (it == iterations) break;
+    parallelFor(0, n, [&](size_t i) {
+      std::complex<double> sum = 0;
+      int count = 0;
+      for (int m = 0; m < k; ++m) {
+        const uint32_t j = g.neighbours[i * size_t(k) + size_t(m)];
+        if (j == PointGeometry::kNoNeighbour) break;
+        // j's cross seen in i's tangent plane: the projection of any of its axes gives the same
+        // fourfold angle up to the tilt between the planes.
+        sum += fourfold(axes[j], e1[i], e2[i]);
+        ++count;
+      }
+      std::complex<double> v = data[i] + (count ? sum / double(count) : 0.0);
+      next[i] = std::abs(v) > 1e-12 ? v / std::abs(v) : z[i];
+    });
+    std::swap(z, next);
+  }
+  parallelFor(0, n, [&](size_t i) {
+    f.axis[i] = axes[i];
+    std::complex<double> sum = 0;
+    int count = 0;
+    for (int m = 0; m < k; ++m) {
+      const uint32_t j = g.neighbours[i * size_t(k) + size_t(m)];
+      if (j == PointGeometry::kNoNeighbour) break;
+      sum += fourfold(axes[j], e1[i], e2[i]) * std::conj(fourfold(axes[i], e1[i], e2[i]));
+      ++count;
+    }
+    f.coherence[i] = count ? float(std::abs(sum) / count) : 0.0f;
+  });
+  return f;
+}
+
+}  // namespace linesurf::detail
