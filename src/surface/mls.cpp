@@ -73,7 +73,14 @@ struct MlsSurface::Impl {
   Cloud cloud;
   std::vector<Vec3d> normal;
   std::vector<double> area, h2;  ///< a_i, h_i^2
-  double reach = 0;              ///< the largest h_i: every query's radius
+  double reach = 0;              ///< the largest h_i
+  /// Queries search the tree with `narrowReach` (the 90th percentile of h_i) and the few
+  /// sources of a larger support in `wide` with `reach`: exact, with a fraction of the
+  /// candidates one search with the largest support would visit on an uneven sampling.
+  double narrowReach = 0;
+  Cloud wideCloud;
+  std::vector<uint32_t> wideIndex;
+  std::unique_ptr<Tree> wide;
   std::unique_ptr<Tree> tree;
   /// Segment sources: endpoints, endpoint normals (the one normal twice without endpoint
   /// normals), strip weight per unit parameter (2 r L), h^2; a tree over their midpoints, queried
@@ -94,7 +101,16 @@ struct MlsSurface::Impl {
     const float q[3] = {float(x.x()), float(x.y()), float(x.z())};
     nanoflann::SearchParams params;
     params.sorted = false;
-    tree->radiusSearch(q, float(reach * reach), found, params);
+    tree->radiusSearch(q, float(narrowReach * narrowReach), found, params);
+    if (wide) {
+      // The wide sources found by the narrow search come again from the wide one.
+      found.erase(std::remove_if(found.begin(), found.end(), [&](const auto& f) { return h2[f.first] > narrowReach * narrowReach; }),
+                  found.end());
+      thread_local std::vector<std::pair<uint32_t, float>> more;
+      more.clear();
+      wide->radiusSearch(q, float(reach * reach), more, params);
+      for (const auto& [j, d2] : more) found.emplace_back(wideIndex[j], d2);
+    }
     std::sort(found.begin(), found.end());
   }
 };
@@ -162,6 +178,15 @@ MlsSurface::MlsSurface(const HybridModel& model, const MlsOptions& options) : im
   if (n > 0) {
     m.tree = std::make_unique<Tree>(3, m.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     m.tree->buildIndex();
+    std::vector<double> h2(m.h2);
+    std::nth_element(h2.begin(), h2.begin() + ptrdiff_t(9 * n / 10), h2.end());
+    m.narrowReach = std::sqrt(h2[9 * n / 10]);
+    for (size_t i = 0; i < n; ++i)
+      if (m.h2[i] > m.narrowReach * m.narrowReach) m.wideCloud.pts.push_back(m.cloud.pts[i]), m.wideIndex.push_back(uint32_t(i));
+    if (!m.wideIndex.empty()) {
+      m.wide = std::make_unique<Tree>(3, m.wideCloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+      m.wide->buildIndex();
+    }
   }
   // A segment is a strip of half-width r: its spacing across is about r, so its support is
   // supportScale x r (clamped as the points'); its weight per unit parameter is the strip's area.
@@ -195,7 +220,7 @@ MlsSurface& MlsSurface::operator=(MlsSurface&&) noexcept = default;
 
 size_t MlsSurface::sources() const { return impl_->cloud.pts.size() + impl_->segments.size(); }
 
-MlsSample MlsSurface::evaluate(const Vec3d& x) const {
+MlsSample MlsSurface::evaluate(const Vec3d& x, bool second) const {
   const Impl& m = *impl_;
   thread_local std::vector<std::pair<uint32_t, float>> found;
   m.inReach(x, found);
@@ -211,13 +236,16 @@ MlsSample MlsSurface::evaluate(const Vec3d& x) const {
     const double u = 1 - t, a = m.area[i];
     const double phi = a * u * u * u * u, dphi = -4 * a * u * u * u, ddphi = 12 * a * u * u;  // d/dt
     const Vec3d gphi = (2 * dphi / m.h2[i]) * r;
-    const Mat3d hphi = (4 * ddphi / (m.h2[i] * m.h2[i])) * (r * r.transpose()) + (2 * dphi / m.h2[i]) * Mat3d::Identity();
     const Vec3d& nrm = m.normal[i];
     const double di = nrm.dot(r);
     N += phi * di, D += phi;
     gN += gphi * di + phi * nrm, gD += gphi;
-    hN += hphi * di + gphi * nrm.transpose() + nrm * gphi.transpose(), hD += hphi;
-    s.normalField += phi * nrm, s.normalJacobian += nrm * gphi.transpose();
+    s.normalField += phi * nrm;
+    if (second) {
+      const Mat3d hphi = (4 * ddphi / (m.h2[i] * m.h2[i])) * (r * r.transpose()) + (2 * dphi / m.h2[i]) * Mat3d::Identity();
+      hN += hphi * di + gphi * nrm.transpose() + nrm * gphi.transpose(), hD += hphi;
+      s.normalJacobian += nrm * gphi.transpose();
+    }
     ++s.sources;
   }
   if (m.segmentTree) {
@@ -269,7 +297,7 @@ MlsSample MlsSurface::evaluate(const Vec3d& x) const {
         gD[i] += I(gphi[size_t(i)]);
         gN[i] += I(gphi[size_t(i)] * dist + u4 * nn[size_t(i)]);
         s.normalField[i] += I(u4 * nn[size_t(i)]);
-        for (int k = 0; k < 3; ++k) {
+        for (int k = 0; k < 3 && second; ++k) {
           // H phi = 12 u^2 grad u grad u^T + 4 u^3 H u, H u = -(2 / h^2) I.
           Poly hphi = 12.0 * (u2 * gu[size_t(i)] * gu[size_t(k)]);
           if (i == k) hphi = hphi + (-8.0 / sg.h2) * u3;
@@ -286,7 +314,7 @@ MlsSample MlsSurface::evaluate(const Vec3d& x) const {
   // f = N / D; grad f = (grad N - f grad D) / D; H f = (H N - f H D - grad f grad D^T - grad D grad f^T) / D.
   s.value = N / D;
   s.gradient = (gN - s.value * gD) / D;
-  s.hessian = (hN - s.value * hD - s.gradient * gD.transpose() - gD * s.gradient.transpose()) / D;
+  if (second) s.hessian = (hN - s.value * hD - s.gradient * gD.transpose() - gD * s.gradient.transpose()) / D;
   return s;
 }
 
@@ -335,7 +363,7 @@ MlsProjection MlsSurface::project(const Vec3d& x0) const {
   p.point = x0;
   const double tol = double(impl_->options.tolerance) * localSupport(x0);
   for (p.iterations = 0; p.iterations < impl_->options.maxIterations; ++p.iterations) {
-    const MlsSample s = evaluate(p.point);
+    const MlsSample s = evaluate(p.point, false);
     const double g2 = s.gradient.squaredNorm();
     if (!s.valid() || !(g2 > 0)) return p;
     const Vec3d step = s.value * s.gradient / g2;

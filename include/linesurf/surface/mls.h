@@ -80,7 +80,9 @@ class MlsSurface {
   MlsSurface(MlsSurface&&) noexcept;
   MlsSurface& operator=(MlsSurface&&) noexcept;
 
-  MlsSample evaluate(const Vec3d& x) const;
+  /// f and its derivatives at x; without `secondDerivatives` the Hessian and the normal
+  /// field's Jacobian are left zero (a third of the work, what projection needs).
+  MlsSample evaluate(const Vec3d& x, bool secondDerivatives = true) const;
   MlsCurvature curvature(const Vec3d& x) const;
   MlsProjection project(const Vec3d& x) const;
   /// The support radius of the nearest source to x (the length tolerances are relative to).
