@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -79,7 +80,39 @@ bool isKey(std::string_view comment, std::string_view key) {
 }
 
 bool isReservedComment(std::string_view c) {
-  return isKey(c, kOriginComment) || isKey(c, kLasScaleComment) || isKey(c, kLasOffsetComment) || isKey(c, kUpAxisComment);
+  return isKey(c, kOriginComment) || isKey(c, kLasScaleComment) || isKey(c, kLasOffsetComment) || isKey(c, kUpAxisComment) ||
+         isKey(c, kLasCrsComment);
+}
+
+/// A coordinate reference system record (user "LASF_Projection": GeoTIFF keys, WKT) as the
+/// comment "linesurf_las_crs RECORD HEX"; larger ones than this are not kept.
+constexpr size_t kMaxCrsBytes = 32768;
+constexpr uint16_t kWktRecord = 2112;
+
+std::string crsComment(uint16_t record, std::string_view payload) {
+  static constexpr char digits[] = "0123456789abcdef";
+  std::string c = fmt::format("{} {} ", kLasCrsComment, record);
+  for (unsigned char ch : payload) c += digits[ch >> 4], c += digits[ch & 15];
+  return c;
+}
+
+/// The record and payload of a crsComment; throws BadParameter when malformed.
+std::pair<uint16_t, std::string> parseCrsComment(std::string_view c) {
+  const std::string_view rest = c.substr(std::min(c.size(), kLasCrsComment.size() + 1));
+  const size_t space = rest.find(' ');
+  const std::string_view hex = space == std::string_view::npos ? std::string_view() : rest.substr(space + 1);
+  uint16_t record = 0;
+  const auto [end, ec] = std::from_chars(rest.data(), rest.data() + std::min(space, rest.size()), record);
+  bool ok = space != std::string_view::npos && ec == std::errc() && end == rest.data() + space && hex.size() % 2 == 0 && hex.size() / 2 <= kMaxCrsBytes;
+  auto nibble = [](char x) { return x >= '0' && x <= '9' ? x - '0' : x >= 'a' && x <= 'f' ? x - 'a' + 10 : -1; };
+  std::string payload;
+  for (size_t k = 0; ok && k < hex.size(); k += 2) {
+    const int hi = nibble(hex[k]), lo = nibble(hex[k + 1]);
+    ok = hi >= 0 && lo >= 0;
+    payload += char(hi * 16 + lo);
+  }
+  if (!ok) throwBadParameter("comment " + std::string(kLasCrsComment), "expected a record number and lower-case hex bytes");
+  return {record, payload};
 }
 
 /// The three numbers of comment `key` ("KEY A B C"): false when the model has no such comment.
@@ -261,7 +294,7 @@ HybridModel lasToModel(std::string_view b, const std::string& name) {
   const Header h = parseHeader(b, name);
   const PointFormat& pf = kFormats[size_t(h.format)];
   std::vector<ExtraField> extras;
-  std::vector<std::string> keptComments;
+  std::vector<std::string> keptComments, crs;
   size_t at = h.headerSize;
   for (uint32_t i = 0; i < h.vlrCount; ++i) {
     const std::string where = fmt::format("VLR {}", i);
@@ -285,7 +318,26 @@ HybridModel lasToModel(std::string_view b, const std::string& name) {
         p = e + 1;
       }
     }
+    if (user == "LASF_Projection" && length <= kMaxCrsBytes) crs.push_back(crsComment(record, payload));
     at += kVlrHeader + length;
+  }
+  // LAS 1.4 may put the CRS (a long WKT, say) in an extended VLR after the points.
+  const uint32_t evlrs = h.minor >= 4 ? get<uint32_t>(b, 243) : 0;
+  uint64_t eat = h.minor >= 4 ? get<uint64_t>(b, 235) : 0;
+  for (uint32_t i = 0; i < evlrs; ++i) {
+    const std::string where = fmt::format("EVLR {}", i);
+    if (eat > b.size() || b.size() - eat < 60)
+      throwBadInput(name, where, fmt::format("its header at byte {} runs past the end of the file ({} bytes): the header's "
+                                             "start or count of extended VLRs is wrong",
+                                             eat, b.size()));
+    const std::string user = fixedText(b.substr(size_t(eat) + 2, 16));
+    const uint16_t record = get<uint16_t>(b, size_t(eat) + 18);
+    const uint64_t length = get<uint64_t>(b, size_t(eat) + 20);
+    if (b.size() - eat - 60 < length)
+      throwBadInput(name, where, fmt::format("its {} bytes at byte {} run past the end of the file ({} bytes)", length, eat + 60,
+                                             b.size()));
+    if (user == "LASF_Projection" && length <= kMaxCrsBytes) crs.push_back(crsComment(record, b.substr(size_t(eat) + 60, size_t(length))));
+    eat += 60 + length;
   }
 
   HybridModel m;
@@ -388,6 +440,7 @@ HybridModel lasToModel(std::string_view b, const std::string& name) {
   m.comments.push_back(fmt::format("{} {} {} {}", kLasScaleComment, h.scale.x(), h.scale.y(), h.scale.z()));
   m.comments.push_back(fmt::format("{} {} {} {}", kLasOffsetComment, h.offset.x(), h.offset.y(), h.offset.z()));
   m.comments.push_back(std::string(kUpAxisComment) + " z");
+  for (std::string& c : crs) m.comments.push_back(std::move(c));
   return m;
 }
 
@@ -534,10 +587,19 @@ std::string lasBytes(const HybridModel& m, const LasWriteOptions& options, const
     vlrs += vlr("linesurf", kCommentsRecord, "comments", text);
     ++vlrCount;
   }
+  bool wkt = false;
+  for (const std::string& c : m.comments) {
+    if (!isKey(c, kLasCrsComment)) continue;
+    const auto [record, payload] = parseCrsComment(c);
+    vlrs += vlr("LASF_Projection", record, "", payload);
+    ++vlrCount;
+    wkt = wkt || record == kWktRecord;
+  }
 
   std::string b(kHeader14, '\0');
   b.replace(0, 4, "LASF");
-  if (pf.extended) put<uint16_t>(b, 6, 0x10);  // formats 6-10 require the WKT bit (1.4 R15 table 4)
+  // Formats 6-10 require the WKT bit (1.4 R15 table 4); the others set it for a WKT record.
+  if (pf.extended || wkt) put<uint16_t>(b, 6, 0x10);
   put<uint8_t>(b, 24, 1);
   put<uint8_t>(b, 25, 4);
   putText(b, 26, 32, "OTHER");

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <tuple>
 
 #include "linesurf/core/error.h"
 #include "linesurf/io/las_io.h"
@@ -55,7 +56,7 @@ struct LasBuilder {
   std::vector<LasPoint> points;
   std::vector<Extra> extras;
   std::vector<std::vector<uint8_t>> extraValues;  ///< per point, the extra bytes
-  std::vector<std::pair<std::string, std::string>> vlrs;  ///< user id, payload (record id 1)
+  std::vector<std::tuple<std::string, uint16_t, std::string>> vlrs, evlrs;  ///< user id, record id, payload
 
   std::string bytes() const {
     const size_t hs = minor < 3 ? 227 : minor == 3 ? 235 : 375;
@@ -82,7 +83,7 @@ struct LasBuilder {
       }
       addVlr("LASF_Spec", 4, d);
     }
-    for (const auto& [user, payload] : vlrs) addVlr(user, 1, payload);
+    for (const auto& [user, id, payload] : vlrs) addVlr(user, id, payload);
     const size_t len = recordLength >= 0 ? size_t(recordLength) : size_t(kRecordSize[size_t(format)]) + extraSize;
     std::string b(hs, '\0');
     std::memcpy(b.data(), "LASF", 4);
@@ -111,6 +112,17 @@ struct LasBuilder {
                     std::min(extraValues[i].size(), r.size() - size_t(kRecordSize[size_t(format)])));
       r.resize(len);
       b += r;
+    }
+    if (!evlrs.empty()) {
+      put<uint64_t>(b, 235, b.size());
+      put<uint32_t>(b, 243, uint32_t(evlrs.size()));
+    }
+    for (const auto& [user, id, payload] : evlrs) {
+      std::string v(60, '\0');
+      std::memcpy(v.data() + 2, user.data(), std::min<size_t>(16, user.size()));
+      put<uint16_t>(v, 18, id);
+      put<uint64_t>(v, 20, payload.size());
+      b += v + payload;
     }
     return b;
   }
@@ -260,6 +272,30 @@ TEST(LasRoundTrip, ModelNotFromLasGetsAFittingScale) {
   for (size_t i = 0; i < 100; ++i) EXPECT_LT((r.points[i].position - m.points[i].position).cwiseAbs().maxCoeff(), 6e-8f);
 }
 
+TEST(LasRoundTrip, CoordinateSystemRecordsKept) {
+  LasBuilder in;
+  in.minor = 4, in.format = 6;
+  in.points = randomPoints(10, 6, 3, -100, 100);
+  const std::string keys("\x01\x00\x01\x00\x00\x00\x01\x00\xff\x00", 10);
+  const std::string wkt = "PROJCS[\"ETRS89 / UTM zone 32N\"]";
+  in.vlrs = {{"LASF_Projection", 34735, keys}, {"other tool", 7, "dropped"}};
+  in.evlrs = {{"LASF_Projection", 2112, wkt}};
+  const HybridModel m = readLasModelFromMemory(in.bytes(), "crs.las");
+  const fs::path dir = test::scratchDir("las_crs");
+  writeModel(dir / "crs.ply", m);  // and through a PLY file
+  writeModel(dir / "crs.las", readModel(dir / "crs.ply"));
+  const std::string out = readBytes(dir / "crs.las");
+  EXPECT_EQ(get<uint16_t>(out, 6) & 0x10, 0x10);  // WKT
+  const HybridModel r = readModel(dir / "crs.las");
+  std::vector<std::string> crs;
+  for (const std::string& c : r.comments)
+    if (c.rfind("linesurf_las_crs ", 0) == 0) crs.push_back(c);
+  ASSERT_EQ(crs.size(), 2u);
+  EXPECT_EQ(crs[0], "linesurf_las_crs 34735 0100010000000100ff00");
+  EXPECT_NE(out.find(wkt), std::string::npos);
+  EXPECT_EQ(out.find("dropped"), std::string::npos);
+}
+
 TEST(LasRoundTrip, FuzzCorpusFilesRead) {
   // Written by a separate encoder (a Python script): formats 0, 1, 3, 7, 10 of LAS 1.2-1.4.
   const fs::path dir = fs::path(LINESURF_SOURCE_DIR) / "tests" / "fuzz" / "corpus_las";
@@ -403,6 +439,19 @@ TEST(LasBadInput, OffsetsLie) {
                         "of 7 VLRs is wrong");
 }
 
+TEST(LasBadInput, ExtendedVlrsLie) {
+  LasBuilder s = smallFile(6);
+  s.minor = 4;
+  s.evlrs = {{"LASF_Projection", 2112, "PROJCS[]"}};
+  std::string b = s.bytes();
+  put<uint64_t>(b, 235, b.size() - 10);
+  EXPECT_EQ(errorOf(b), "t.las: EVLR 0: its header at byte 523 runs past the end of the file (533 bytes): the header's start or "
+                        "count of extended VLRs is wrong");
+  b = s.bytes();
+  put<uint64_t>(b, 20 + get<uint64_t>(b, 235), 1000);
+  EXPECT_EQ(errorOf(b), "t.las: EVLR 0: its 1000 bytes at byte 525 run past the end of the file (533 bytes)");
+}
+
 TEST(LasBadInput, UnknownPointFormat) {
   std::string b = smallFile().bytes();
   put<uint8_t>(b, 104, 11);
@@ -432,7 +481,7 @@ TEST(LasBadInput, CompressedLaz) {
   put<uint8_t>(b, 104, uint8_t(0x80 | 3));
   EXPECT_EQ(errorOf(b), "t.las: header: the points are compressed (LAZ); decompress it first, e.g. with laszip/PDAL, to .las");
   LasBuilder v = smallFile();
-  v.vlrs = {{"laszip encoded", "x"}};
+  v.vlrs = {{"laszip encoded", 22204, "x"}};
   EXPECT_EQ(errorOf(v.bytes()), "t.las: VLR 0: the points are compressed (LAZ); decompress it first, e.g. with laszip/PDAL, to .las");
 }
 

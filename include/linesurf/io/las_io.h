@@ -10,6 +10,8 @@
 ///   linesurf_las_scale SX SY SZ  the file's quantisation, reused when the model is written back
 ///   linesurf_las_offset OX OY OZ   as LAS, so that the integer X Y Z records come back bit-exact
 ///   linesurf_up_axis z           LAS is z-up
+///   linesurf_las_crs RECORD HEX  a coordinate reference system record (GeoTIFF keys, WKT),
+///                                written back as it was
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -22,6 +24,7 @@ inline constexpr std::string_view kOriginComment = "linesurf_origin";
 inline constexpr std::string_view kLasScaleComment = "linesurf_las_scale";
 inline constexpr std::string_view kLasOffsetComment = "linesurf_las_offset";
 inline constexpr std::string_view kUpAxisComment = "linesurf_up_axis";
+inline constexpr std::string_view kLasCrsComment = "linesurf_las_crs";
 
 /// The origin model positions are relative to (the `linesurf_origin` comment), zero when there
 /// is none: object-space point = origin + position. Throws BadParameter for a malformed comment.
