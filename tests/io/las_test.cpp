@@ -52,6 +52,7 @@ struct Extra {
 struct LasBuilder {
   int minor = 2, format = 0;
   int recordLength = -1;  ///< -1: the format's size + the extras'
+  size_t headerPadding = 0, pointPadding = 0;  ///< bytes after the header and before the points
   std::array<double, 3> scale{0.001, 0.001, 0.001}, offset{0, 0, 0};
   std::vector<LasPoint> points;
   std::vector<Extra> extras;
@@ -59,7 +60,7 @@ struct LasBuilder {
   std::vector<std::tuple<std::string, uint16_t, std::string>> vlrs, evlrs;  ///< user id, record id, payload
 
   std::string bytes() const {
-    const size_t hs = minor < 3 ? 227 : minor == 3 ? 235 : 375;
+    const size_t hs = (minor < 3 ? 227 : minor == 3 ? 235 : 375) + headerPadding;
     std::string vl;
     auto addVlr = [&](const std::string& user, uint16_t id, const std::string& payload) {
       std::string v(54, '\0');
@@ -84,6 +85,7 @@ struct LasBuilder {
       addVlr("LASF_Spec", 4, d);
     }
     for (const auto& [user, id, payload] : vlrs) addVlr(user, id, payload);
+    vl += std::string(pointPadding, '\xdd');
     const size_t len = recordLength >= 0 ? size_t(recordLength) : size_t(kRecordSize[size_t(format)]) + extraSize;
     std::string b(hs, '\0');
     std::memcpy(b.data(), "LASF", 4);
@@ -270,6 +272,17 @@ TEST(LasRoundTrip, ModelNotFromLasGetsAFittingScale) {
   const HybridModel r = readLasModelFromMemory(lasBytes(m, {}, "s.las"), "s.las");
   // 10^ceil(log10(0.13 / 2^22)) = 1e-7: within half a step.
   for (size_t i = 0; i < 100; ++i) EXPECT_LT((r.points[i].position - m.points[i].position).cwiseAbs().maxCoeff(), 6e-8f);
+}
+
+TEST(LasRoundTrip, HeaderSizeOffsetAndUnknownVlrsHonoured) {
+  LasBuilder in;
+  in.minor = 3, in.format = 1;
+  in.headerPadding = 20, in.pointPadding = 2;  // a longer header, and the pad bytes of old writers
+  in.vlrs = {{"some tool", 42, std::string(300, 'v')}};
+  in.points = randomPoints(5, 1, 9, -50, 50);
+  const HybridModel m = readLasModelFromMemory(in.bytes(), "pad.las");
+  ASSERT_EQ(m.points.size(), 5u);
+  EXPECT_EQ(m.points[4].position.x(), float(in.points[4].xyz[0] * 0.001));
 }
 
 TEST(LasRoundTrip, CoordinateSystemRecordsKept) {
