@@ -12,11 +12,13 @@
 #include "drawable_model.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
+#include "linesurf/io/atomic_file.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
+#include "linesurf/render/drawing.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
 #include "options_bind.h"
@@ -31,6 +33,7 @@ struct RenderArgs {
   ViewOptions view;
   PrepareOptions prepare;
   MeshRenderOptions mesh;
+  DrawingOptions drawing;  ///< a style other than splat: strokes from the segments (§9.4, §9.5)
   std::string primitive = "auto";
   uint64_t budget = 0;  ///< splats a view from a .lod hierarchy (0 = every leaf)
 };
@@ -58,11 +61,13 @@ void run(RenderArgs& a) {
   validate(a.view);
   validate(a.prepare);
   validate(a.mesh);
+  validate(a.drawing);
+  const bool drawing = a.drawing.style != DrawStyle::Splat;
 
   const int w = a.view.width, h = a.view.height;
   // A hierarchy is read a view's nodes at a time: its budget is checked once its size is known.
   const bool isLod = lod::isLodFile(a.model);
-  checkFiles({a.model}, {{"--output", a.output, {".png"}}, {"--depth-out", a.depthOut, {".png"}},
+  checkFiles({a.model}, {{"--output", a.output, drawing ? std::vector<std::string>{".png", ".svg"} : std::vector<std::string>{".png"}}, {"--depth-out", a.depthOut, {".png"}},
                          {"--alpha-out", a.alphaOut, {".png"}}, {"--normal-out", a.normalOut, {".png"}}},
              /*inputsHeldWhole=*/!isLod);
   // Colour, depth, alpha, normal images (16 bytes a pixel each) and the Z3 fragment layers.
@@ -88,6 +93,7 @@ void run(RenderArgs& a) {
   }
   else if (a.budget > 0) throwBadOption("budget", "needs a level-of-detail hierarchy (linesurf lod build), got " + a.model);
   if (lodFile && a.primitive != "auto") throwBadOption("primitive", "does not apply to a .lod hierarchy");
+  if (lodFile && drawing) throwBadOption("style", "draws a model's own segments; it does not apply to a .lod hierarchy");
   const bool isMesh = !lodFile && fileHoldsMesh(a.model);
   if (a.primitive == "mesh" && !isMesh)
     throwBadOption("primitive", "mesh needs a file with faces; " + a.model + " holds none");
@@ -96,6 +102,9 @@ void run(RenderArgs& a) {
   if (isMesh && a.primitive != "points") {
     triMesh = readMesh(a.model);
   }
+  if (triMesh && drawing && !triMesh->faces.empty())
+    throwBadOption("style", "draws a model's own segments; " + a.model +
+                                " is a mesh: draw its contour lines (linesurf extract contour) or --primitive points");
   if (triMesh && triMesh->faces.empty()) {  // a mesh file without faces: its vertices are what it holds
     model = meshVerticesAsPoints(*triMesh);
     triMesh.reset();
@@ -132,11 +141,18 @@ void run(RenderArgs& a) {
   std::optional<Renderer> renderer;
   std::optional<MeshRenderer> meshRenderer;
   std::optional<lod::LodRenderer> lodRenderer;
-  if (triMesh) meshRenderer.emplace(*triMesh, o, a.mesh);
+  std::optional<DrawingRenderer> drawer;
+  if (drawing && model.segments.empty()) {
+    if (!a.drawing.silhouettes)
+      throwBadOption("style", a.model + " has no segments and `silhouettes` is off: nothing to draw");
+    say(a.model + ": no segments, the drawing holds its silhouettes only");
+  }
+  if (drawing) drawer.emplace(model, o, a.drawing);
+  else if (triMesh) meshRenderer.emplace(*triMesh, o, a.mesh);
   else if (lodFile) lodRenderer.emplace(*lodFile, o, a.budget > 0 ? a.budget : UINT64_MAX, a.prepare.radiusScale);
   else renderer.emplace(model, o);
   const BoundingSphere sphere =
-      triMesh ? meshRenderer->sphere() : lodRenderer ? lodRenderer->sphere() : renderer->sphere();
+      drawer ? drawer->sphere() : triMesh ? meshRenderer->sphere() : lodRenderer ? lodRenderer->sphere() : renderer->sphere();
   const std::vector<Camera> cams = viewCameras(sphere, a.view, frame);
   const int views = a.view.views;
 
@@ -145,6 +161,9 @@ void run(RenderArgs& a) {
   for (size_t i = 0; i < cams.size(); ++i) {
     RenderResult r;
     uint64_t trianglesThisView = 0;
+    bool svgWritten = false;
+    const int vi = views > 0 ? int(i) : -1;
+    std::filesystem::path out = vi >= 0 ? viewPath(a.output, vi) : std::filesystem::path(a.output);
     if (meshRenderer) {  // the mesh ground truth: same outputs, triangle counts in the summary
       MeshRenderResult m = meshRenderer->render(cams[i]);
       r.color = std::move(m.color);
@@ -164,12 +183,25 @@ void run(RenderArgs& a) {
       for (const std::string& e : f.failures) std::fprintf(stderr, "warning: %s (not drawn)\n", e.c_str());
       say(fmt::format("{}: {} nodes, {} splats within the budget; select {:.1f} ms, load {:.1f} ms", a.model,
                       f.selection.nodes.size(), f.selection.primitives, 1000 * f.selectSeconds, 1000 * f.loadSeconds));
+    } else if (drawer) {
+      Drawing d = drawer->render(cams[i]);
+      r = std::move(d.splat);
+      r.color = std::move(d.image);
+      if (a.depthOut.empty()) r.depth.reset();  // the drawing's own buffers, written only when asked
+      if (a.normalOut.empty()) r.normal.reset();
+      say(fmt::format("drawing: {} strokes ({} across), {} drawn in {} visible runs, {} silhouette paths; strokes "
+                      "{:.1f} ms, raster {:.1f} ms", d.stats.strokes, d.stats.crossStrokes, d.stats.strokesDrawn,
+                      d.stats.runs, d.stats.silhouettePaths, 1000 * d.stats.strokeSeconds, 1000 * d.stats.rasterSeconds));
+      if (out.extension() == ".svg") {
+        const std::string svg = drawingSvg(d, a.drawing);
+        checkSize("--output", double(svg.size()), fmt::format("an SVG drawing of {} paths", d.runs.size()));
+        writeFileAtomically(out, svg);
+        svgWritten = true;
+      }
     } else {
       r = renderer->render(cams[i]);
     }
-    const int vi = views > 0 ? int(i) : -1;
-    std::filesystem::path out = vi >= 0 ? viewPath(a.output, vi) : std::filesystem::path(a.output);
-    writePng(out, r.color, o.background.w() < 1);
+    if (!svgWritten) writePng(out, r.color, drawing ? a.drawing.paper.w() < 1 : o.background.w() < 1);
     if (r.depth) writePng(bufferPath(a.depthOut, vi, views), depthAsGrey(*r.depth));
     if (r.alpha) writePng(bufferPath(a.alphaOut, vi, views), *r.alpha);
     if (r.normal) writePng(bufferPath(a.normalOut, vi, views), *r.normal);
@@ -211,13 +243,14 @@ RegisterCommand reg(40, [](CLI::App& app) {
   CLI::App* sub = app.add_subcommand("render", "Render a point or hybrid model by EWA splatting (thesis §4-§6.2) to PNG");
   sub->add_option("MODEL", a->model, "Point cloud, hybrid model or mesh (.ply, .obj, .xyz); see --primitive")->type_name("FILE")
       ->required();
-  sub->add_option("-o,--output", a->output, "Output PNG (with --views N: OUT_000.png ...)")->type_name("FILE")->capture_default_str();
+  sub->add_option("-o,--output", a->output, "Output PNG, or SVG with --style lines / hatch (with --views N: OUT_000.png ...)")->type_name("FILE")->capture_default_str();
   // Every flag of the camera, the preparation, the renderer and the mesh rasteriser comes from
   // the option tables (pipeline/option_tables.h).
   bindOptions(sub, v);
   bindOptions(sub, a->prepare);
   bindOptions(sub, o);
   bindOptions(sub, a->mesh);
+  bindOptions(sub, a->drawing);
   // Read as every table option is (options_bind.h): a decimal integer in range, so that -1, 2^64,
   // "" or 0x10 are refused naming the flag instead of read as something else.
   sub->add_option_function<std::string>("--budget", [a](const std::string& t) {

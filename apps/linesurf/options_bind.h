@@ -164,7 +164,7 @@ class TableBinder {
   void operator()(BackgroundRef r, const OptionSpec& s) {
     if (!wanted(s)) return;
     Color& c = r.color;
-    add(s, [&c](const std::string& t) { c = parseBackground(t); }, "COLOR", backgroundName(c));
+    add(s, [&c, s](const std::string& t) { c = parseColor(s.name, t); }, "COLOR", backgroundName(c));
   }
 
  private:

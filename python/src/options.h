@@ -179,7 +179,7 @@ class OptionApplier {
     r.axis = parseUpAxis(v.cast<std::string>());
   }
   static void set(BackgroundRef r, const py::object& v, const OptionSpec& s) {
-    if (py::isinstance<py::str>(v)) return void(r.color = parseBackground(v.cast<std::string>()));
+    if (py::isinstance<py::str>(v)) return void(r.color = parseColor(s.name, v.cast<std::string>()));
     if (!PySequence_Check(v.ptr()) || (py::len(v) != 3 && py::len(v) != 4))
       throwBadOption(s.name, "expected a name or 3 or 4 numbers in [0, 1]");
     py::sequence q = py::reinterpret_borrow<py::sequence>(v);

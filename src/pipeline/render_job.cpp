@@ -51,7 +51,13 @@ Vec3f parseUpAxis(const std::string& text) {
   throwBadOption("upAxis", "expected x, y, z, -x, -y or -z, got '" + text + "'");
 }
 
-Color parseBackground(const std::string& s) {
+Color parseBackground(const std::string& s) { return parseColor("background", s); }
+
+Color parseColor(const std::string& field, const std::string& s) {
+  if (s.size() == 7 && s[0] == '#' && s.find_first_not_of("0123456789abcdefABCDEF", 1) == std::string::npos) {
+    const unsigned long v = std::strtoul(s.c_str() + 1, nullptr, 16);
+    return Color(float((v >> 16) & 255) / 255.0f, float((v >> 8) & 255) / 255.0f, float(v & 255) / 255.0f, 1);
+  }
   if (s == "white") return Color(1, 1, 1, 1);
   if (s == "black") return Color(0, 0, 0, 1);
   if (s == "transparent" || s == "none") return Color(0, 0, 0, 0);
@@ -71,7 +77,7 @@ Color parseBackground(const std::string& s) {
     start = end + 1;
   }
   if (v.size() == 3) v.push_back(1);
-  if (v.size() != 4) throwBadOption("background", "expected white, black, transparent or R,G,B[,A] in [0,1], got '" + s + "'");
+  if (v.size() != 4) throwBadOption(field, "expected white, black, transparent, #rrggbb or R,G,B[,A] in [0,1], got '" + s + "'");
   return Color(v[0], v[1], v[2], v[3]);
 }
 

@@ -188,6 +188,7 @@ TEST(OptionTables, ValidateAcceptsExactlyTheDocumentedRange) {
   checkValidateAgainstTable<ViewOptions>("ViewOptions");
   checkValidateAgainstTable<PrepareOptions>("PrepareOptions");
   checkValidateAgainstTable<RenderOptions>("RenderOptions");
+  checkValidateAgainstTable<DrawingOptions>("DrawingOptions");
   checkValidateAgainstTable<GeometryOptions>("GeometryOptions");
   checkValidateAgainstTable<EpsDeltaOptions>("EpsDeltaOptions");
   checkValidateAgainstTable<ShapeApproxOptions>("ShapeApproxOptions");
@@ -215,6 +216,7 @@ TEST(OptionTables, DefaultsLieInTheirRanges) {
   check(PrepareOptions{}, "PrepareOptions");
   check(RenderOptions{}, "RenderOptions");
   check(MeshRenderOptions{}, "MeshRenderOptions");
+  check(DrawingOptions{}, "DrawingOptions");
   check(GeometryOptions{}, "GeometryOptions");
   check(EpsDeltaOptions{}, "EpsDeltaOptions");
   check(ShapeApproxOptions{}, "ShapeApproxOptions");
@@ -236,7 +238,7 @@ std::vector<Command> commands() {
   return {
       {"render", points, ".png",
        {numericFields<ViewOptions>, numericFields<PrepareOptions>, numericFields<RenderOptions>,
-        numericFields<MeshRenderOptions>}},
+        numericFields<MeshRenderOptions>, numericFields<DrawingOptions>}},
       {"view", points, ".html", {numericFields<ViewOptions>, numericFields<RenderOptions>, numericFields<PrepareOptions>}},
       {"extract eps-delta", points, ".ply", {numericFields<EpsDeltaOptions>, numericFields<GeometryOptions>}},
       {"extract shape-approx", points, ".ply", {numericFields<ShapeApproxOptions>, numericFields<GeometryOptions>}},
@@ -355,6 +357,7 @@ TEST(CliOptions, HelpShowsEveryTableOptionWithTheStructsDefault) {
   append(render, shown<PrepareOptions>());
   append(render, shown<RenderOptions>());
   append(render, shown<MeshRenderOptions>());
+  append(render, shown<DrawingOptions>());
   checkHelp("render", render, kUseCli);
   std::vector<Shown> view = shown<ViewOptions>();
   append(view, shown<RenderOptions>());

@@ -41,8 +41,10 @@ void validate(const ViewOptions& options);
 /// "x", "-z", ... -> unit axis; throws OptionError("upAxis") for anything else.
 Vec3f parseUpAxis(const std::string& text);
 
-/// "white", "black", "transparent" (or "none"), or "R,G,B[,A]" in [0, 1]; throws
-/// OptionError("background") otherwise.
+/// "white", "black", "transparent" (or "none"), "#rrggbb", or "R,G,B[,A]" in [0, 1]; throws
+/// OptionError(field) otherwise.
+Color parseColor(const std::string& field, const std::string& text);
+/// parseColor("background", text).
 Color parseBackground(const std::string& text);
 
 /// The cameras of a view: one, or `views` spread ones, of a model drawn in `frame`
