@@ -39,11 +39,6 @@ inline std::span<const EnumName<DrawStyle>> enumNames(DrawStyle) {
       {"splat", DrawStyle::Splat}, {"lines", DrawStyle::Lines}, {"hatch", DrawStyle::Hatch}};
   return k;
 }
-inline std::span<const EnumName<DrawStyle>> enumNames(DrawStyle) {
-  static constexpr EnumName<DrawStyle> k[] = {
-      {"splat", DrawStyle::Splat}, {"lines", DrawStyle::Lines}, {"hatch", DrawStyle::Hatch}};
-  return k;
-}
 inline std::span<const EnumName<ClusteringMethod>> enumNames(ClusteringMethod) {
   static constexpr EnumName<ClusteringMethod> k[] = {{"greedy", ClusteringMethod::Greedy},
                                                      {"hierarchical", ClusteringMethod::Hierarchical}};
@@ -170,24 +165,7 @@ void describeOptions(DrawingOptions& o, V&& v) {
   v(o.strokeDepthTolerance, {"strokeDepthTolerance",
                              "A stroke is visible within this many segment radii of the splat depth", aboveRange(0, 100)});
   v(o.silhouettes, {"silhouettes", "Draw silhouettes from the depth and normal buffers"});
-  v(o.crossHatch, {"crossHatch", "Hatch: a second family across the strokes where they cannot reach the tone"});
-  v(o.strokeSeed, {"strokeSeed", "Seed of the strokes' order within a level of their nested priorities", atLeast(0)});
-}
-
-/// Drawings from the segments (thesis §9.4, §9.5); render/drawing.h says why each default.
-template <typename V>
-void describeOptions(DrawingOptions& o, V&& v) {
-  v.group("drawing", "Drawings from the segments (§9.4, §9.5): strokes, hatching, silhouettes");
-  v(o.style, {"style",
-              "splat (shaded EWA splatting), lines (every visible segment as an ink stroke) or hatch (stroke density "
-              "follows the shaded tone); lines and hatch also write .svg"});
-  v(o.strokeWidth, {"strokeWidth", "Width of every stroke, pixels", closedRange(0.1, 64)});
-  v(BackgroundRef{o.paper}, {"paper", "Paper colour: white, black, transparent, #rrggbb or R,G,B[,A] in [0, 1]"});
-  v(BackgroundRef{o.ink}, {"ink", "Ink colour: black, white, #rrggbb or R,G,B[,A] in [0, 1]"});
-  v(o.toneLevels, {"toneLevels", "Hatch: tones the shaded luminance is quantised to (0 = continuous)", closedRange(0, 256)});
-  v(o.strokeDepthTolerance, {"strokeDepthTolerance",
-                             "A stroke is visible within this many segment radii of the splat depth", aboveRange(0, 100)});
-  v(o.silhouettes, {"silhouettes", "Draw silhouettes from the depth and normal buffers"});
+  v(o.inBetween, {"inBetween", "Hatch: copies of the strokes halfway across where even all of them are too light"});
   v(o.crossHatch, {"crossHatch", "Hatch: a second family across the strokes where they cannot reach the tone"});
   v(o.strokeSeed, {"strokeSeed", "Seed of the strokes' order within a level of their nested priorities", atLeast(0)});
 }
