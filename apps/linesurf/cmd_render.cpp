@@ -189,8 +189,8 @@ void run(RenderArgs& a) {
       r.color = std::move(d.image);
       if (a.depthOut.empty()) r.depth.reset();  // the drawing's own buffers, written only when asked
       if (a.normalOut.empty()) r.normal.reset();
-      say(fmt::format("drawing: {} strokes ({} across), {} drawn in {} visible runs, {} silhouette paths; strokes "
-                      "{:.1f} ms, raster {:.1f} ms", d.stats.strokes, d.stats.crossStrokes, d.stats.strokesDrawn,
+      say(fmt::format("drawing: {} strokes ({} in between, {} across), {} drawn in {} visible runs, {} silhouette paths; strokes "
+                      "{:.1f} ms, raster {:.1f} ms", d.stats.strokes, d.stats.inBetweenStrokes, d.stats.crossStrokes, d.stats.strokesDrawn,
                       d.stats.runs, d.stats.silhouettePaths, 1000 * d.stats.strokeSeconds, 1000 * d.stats.rasterSeconds));
       if (out.extension() == ".svg") {
         const std::string svg = drawingSvg(d, a.drawing);

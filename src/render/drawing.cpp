@@ -54,12 +54,15 @@ float projectedAcross(const Camera& cam, const Vec3f& midCam, const Vec3f& offse
 }
 
 /// §9.4: whether the tone at a pixel asks for a piece of this family and priority. The main
-/// family draws the strokes of priority below D s / w (D the darkness, s the projected spacing,
-/// w the width: coverage w / s at full density); the cross family draws where the main family
-/// at full density (C1 = w / s1) is lighter than the tone, for the rest: 1 - D = (1 - C1)(1 - C2).
-bool toneWants(float darkness, float priority, bool cross, float ownSpacing, float mainSpacing, float w) {
-  if (!cross) return priority <= darkness * ownSpacing / w;
-  const float c1 = mainSpacing > 0 ? std::min(1.0f, w / mainSpacing) : 1.0f;
+/// family draws the strokes of priority below f = D s / w (D the darkness, s the projected
+/// spacing, w the width: coverage w / s at full density), the in-between strokes those below
+/// f - 1; the cross family draws where the main family at full density (C1 = w / s1, twice that
+/// with the in-between strokes) is lighter than the tone, for the rest: 1 - D = (1 - C1)(1 - C2).
+bool toneWants(float darkness, float priority, uint8_t family, float ownSpacing, float mainSpacing, float w,
+               bool inBetween) {
+  if (family == StrokeSet::Stroke::kMain) return priority <= darkness * ownSpacing / w;
+  if (family == StrokeSet::Stroke::kInBetween) return priority + 1 <= darkness * ownSpacing / w;
+  const float c1 = mainSpacing > 0 ? std::min(1.0f, (inBetween ? 2 : 1) * w / mainSpacing) : 1.0f;
   if (darkness <= c1 || c1 >= 1) return false;
   const float c2 = (darkness - c1) / (1 - c1);
   return priority <= c2 * ownSpacing / w;
@@ -73,7 +76,8 @@ float strokeRuns(const StrokeContext& c, uint32_t si, std::vector<StrokeRun>& ou
   const Image& depth = *c.splat.depth;
   const Image& color = c.splat.color;
   const Camera& cam = c.cam;
-  const bool hatch = c.o.style == DrawStyle::Hatch, cross = s.family == 1;
+  const bool hatch = c.o.style == DrawStyle::Hatch, cross = s.family == StrokeSet::Stroke::kCross;
+  const bool inBetween = c.set.inBetweenStrokes() > 0;
   const Mat3f& rot = cam.rotation();
   StrokeRun run;
   run.stroke = si;
@@ -106,9 +110,8 @@ float strokeRuns(const StrokeContext& c, uint32_t si, std::vector<StrokeRun>& ou
     if (hatch) {
       const Vec3f mid = 0.5f * (a + b), t = (b - a).normalized();
       const Vec3f across = n.cross(t).normalized();
-      // the main family's neighbours lie across it; the cross family's along the main stroke,
-      // and the main spacing is the cross stroke's own projected length
-      own = projectedAcross(cam, mid, (cross ? Vec3f(across.cross(n)) : across) * p.spacing, dir);
+      // every family's neighbours lie across it (n x t); a cross stroke spans one main spacing
+      own = projectedAcross(cam, mid, across * p.spacing, dir);
       main = cross ? len : own;
     }
     const int steps = std::max(1, int(std::ceil(len / 0.5f)));
@@ -123,7 +126,8 @@ float strokeRuns(const StrokeContext& c, uint32_t si, std::vector<StrokeRun>& ou
         pass = z.w() > 0.5f && std::abs(sq.z() - z.x()) <= tol;
       }
       if (pass && hatch)
-        pass = toneWants(1 - drawingTone(color.at(x, y), c.o.toneLevels), s.priority, cross, own, main, c.o.strokeWidth);
+        pass = toneWants(1 - drawingTone(color.at(x, y), c.o.toneLevels), s.priority, s.family, own, main,
+                         c.o.strokeWidth, inBetween);
       const Vec2f pt(sq.x(), sq.y());
       if (!pass) {
         close();
@@ -154,7 +158,8 @@ Drawing drawStrokes(const StrokeSet& set, const Camera& cam, const RenderResult&
     for (StrokeRun& r : perStroke[i]) d.runs.push_back(std::move(r));
   }
   d.stats.strokes = set.mainStrokes();
-  d.stats.crossStrokes = n - set.mainStrokes();
+  d.stats.inBetweenStrokes = set.inBetweenStrokes();
+  d.stats.crossStrokes = n - set.mainStrokes() - set.inBetweenStrokes();
   d.stats.runs = d.runs.size();
   d.stats.strokeSeconds = total.seconds();
   if (o.silhouettes) {

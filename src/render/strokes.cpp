@@ -246,7 +246,30 @@ StrokeSet::StrokeSet(const HybridModel& model, const DrawingOptions& options) {
   std::nth_element(sp.begin(), sp.begin() + long(sp.size() / 2), sp.end());
   typicalSpacing_ = sp[sp.size() / 2];
 
-  // 3. the cross family: a stroke across each main stroke (n x t, one main spacing long) every
+  // 3. in-between strokes: every main stroke moved half its spacing across, all to the side of
+  // one fixed direction (a stroke keeps one side), so neighbouring lines fill the gap between them
+  std::vector<uint32_t> parent;
+  if (options.style == DrawStyle::Hatch && options.inBetween) {
+    const Vec3f g = Vec3f(0.27f, 0.53f, 0.80f).normalized();
+    for (size_t s = 0; s < mainStrokes_; ++s) {
+      float side = 0;
+      for (uint32_t i = strokes_[s].first; i < strokes_[s].first + strokes_[s].count; ++i)
+        side += acrossOf(pieces_[i]).dot(g) * (pieces_[i].b - pieces_[i].a).norm();
+      const float sign = side < 0 ? -1.0f : 1.0f;
+      Stroke st{uint32_t(pieces_.size()), strokes_[s].count, 0, Stroke::kInBetween};
+      for (uint32_t i = strokes_[s].first; i < strokes_[s].first + strokes_[s].count; ++i) {
+        Piece p = pieces_[i];
+        const Vec3f shift = (0.5f * sign * p.spacing) * acrossOf(p);
+        p.a += shift, p.b += shift;
+        pieces_.push_back(p);
+      }
+      strokes_.push_back(st);
+      parent.push_back(uint32_t(s));
+    }
+    inBetween_ = parent.size();
+  }
+
+  // 4. the cross family: a stroke across each main stroke (n x t, one main spacing long) every
   // typical spacing of arclength. Its priority nests along its main stroke: the j-th cross
   // stroke's is the van der Corput radical inverse of j plus a per-stroke offset, so the cross
   // strokes below f lie every 1/f-th step along every main stroke (evenly, at every f).
@@ -265,7 +288,7 @@ StrokeSet::StrokeSet(const HybridModel& model, const DrawingOptions& options) {
           if (a.isZero()) continue;
           const Vec3f m = p.a + (p.b - p.a) * ((at - start) / len);
           const Vec3f half = 0.5f * p.spacing * a;
-          strokes_.push_back({uint32_t(pieces_.size()), 1, 0, 1});
+          strokes_.push_back({uint32_t(pieces_.size()), 1, 0, Stroke::kCross});
           pieces_.push_back(Piece{m - half, m + half, p.normal, p.radius, step, p.spacing});
           crossPriority.push_back((float(radicalInverse(j + offset) >> 8) + 0.5f) / 16777216.0f);
         }
@@ -274,9 +297,11 @@ StrokeSet::StrokeSet(const HybridModel& model, const DrawingOptions& options) {
     }
   }
 
-  // 4. the main family's nested priorities
+  // 5. the main family's nested priorities; in-between strokes take their main stroke's
   assignPriorities(strokes_, 0, mainStrokes_, pieces_, h, options.strokeSeed);
-  for (size_t i = mainStrokes_; i < strokes_.size(); ++i) strokes_[i].priority = crossPriority[i - mainStrokes_];
+  for (size_t i = 0; i < inBetween_; ++i) strokes_[mainStrokes_ + i].priority = strokes_[parent[i]].priority;
+  const size_t firstCross = mainStrokes_ + inBetween_;
+  for (size_t i = firstCross; i < strokes_.size(); ++i) strokes_[i].priority = crossPriority[i - firstCross];
 }
 
 }  // namespace linesurf

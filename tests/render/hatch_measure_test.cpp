@@ -143,17 +143,19 @@ void measure(const std::string& name, HybridModel model, const std::filesystem::
     increasing = increasing && f.levelTone[i] > last;
     last = f.levelTone[i];
   }
-  std::printf("%s\n", fmt::format("| {} | {}² | w {:g}{} | {} strokes + {} across | MAE {:.3f} (σ {:.2f} px, {} px) | "
+  std::printf("%s\n", fmt::format("| {} | {}² | w {:g}{} | {} strokes + {} between + {} across | MAE {:.3f} (σ {:.2f} px, {} px) | "
                                   "increasing {} | kept by id {:.3f} (ids {:.3f}) | set {:.2f} s, frame {:.0f} ms (splat {:.0f}, "
                                   "strokes {:.0f}, raster {:.0f}) |{}",
-                                  name, size, o.strokeWidth, o.crossHatch ? "" : " no cross", r.strokes().mainStrokes(),
-                                  r.strokes().strokes().size() - r.strokes().mainStrokes(), f.mae, f.sigma, f.pixels,
+                                  name, size, o.strokeWidth, std::string(o.inBetween ? "" : " no in-between") + (o.crossHatch ? "" : " no cross"), r.strokes().mainStrokes(),
+                                  r.strokes().inBetweenStrokes(),
+                                  r.strokes().strokes().size() - r.strokes().mainStrokes() - r.strokes().inBetweenStrokes(), f.mae, f.sigma, f.pixels,
                                   increasing ? "yes" : "no", drawn > 0 ? kept / drawn : 0.0,
                                   idsA ? double(idsBoth) / double(idsA) : 0.0, buildSeconds, 1000 * da.stats.totalSeconds,
                                   1000 * da.stats.splatSeconds, 1000 * da.stats.strokeSeconds,
                                   1000 * da.stats.rasterSeconds, levels)
                            .c_str());
-  const std::string stem = fmt::format("{}_{}_w{:g}{}", name, size, o.strokeWidth, o.crossHatch ? "" : "_nocross");
+  const std::string stem = fmt::format("{}_{}_w{:g}{}{}", name, size, o.strokeWidth, o.inBetween ? "" : "_nobetween",
+                                       o.crossHatch ? "" : "_nocross");
   writePng(dir / (stem + ".png"), da.image, false);
   writePng(dir / (stem + "_shaded.png"), da.splat.color, false);
   std::ofstream(dir / (stem + ".svg")) << drawingSvg(da, o);
@@ -179,10 +181,13 @@ TEST(DrawingMeasure, ToneAndCoherence) {
       measure("sphere", sphere, dir, Vec3f(0, 1, 0), size, o);
       measure("torus", torus, dir, Vec3f(0, 0, 1), size, o);
       measure("igea", igea, dir, Vec3f(0, 1, 0), size, o);
-      if (size == 512 && w == 1.25f) {
-        o.crossHatch = false;
-        measure("sphere", sphere, dir, Vec3f(0, 1, 0), size, o);
-        measure("igea", igea, dir, Vec3f(0, 1, 0), size, o);
+      if (size == 512 && w == 1.25f) {  // the model's own strokes alone, then with in-between ones
+        o.crossHatch = o.inBetween = false;
+        for (int i = 0; i < 2; ++i, o.inBetween = true) {
+          measure("sphere", sphere, dir, Vec3f(0, 1, 0), size, o);
+          measure("torus", torus, dir, Vec3f(0, 0, 1), size, o);
+          measure("igea", igea, dir, Vec3f(0, 1, 0), size, o);
+        }
       }
     }
 }

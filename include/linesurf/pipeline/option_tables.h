@@ -18,7 +18,6 @@
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/render/drawing.h"
-#include "linesurf/render/drawing.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/render_options.h"
 

@@ -13,6 +13,9 @@
 ///    pixel of darkness D draws a stroke where its priority is below D x (projected spacing) /
 ///    width, so a darker tone adds strokes and never moves one, and strokes stay on the surface
 ///    as the camera moves (Praun et al. 2001's nesting, on the model's own lines).
+///  - In-between strokes: where even every stroke is lighter than the tone, copies of the
+///    strokes moved half their spacing across (n x t, on the tangent plane: within (s/2)^2 k / 2
+///    of the surface) double the density, in the strokes' own priority order.
 ///  - A second family across the first (cross hatching, Hertzmann & Zorin 2000): short strokes
 ///    along n x t through the main strokes, one main spacing long, drawn only where the main
 ///    family at full density is lighter than the tone; their priorities nest along each main
@@ -58,6 +61,7 @@ struct DrawingOptions {
   /// of the splat depth buffer (the strip's own depth spread at grazing views), (0, 100].
   float strokeDepthTolerance = 2.0f;
   bool silhouettes = true;  ///< draw silhouettes (depth and normal buffers)
+  bool inBetween = true;    ///< Hatch: copies of the strokes halfway across where they are too few
   bool crossHatch = true;   ///< Hatch: the second family in tones the first cannot reach
   /// Seed of the order of the strokes within one level of the nested sampling (object space).
   uint64_t strokeSeed = 1;
@@ -68,6 +72,7 @@ void validate(const DrawingOptions& options);
 
 struct DrawingStats {
   size_t strokes = 0;        ///< strokes of the model (main family)
+  size_t inBetweenStrokes = 0;  ///< copies of the main strokes halfway across
   size_t crossStrokes = 0;   ///< strokes of the cross family
   size_t strokesDrawn = 0;   ///< strokes with a visible run (both families)
   size_t runs = 0;           ///< visible runs, silhouettes excluded
@@ -96,25 +101,27 @@ class StrokeSet {
     Vec3f normal;       ///< the segment's normal
     float radius;       ///< the segment's half-width (depth tolerance)
     float spacing;      ///< distance to the neighbouring strokes across (object units)
-    float crossSpacing; ///< cross family: distance between cross strokes along the main one
+    float crossSpacing; ///< cross family: the main family's spacing where it crosses (others 0)
   };
   struct Stroke {
     uint32_t first = 0, count = 0;  ///< pieces
     float priority = 0;             ///< (0, 1]: share of the family's length ranked up to it
-    uint8_t family = 0;             ///< 0 main, 1 cross
+    uint8_t family = 0;             ///< kMain, kCross or kInBetween
+    static constexpr uint8_t kMain = 0, kCross = 1, kInBetween = 2;
   };
   /// Chains, spacings, cross strokes and priorities of `model`'s segments (none: an empty set).
   StrokeSet(const HybridModel& model, const DrawingOptions& options);
   const std::vector<Stroke>& strokes() const { return strokes_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
   size_t mainStrokes() const { return mainStrokes_; }
+  size_t inBetweenStrokes() const { return inBetween_; }
   /// The typical spacing between neighbouring strokes (median over the pieces), object units.
   float typicalSpacing() const { return typicalSpacing_; }
 
  private:
   std::vector<Stroke> strokes_;
   std::vector<Piece> pieces_;
-  size_t mainStrokes_ = 0;
+  size_t mainStrokes_ = 0, inBetween_ = 0;
   float typicalSpacing_ = 0;
 };
 
