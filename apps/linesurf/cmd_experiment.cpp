@@ -185,7 +185,7 @@ RegisterCommand reg(70, [](CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1, 100000));
   sub->add_option("--mesh-views", a->meshViews, "Views per mesh (thesis: 20)")->capture_default_str()->check(CLI::Range(1, 100000));
   sub->add_option("--size", a->size, "Square image side in pixels (thesis: 512)")->capture_default_str()->check(CLI::Range(16, 8192));
-  sub->add_option("--methods", a->methods, "Comma-separated subset of eps-delta, shape-greedy, shape-hierarchical, contour (default: all)");
+  sub->add_option("--methods", a->methods, "Comma-separated subset of eps-delta, shape-greedy, shape-hierarchical, curvature-lines, contour (default: all but curvature-lines)");
   sub->add_option("--only", a->only, "Only models whose file name contains one of these (comma-separated)");
   sub->add_option("--image-views", a->imageViews, "Views whose images go to the HTML page")->capture_default_str()->check(CLI::Range(0, 100000));
   sub->add_flag("--no-images", a->noImages, "Write no images (numbers only)");

@@ -138,6 +138,7 @@ const char* tableCaption(int table) {
     case 2: return "Table 2: hybrid models from shape approximation with greedy clustering (§3.2.3.1)";
     case 3: return "Table 3: hybrid models from shape approximation with hierarchical distortion minimized clustering (§3.2.3.2)";
     case 5: return "Table 5: pure point and pure line-segment models from contour-plane extraction (§3.3)";
+    case 6: return "Lines of curvature traced on the MLS surface (§9.2, the thesis's future work: its cells blank)";
   }
   return "";
 }
@@ -197,8 +198,11 @@ void pointTable(std::string& md, const ExperimentResults& results, ExperimentMet
                     pair(fixed(sMse / n, 6), fixed(tAvg(tMse), 4)), pair(fixed(sNccm / n, 4), fixed(tAvg(tNccm), 4)),
                     pair(pct(sSpeed / n), pct(tAvg(tSpeed))), pair(pct(sRed / n), pct(tAvg(tRed))));
   const PublishedAverages p = published(table);
-  md += fmt::format("\nThesis averages over all its ten models: data reduction {}, speedup {}.\n\n", pct(p.reduction),
-                    pct(p.speedup));
+  if (std::isnan(p.reduction))
+    md += "\n";
+  else
+    md += fmt::format("\nThesis averages over all its ten models: data reduction {}, speedup {}.\n\n", pct(p.reduction),
+                      pct(p.speedup));
 }
 
 void clusterTable(std::string& md, const ExperimentResults& results) {
@@ -348,7 +352,8 @@ std::string experimentMarkdown(const ExperimentResults& results) {
       "Definitions: docs/metrics.md; protocol: docs/experiments.md.\n\n",
       o.views, o.meshViews, o.size, o.size, results.threads, results.totalSeconds, o.render.tailCoverage,
       o.render.tailCoverage == 0 ? " (off: the thesis's settings for Table 5; render's default is on)" : "");
-  for (ExperimentMethod m : {ExperimentMethod::EpsDelta, ExperimentMethod::ShapeGreedy, ExperimentMethod::ShapeHierarchical})
+  for (ExperimentMethod m : {ExperimentMethod::EpsDelta, ExperimentMethod::ShapeGreedy, ExperimentMethod::ShapeHierarchical,
+                             ExperimentMethod::CurvatureLines})
     pointTable(md, results, m);
   clusterTable(md, results);
   meshTable(md, results);

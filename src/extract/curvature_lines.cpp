@@ -425,10 +425,17 @@ HybridModel extractCurvatureLines(const HybridModel& cloud, const PointGeometry&
         nc -= nc.dot(d) / len2 * d;
         if (!(nc.norm() > 1e-9)) break;
         nc.normalize();
+        // §3.1's epsilon bounds the distance to the surface: the samples' offset from the strip's
+        // plane. Their sideways drift within the plane moves the strip over the surface, not off
+        // it; a tenth of the strip's half-width keeps its cover.
+        double lateralLimit = 1e300;
+        for (size_t k = a; k <= c; ++k) lateralLimit = std::min(lateralLimit, 0.05 * o.widthScale * tr.samples[ln.ids[k]].dsep);
         bool ok = true;
         for (size_t k = a + 1; k < c && ok; ++k) {
           const Vec3d r = tr.samples[ln.ids[k]].p - pa;
-          ok = (r - r.dot(d) / len2 * d).norm() <= st.epsilon;
+          const Vec3d off = r - r.dot(d) / len2 * d;
+          const double normal = std::abs(off.dot(nc));
+          ok = normal <= st.epsilon && (off - off.dot(nc) * nc).norm() <= lateralLimit;
         }
         for (size_t k = a; k <= c && ok; ++k) ok = tr.samples[ln.ids[k]].n.cast<double>().dot(nc) >= cosLimit;
         if (!ok) break;

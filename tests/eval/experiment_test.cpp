@@ -217,6 +217,15 @@ TEST(Experiment, RejectsAbsurdOptionsAndEmptyFolders) {
   }
   EXPECT_THROW(parseExperimentMethod("fastest"), Error);
   EXPECT_EQ(parseExperimentMethod("greedy"), ExperimentMethod::ShapeGreedy);
+  // Curvature lines (§9.2) run only when asked for, after the thesis's point methods.
+  EXPECT_EQ(parseExperimentMethod("curvature-lines"), ExperimentMethod::CurvatureLines);
+  ExperimentOptions d;
+  const std::vector<ExperimentMethod> def = d.effectiveMethods();
+  EXPECT_EQ(std::count(def.begin(), def.end(), ExperimentMethod::CurvatureLines), 0);
+  d.methods = {ExperimentMethod::Contour, ExperimentMethod::CurvatureLines, ExperimentMethod::EpsDelta};
+  EXPECT_EQ(d.effectiveMethods(), (std::vector<ExperimentMethod>{ExperimentMethod::EpsDelta, ExperimentMethod::CurvatureLines,
+                                                                 ExperimentMethod::Contour}));
+  EXPECT_EQ(thesisTableOf(ExperimentMethod::CurvatureLines), 6);
 }
 
 TEST(Experiment, ThesisModelsAndFigures) {

@@ -24,6 +24,7 @@
 #include "linesurf/core/progress.h"
 #include "linesurf/eval/image_metrics.h"
 #include "linesurf/extract/contour.h"
+#include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
@@ -31,16 +32,17 @@
 
 namespace linesurf {
 
-/// The extraction methods of the experiments. The first three apply to point clouds, Contour
-/// to meshes.
-enum class ExperimentMethod { EpsDelta, ShapeGreedy, ShapeHierarchical, Contour };
+/// The extraction methods of the experiments. All but Contour apply to point clouds, Contour to
+/// meshes. CurvatureLines (§9.2, the thesis's future work) runs only when asked for.
+enum class ExperimentMethod { EpsDelta, ShapeGreedy, ShapeHierarchical, CurvatureLines, Contour };
 
-/// "eps-delta", "shape-greedy", "shape-hierarchical", "contour".
+/// "eps-delta", "shape-greedy", "shape-hierarchical", "curvature-lines", "contour".
 const char* experimentMethodName(ExperimentMethod m);
 /// Inverse of experimentMethodName (also accepts "greedy", "hierarchical"); throws
 /// linesurf::Error (BadParameter) naming the accepted values otherwise.
 ExperimentMethod parseExperimentMethod(const std::string& name);
-/// The thesis table a method's results belong to: 1, 2, 3 or 5.
+/// The thesis table a method's results belong to: 1, 2, 3 or 5; 6 for curvature lines, a table in
+/// the layout of Tables 1-3 with the thesis's cells blank.
 int thesisTableOf(ExperimentMethod m);
 
 struct ExperimentOptions {
@@ -51,7 +53,8 @@ struct ExperimentOptions {
   int views = 50;       ///< point-cloud views per model (§7.2: 50), >= 1
   int meshViews = 20;   ///< mesh views per model (§7.3: 20), >= 1
   int size = 512;       ///< square image side in pixels (§7: 512), [16, 8192]
-  /// Methods to run; empty = all four. Point methods are skipped on meshes and vice versa.
+  /// Methods to run; empty = the thesis's four (not curvature lines). Point methods are skipped on
+  /// meshes and vice versa.
   std::vector<ExperimentMethod> methods;
   int imageViews = 3;   ///< views whose images are written for the HTML page, >= 0
   /// Only models whose file stem contains one of these substrings; empty = every model.
@@ -61,6 +64,7 @@ struct ExperimentOptions {
   EpsDeltaOptions epsDelta;       ///< §7.2 defaults: epsilon = 5% of the average spacing, delta 0.004
   ShapeApproxOptions shapeApprox; ///< §7.2 defaults: delta_n = 0.008; method is set per run
   ContourOptions contour;         ///< §3.3 defaults (d = mean edge length, seed 1)
+  CurvatureLineOptions curvatureLines;  ///< §9.2 defaults (epsilon = 5% of the average spacing, delta 0.004)
   /// Renderer defaults, the same for every image, except tail coverage: off (0), the thesis's
   /// setting, since it moves Table 5's line-vs-point comparison (render_options.h).
   RenderOptions render = [] {
