@@ -21,6 +21,7 @@
 #include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/pipeline/verify_job.h"
+#include "linesurf/render/drawing.h"
 #include "linesurf/render/renderer.h"
 #include "linesurf/surface/mls.h"
 #include "model.h"
@@ -500,6 +501,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
     optionSpecs(l, ViewOptions{});
     optionSpecs(l, RenderOptions{});
     optionSpecs(l, PrepareOptions{});
+    optionSpecs(l, DrawingOptions{});
     return l;
   }, "The keywords of render() from the option tables: [{keyword, field, default, help}].");
   m.def(
@@ -510,14 +512,18 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         ViewOptions v;
         RenderOptions o;
         PrepareOptions p;
+        DrawingOptions dr;
         applyOptions(kw, v);
         applyOptions(kw, o);
         applyOptions(kw, p);
+        applyOptions(kw, dr);
         rejectUnknown(kw);
         o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
         validate(o);
         validate(v);
         validate(p);
+        validate(dr);
+        const bool drawing = dr.style != DrawStyle::Splat;
 
         RenderResult r;
         // A str or PathLike naming a .lod file is a hierarchy; anything else goes to modelArg (so a
@@ -527,6 +533,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
           const std::string name = py::str(py::module_::import("os").attr("fspath")(model));
           isPath = name.size() >= 4 && name.compare(name.size() - 4, 4, ".lod") == 0;
         }
+        if (isPath && drawing) throwBadOption("style", "draws a model's own segments; it does not apply to a .lod hierarchy");
         if (isPath) {
           // A level-of-detail hierarchy (lod_build): the nodes chosen for the view within `budget`
           // splats (None: every leaf, the whole model's picture), as `linesurf render M.lod --budget`.
@@ -563,14 +570,25 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         if (!budget.is_none()) throwBadOption("budget", "needs a level-of-detail hierarchy (a .lod path; see lod_build)");
         ModelArg a = modelArg(model);
         if (a.model->empty()) throwBadOption("model", "holds no points and no segments");
+        if (drawing && a.model->segments.empty() && !dr.silhouettes)
+          throwBadOption("style", "the model has no segments and `silhouettes` is off: nothing to draw");
         {
           py::gil_scoped_release release;
           // What `linesurf render` does to a model before drawing it; a copy only when it changes it.
           const ModelFrame frame = normalizingFrame(a.model->bounds());
           if (!frame.identity()) toFrame(a.mutableCopy(), frame);
           if (needsPreparation(*a.model, p.radiusScale)) prepareForRendering(a.mutableCopy(), p);
-          Renderer renderer(*a.model, o);
-          r = renderer.render(viewCameras(renderer.sphere(), v, frame).front());
+          if (drawing) {  // as `linesurf render --style`: the strokes over the paper, the splat's buffers
+            const DrawingRenderer drawer(*a.model, o, dr);
+            Drawing d = drawer.render(viewCameras(drawer.sphere(), v, frame).front());
+            r = std::move(d.splat);
+            r.color = std::move(d.image);
+            if (!depth) r.depth.reset();
+            if (!normal) r.normal.reset();
+          } else {
+            Renderer renderer(*a.model, o);
+            r = renderer.render(viewCameras(renderer.sphere(), v, frame).front());
+          }
         }
         }
         py::array_t<uint8_t> color = rgba8(r.color);
@@ -597,8 +615,9 @@ Returns an (H, W, 4) uint8 RGBA array, or, when depth/alpha/normal is requested,
 (H, W, 3) 'normal' ((n+1)/2). Camera: an orbit view (azimuth, elevation, distance, zoom, fov,
 up_axis) auto-framed on the bounding sphere, or look-at (eye, target, up). Raw scans get normals
 and radii from the §6.1 geometry (k) on every call; prepare() once for repeated renders. The
-keywords are the fields of ViewOptions, RenderOptions and PrepareOptions (the option tables,
-pipeline/option_tables.h); size = (width, height). The GIL is released.)doc");
+keywords are the fields of ViewOptions, RenderOptions, PrepareOptions and DrawingOptions (the option
+tables, pipeline/option_tables.h); size = (width, height); style='lines' or 'hatch' draws the
+model's segments as ink strokes (§9.4, §9.5) instead of splatting them. The GIL is released.)doc");
 
   m.def(
       "lod_build",
