@@ -2,6 +2,7 @@
 // handling, determinism, the thesis's figures and the CLI.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>

@@ -128,13 +128,6 @@ Extraction extract(const HybridModel& cloud, CurvatureLineOptions o = {}) {
   r.geometry = computePointGeometry(cloud, go);
   o.provenance = true;
   r.model = extractCurvatureLines(cloud, r.geometry, o, &r.stats);
-  if (getenv("CL_DEBUG")) {
-    const CurvatureLineStats& s = r.stats;
-    fprintf(stderr, "n %zu seg %zu lines %zu closed %zu kept %zu red %.3f chainlen %.2f sp dsep %.2f sp steps %zu fail %zu stops sep %zu sing %zu bnd %zu cls %zu | field %.2f trace %.2f str %.2f cover %.2f\n",
-      s.inputPoints, s.segments, s.lines, s.closedLines, s.keptPoints, s.dataReduction(), s.meanChainLength()/s.averageSpacing,
-      s.meanSeparation/s.averageSpacing, s.steps, s.projectionFailures, s.stopSeparation, s.stopSingularity, s.stopBoundary, s.stopClosed,
-      s.fieldSeconds, s.traceSeconds, s.straightenSeconds, s.coverSeconds);
-  }
   return r;
 }
 
@@ -142,8 +135,9 @@ TEST(CurvatureLines, TorusSegmentsFollowTheParallels) {
   const Extraction r = extract(torusCloud(240, 60));
   ASSERT_GT(r.model.segments.size(), 50u);
   const AngleFigures f = angleFigures(r.model, torusTruth, true);
-  EXPECT_LE(f.quantile(0.5), 2.0);
-  EXPECT_LE(f.quantile(0.95), 6.0);
+  // Measured 0.5 and 1.7 degrees.
+  EXPECT_LE(f.quantile(0.5), 1.0);
+  EXPECT_LE(f.quantile(0.95), 3.0);
   EXPECT_LE(double(f.swaps), 0.02 * double(f.angles.size()));
   // The parallels are closed: most chains close on themselves.
   EXPECT_GT(r.stats.closedLines, r.stats.lines / 2);
@@ -162,15 +156,11 @@ TEST(CurvatureLines, TorusMaxFamilyFollowsTheMeridians) {
 
 TEST(CurvatureLines, EllipsoidAwayFromItsUmbilics) {
   CurvatureLineOptions o;
-  if (getenv("CL_ITER")) o.smoothingIterations = atoi(getenv("CL_ITER"));
-  if (getenv("CL_W")) o.fieldDataWeight = atof(getenv("CL_W"));
-  if (getenv("CL_N")) o.supportScale = atof(getenv("CL_N"));
   const Extraction r = extract(ellipsoidCloud(16000), o);
   ASSERT_GT(r.model.segments.size(), 50u);
   const double exclude = 2 * o.separation * r.stats.averageSpacing;
   const AngleFigures f = angleFigures(r.model, [&](const Vec3d& x) { return ellipsoidTruth(x, exclude); }, true);
   ASSERT_GT(f.angles.size(), r.model.segments.size() / 2);
-  if (getenv("CL_DEBUG")) fprintf(stderr, "angles %zu of %zu: median %.2f p95 %.2f swaps %zu\n", f.angles.size(), r.model.segments.size(), f.quantile(0.5), f.quantile(0.95), f.swaps);
   EXPECT_LE(f.quantile(0.5), 2.0);
   EXPECT_LE(f.quantile(0.95), 6.0);
   EXPECT_LE(double(f.swaps), 0.05 * double(f.angles.size()));
@@ -236,11 +226,13 @@ TEST(CurvatureLines, SameOutputForAnyThreadCount) {
 }
 
 TEST(CurvatureLines, NoisyTorusStaysClose) {
-  // Noise of 0.25 spacings along the normal: the directions hold within a few degrees.
+  // Noise of 0.25 spacings: the median may grow by 3 degrees over the clean torus's (measured
+  // 1.2 against 0.5).
   const Extraction r = extract(torusCloud(240, 60, 0.25f));
   const AngleFigures f = angleFigures(r.model, torusTruth, true);
   ASSERT_GT(f.angles.size(), 50u);
-  EXPECT_LE(f.quantile(0.5), 5.0);
+  EXPECT_LE(f.quantile(0.5), 0.5 + 3.0);
+  EXPECT_LE(double(f.swaps), 0.02 * double(f.angles.size()));
 }
 
 TEST(CurvatureLines, CloudsWithoutASurfaceKeepEveryPoint) {
