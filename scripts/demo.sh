@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The main job on the bundled models: geometry (§6.1), both point-cloud extractions (§3.1, §3.2),
-# contour extraction (§3.3), renderings of point and hybrid models from the same view (§4-§6.2)
+# The main job on the bundled models: geometry (§6.1), the point-cloud extractions (§3.1, §3.2,
+# the lines of curvature of §9.2), contour extraction (§3.3), renderings of point and hybrid models from the same view (§4-§6.2)
 # and their image comparison (§7).
 # Usage: scripts/demo.sh [path/to/linesurf] [output folder]
 set -euo pipefail
@@ -17,12 +17,15 @@ run normals "$DATA/igea_points.ply" -o "$OUT/igea_normals.ply" --curvature
 run extract eps-delta "$OUT/igea_normals.ply" -o "$OUT/igea_eps_delta.ply"
 run extract shape-approx "$OUT/igea_normals.ply" -o "$OUT/igea_shape_approx.ply" \
     --clustering greedy --clusters-out "$OUT/igea_clusters.ply"
+run extract curvature-lines "$OUT/igea_normals.ply" -o "$OUT/igea_curvature_lines.ply"
 run render "$OUT/igea_normals.ply" -o "$OUT/igea_points.png" "${VIEW[@]}"
 run render "$OUT/igea_eps_delta.ply" -o "$OUT/igea_eps_delta.png" "${VIEW[@]}"
 run render "$OUT/igea_shape_approx.ply" -o "$OUT/igea_shape_approx.png" "${VIEW[@]}"
 run render "$OUT/igea_clusters.ply" -o "$OUT/igea_clusters.png" "${VIEW[@]}"
+run render "$OUT/igea_curvature_lines.ply" -o "$OUT/igea_curvature_lines.png" "${VIEW[@]}"
 run compare "$OUT/igea_points.png" "$OUT/igea_eps_delta.png" --diff "$OUT/igea_eps_delta_diff.png"
 run compare "$OUT/igea_points.png" "$OUT/igea_shape_approx.png" --diff "$OUT/igea_shape_approx_diff.png"
+run compare "$OUT/igea_points.png" "$OUT/igea_curvature_lines.png"
 
 # Triangle mesh: Al, cut into a pure line-segment model and a pure point model.
 run extract contour "$DATA/al_mesh.ply" -o "$OUT/al_segments.ply" --seed 1
