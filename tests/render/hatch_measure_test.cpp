@@ -5,6 +5,7 @@
 //   against the target tone (the shaded render's luminance quantised to 8 levels), on pixels at
 //   least 2 sigma inside the silhouette: mean absolute error, and the mean drawn tone per level;
 //   coherence: two views 3 degrees apart, the visible length kept by stroke id.
+// Igea is drawn from its shape-approximation hybrid and from its lines of curvature (§9.2).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -161,6 +162,73 @@ void measure(const std::string& name, HybridModel model, const std::filesystem::
   std::ofstream(dir / (stem + ".svg")) << drawingSvg(da, o);
 }
 
+/// A 60-frame orbit, 3 degrees a frame: the visible length kept by id from frame to frame (mean
+/// and least over the 59 pairs), and the flicker: the blurred ink of frame t + 1 against frame t's
+/// at the same surface point (frame t + 1's pixels reprojected into t through its depth buffer;
+/// pixels whose point is hidden or off frame t are left out), mean absolute difference.
+void orbit(const std::string& name, HybridModel model, const Vec3f& up, const DrawingOptions& o, bool headlight) {
+  const ModelFrame frame = normalizingFrame(model.bounds());
+  toFrame(model, frame);
+  prepareForRendering(model, {});
+  RenderOptions ro;
+  ro.light.headlight = headlight;  // off: the light, so the tone, stays put on the surface
+  const DrawingRenderer r(model, ro, o);
+  ViewOptions v;
+  v.width = v.height = 512;
+  v.upAxis = up;
+  std::vector<Camera> cams;
+  for (int f = 0; f < 60; ++f, v.azimuth += 3) cams.push_back(viewCameras(r.sphere(), v, frame).front());
+  Drawing prev = r.render(cams[0]);
+  const float sigma = r.strokes().typicalSpacing() * cams[0].focalPixels() / (cams[0].eye() - r.sphere().center).norm();
+  auto blurred = [&](const Drawing& d) {
+    std::vector<float> ink(d.image.pixels.size());
+    for (size_t i = 0; i < ink.size(); ++i) ink[i] = luminance(d.image.pixels[i]);
+    return blur(ink, 512, 512, sigma);
+  };
+  std::vector<float> prevBlur = blurred(prev);
+  double keptSum = 0, keptMin = 1, flickerSum = 0;
+  for (int f = 1; f < 60; ++f) {
+    Drawing cur = r.render(cams[f]);
+    std::vector<float> curBlur = blurred(cur);
+    double drawn = 0, kept = 0;
+    for (size_t i = 0; i < cur.visibleLength.size(); ++i)
+      drawn += prev.visibleLength[i], kept += std::min(prev.visibleLength[i], cur.visibleLength[i]);
+    keptSum += kept / drawn, keptMin = std::min(keptMin, kept / drawn);
+    const Image& z = *cur.splat.depth;
+    const Image& zp = *prev.splat.depth;
+    const Mat4f worldFromCamera = cams[f].cameraFromWorld().inverse();
+    double diff = 0;
+    size_t n = 0;
+    for (int y = 0; y < 512; ++y)
+      for (int x = 0; x < 512; ++x) {
+        if (!(z.at(x, y).w() > 0.5f)) continue;
+        const Vec3f pc = cams[f].rayThrough(x + 0.5f, y + 0.5f) * z.at(x, y).x();
+        const Vec3f pw = (worldFromCamera * pc.homogeneous()).head<3>();
+        const Vec3f q = cams[f - 1].project(cams[f - 1].toCamera(pw));
+        const int qx = int(std::floor(q.x())), qy = int(std::floor(q.y()));
+        if (qx < 0 || qy < 0 || qx >= 512 || qy >= 512 || !(zp.at(qx, qy).w() > 0.5f)) continue;
+        if (std::abs(zp.at(qx, qy).x() - q.z()) > 0.01f * q.z()) continue;  // hidden in frame t
+        diff += std::abs(curBlur[size_t(y) * 512 + x] - prevBlur[size_t(qy) * 512 + qx]), ++n;
+      }
+    flickerSum += n ? diff / double(n) : 0;
+    prev = std::move(cur), prevBlur = std::move(curBlur);
+  }
+  std::printf("%s\n", fmt::format("| {} orbit, {} | length kept by id: mean {:.3f}, least {:.3f} | flicker {:.4f} (σ {:.2f} px) |",
+                                  name, headlight ? "headlight" : "world light", keptSum / 59, keptMin, flickerSum / 59, sigma).c_str());
+}
+
+TEST(DrawingMeasure, Orbit) {
+  if (!std::getenv("LINESURF_DRAWING_MEASURE")) GTEST_SKIP() << "set LINESURF_DRAWING_MEASURE to a folder to measure";
+  const std::filesystem::path dir(std::getenv("LINESURF_DRAWING_MEASURE"));
+  const DrawingOptions o{.style = DrawStyle::Hatch};
+  for (bool headlight : {true, false}) {
+    orbit("sphere", extractContour(shapes::sphereMesh(1, 5)), Vec3f(0, 1, 0), o, headlight);
+    orbit("torus", extractContour(torusMesh(1, 0.4f, 160, 64)), Vec3f(0, 0, 1), o, headlight);
+    if (std::filesystem::exists(dir / "igea_curvature_lines.ply"))
+      orbit("igea-curvature-lines", readModel(dir / "igea_curvature_lines.ply"), Vec3f(0, 1, 0), o, headlight);
+  }
+}
+
 TEST(DrawingMeasure, ToneAndCoherence) {
   const char* out = std::getenv("LINESURF_DRAWING_MEASURE");
   if (!out) GTEST_SKIP() << "set LINESURF_DRAWING_MEASURE to a folder to measure";
@@ -174,6 +242,13 @@ TEST(DrawingMeasure, ToneAndCoherence) {
                            igeaPath.string()).exitCode, 0);
   }
   const HybridModel igea = readModel(igeaPath);
+  // and its lines of curvature (§9.2), chains with shared endpoints over 95 % of the points
+  const auto linesPath = dir / "igea_curvature_lines.ply";
+  if (!std::filesystem::exists(linesPath)) {
+    ASSERT_EQ(test::runCli("-q extract curvature-lines " + (test::bundledData() / "igea_points.ply").string() + " -o " +
+                           linesPath.string()).exitCode, 0);
+  }
+  const HybridModel igeaLines = readModel(linesPath);
   const int sizes[] = {512, 1024};
   for (int size : sizes)
     for (float w : {1.25f, 2.0f}) {
@@ -181,6 +256,7 @@ TEST(DrawingMeasure, ToneAndCoherence) {
       measure("sphere", sphere, dir, Vec3f(0, 1, 0), size, o);
       measure("torus", torus, dir, Vec3f(0, 0, 1), size, o);
       measure("igea", igea, dir, Vec3f(0, 1, 0), size, o);
+      measure("igea-curvature-lines", igeaLines, dir, Vec3f(0, 1, 0), size, o);
       if (size == 512 && w == 1.25f) {  // the model's own strokes alone, then with in-between ones
         o.crossHatch = o.inBetween = false;
         for (int i = 0; i < 2; ++i, o.inBetween = true) {
