@@ -56,13 +56,15 @@ float projectedAcross(const Camera& cam, const Vec3f& midCam, const Vec3f& offse
 /// §9.4: whether the tone at a pixel asks for a piece of this family and priority. The main
 /// family draws the strokes of priority below f = D s / w (D the darkness, s the projected
 /// spacing, w the width: coverage w / s at full density), the in-between strokes those below
-/// f - 1; the cross family draws where the main family at full density (C1 = w / s1, twice that
-/// with the in-between strokes) is lighter than the tone, for the rest: 1 - D = (1 - C1)(1 - C2).
+/// f - 1; the cross family draws where the main family at full density (C1 = w / s1; with the
+/// in-between strokes 1 - (1 - w / s1)^2, as they fall independently of the strokes they copy
+/// where chains of two sides meet) is lighter than the tone, for the rest: 1 - D = (1 - C1)(1 - C2).
 bool toneWants(float darkness, float priority, uint8_t family, float ownSpacing, float mainSpacing, float w,
                bool inBetween) {
   if (family == StrokeSet::Stroke::kMain) return priority <= darkness * ownSpacing / w;
   if (family == StrokeSet::Stroke::kInBetween) return priority + 1 <= darkness * ownSpacing / w;
-  const float c1 = mainSpacing > 0 ? std::min(1.0f, (inBetween ? 2 : 1) * w / mainSpacing) : 1.0f;
+  const float one = mainSpacing > 0 ? std::min(1.0f, w / mainSpacing) : 1.0f;
+  const float c1 = inBetween ? 1 - (1 - one) * (1 - one) : one;
   if (darkness <= c1 || c1 >= 1) return false;
   const float c2 = (darkness - c1) / (1 - c1);
   return priority <= c2 * ownSpacing / w;
