@@ -21,7 +21,7 @@
 ///    family at full density is lighter than the tone; their priorities nest along each main
 ///    stroke (a van der Corput order), so a darker tone adds cross strokes between the drawn ones.
 ///  - Hidden strokes: the splat depth buffer of the same view (points and segments) is rendered
-///    first; a stroke sample is visible where its depth lies within depthTolerance x its
+///    first; a stroke sample is visible where its depth lies within strokeDepthTolerance x its
 ///    segment's radius of the visible surface's.
 ///  - Silhouettes (§9.5): boundaries between neighbouring pixels where the coverage changes, the
 ///    depth jumps, or n.v changes sign, chained into polylines and drawn as strokes.
