@@ -10,6 +10,7 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "ooc_cli.h"
+#include "linesurf/ooc/ooc_extract.h"
 #include "options_bind.h"
 
 namespace linesurf::cli {
@@ -19,15 +20,42 @@ struct CurvatureLineArgs {
   std::string input, output;
   GeometryOptions geometry = [] {
     GeometryOptions g;
-    // The lines need normals, neighbours and spacing; the MLS surface gives the curvature and
-    // the cover radius the kept points' radii.
+    // The lines need normals, the local Delaunay stars (the cross field's graph) and spacing; the
+    // MLS surface gives the curvature, the cover radius the kept points' radii.
     g.curvature = false;
-    g.delaunayNeighbours = false;
     return g;
   }();
   CurvatureLineOptions extract;
   bool ascii = false;
+  OutOfCoreFlags ooc;  // picked by itself when the input would not fit --max-mb
 };
+
+void runOutOfCore(CurvatureLineArgs& a, const std::string& why) {
+  Timer total;
+  if (a.ascii) throwBadParameter("--ascii", "the out-of-core path writes binary PLY");
+  MpiRun mpi;
+  if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
+  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
+  ooc::OocCurvatureLineReport r;
+  mpi.guard([&] { r = ooc::extractCurvatureLinesOutOfCore(a.input, a.output, o, a.extract); });
+  endProgress();
+  if (mpi.rank != 0) return;
+  const ooc::OocNormalsReport& g = r.geometry;
+  sayTiles(g, a.input);
+  say(fmt::format("tolerances   epsilon {:.6g}  delta {:.6g}", r.epsilon, a.extract.delta));
+  say(fmt::format("lines        {} chains ({} closed), mean length {:.2f} spacings; {} shorter than 2 d_sep, {} dropped; "
+                  "lines end at tile borders",
+                  r.lines, r.closedLines, r.lines && g.averageSpacing > 0 ? r.lineLength / double(r.lines) / g.averageSpacing : 0.0,
+                  r.shortLines, r.prunedLines));
+  say(fmt::format("output       {} points + {} segments -> {}", r.keptPoints, r.segments, a.output));
+  say(fmt::format("replaced     {} points ({:.2f}%)", r.replacedPoints,
+                  g.points ? 100.0 * double(r.replacedPoints) / double(g.points) : 0.0));
+  say(fmt::format("reduction    {:.2f}% (§7.2.2: 6 floats per point, 9 per segment)",
+                  g.points ? 100.0 * (1.0 - (6.0 * double(r.keptPoints) + 9.0 * double(r.segments)) / (6.0 * double(g.points))) : 0.0));
+  say(fmt::format("times        bbox {:.3f} s, partition {:.3f} s, normals tiles {:.3f} s, orientation {:.3f} s, "
+                  "curvature-lines tiles {:.3f} s, write {:.3f} s, total {:.3f} s",
+                  g.tBbox, g.tPartition, g.tTiles, g.tOrient, r.tExtract, r.tWrite, total.seconds()));
+}
 
 void run(CurvatureLineArgs& a) {
   Timer total;
@@ -35,13 +63,19 @@ void run(CurvatureLineArgs& a) {
   validate(o);  // before the (long) geometry stage
   validate(a.geometry);
   checkFiles({a.input}, {{"--output", a.output, {".ply"}}}, false);
+  if (const std::string why = a.ooc.requested(); !why.empty()) {
+    runOutOfCore(a, why);
+    return;
+  }
   {
-    // The MLS surface, the field and the samples: about three times what the normals hold.
-    const double need = 3.0 * inMemoryEstimate(a.input, a.geometry.k);
-    if (need > memoryBudgetBytes())
-      throwBadParameter("--max-mb", fmt::format("extract curvature-lines runs in memory and needs about {:.0f} MiB for {}; "
-                                                "give --max-mb {:.0f} or more",
-                                                need / (1024.0 * 1024.0), a.input, std::ceil(need / (1024.0 * 1024.0))));
+    // The MLS surface (its own neighbour search), the field and the samples: about twice what
+    // the normals hold.
+    const double need = 2.0 * inMemoryEstimate(a.input, a.geometry.k);
+    if (need > memoryBudgetBytes()) {
+      runOutOfCore(a, fmt::format("in memory it needs about {:.0f} MiB, more than --max-mb {:g}", need / (1024.0 * 1024.0),
+                                  globalOptions().maxMegabytes));
+      return;
+    }
   }
   CloudWithGeometry in = readCloudWithGeometry(a.input, a.geometry);
   const PointGeometry& geo = in.geometry;
@@ -87,6 +121,7 @@ RegisterCommand reg(34, [](CLI::App& app) {
   b.option("epsilon")->excludes(b.option("epsilonRelative"));
   bindGeometryOptions(sub, a->geometry);
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
+  bindOutOfCoreFlags(sub, a->ooc);
   sub->callback([a] { run(*a); });
 });
 

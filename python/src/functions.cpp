@@ -392,7 +392,7 @@ segments, points_kept, points_replaced, ...) and labels (N,) int64 cluster ids.)
         applyOptions(kw, o);
         applyOptions(kw, go, kExtractGeometry);
         rejectUnknown(kw);
-        go.curvature = go.delaunayNeighbours = false;  // the MLS surface gives the curvature
+        go.curvature = false;  // the MLS surface gives the curvature; the Delaunay stars are the field's graph
         validate(o);
         validate(go);
         ModelArg a = modelArg(model, "cloud");

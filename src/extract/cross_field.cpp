@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <span>
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/surface/mls.h"
@@ -59,42 +60,50 @@ CrossField computeCrossField(const HybridModel& cloud, const PointGeometry& g, c
   // then makes the field as parallel as the frames allow.
   for (size_t i = 0; i < n; ++i)
     if (std::abs(z[i]) < 1e-12) z[i] = 1e-6;
+  // The neighbour graph: the local Delaunay star where the geometry has it (the out-of-core
+  // tiles keep only that, so in memory and out of core smooth over the same graph), else the k
+  // nearest.
+  const bool knn = g.delaunayOffsets.size() != n + 1;
   const int k = g.k;
-  auto axisOf = [&](const std::vector<std::complex<double>>& zz, size_t j) {
-    const double theta = std::arg(zz[j]) / 4.0;
-    return Vec3f(float(std::cos(theta)) * e1[j] + float(std::sin(theta)) * e2[j]);
+  auto neighbours = [&](size_t i) -> std::span<const uint32_t> {
+    if (!knn) return g.delaunayOf(i);
+    std::span<const uint32_t> row(g.neighbours.data() + i * size_t(k), size_t(k));
+    size_t m = 0;
+    while (m < row.size() && row[m] != PointGeometry::kNoNeighbour) ++m;
+    return row.first(m);
   };
-  std::vector<Vec3f> axes(n);
-  for (int it = 0; it <= iterations; ++it) {
-    parallelFor(0, n, [&](size_t i) { axes[i] = axisOf(z, i); });
-    if (it == iterations) break;
+  // The connection: j's frame turned into i's by the angle phi_ij of e1_j projected onto i's
+  // plane (the frames are right-handed about consistently oriented normals), so a direction at
+  // theta in j's frame lies at theta + phi_ij in i's, and z_j seen from i is z_j exp(4 i phi_ij).
+  // Computed once; each iteration is then complex products only.
+  std::vector<uint32_t> offsets(n + 1, 0), adjacent;
+  for (size_t i = 0; i < n; ++i) offsets[i + 1] = offsets[i] + uint32_t(neighbours(i).size());
+  adjacent.resize(offsets[n]);
+  std::vector<std::complex<double>> connection(offsets[n]);
+  parallelFor(0, n, [&](size_t i) {
+    uint32_t e = offsets[i];
+    for (const uint32_t j : neighbours(i)) {
+      adjacent[e] = j;
+      connection[e++] = fourfold(e1[j], e1[i], e2[i]);
+    }
+  });
+  for (int it = 0; it < iterations; ++it) {
     parallelFor(0, n, [&](size_t i) {
       std::complex<double> sum = 0;
-      int count = 0;
-      for (int m = 0; m < k; ++m) {
-        const uint32_t j = g.neighbours[i * size_t(k) + size_t(m)];
-        if (j == PointGeometry::kNoNeighbour) break;
-        // j's cross seen in i's tangent plane: the projection of any of its axes gives the same
-        // fourfold angle up to the tilt between the planes.
-        sum += fourfold(axes[j], e1[i], e2[i]);
-        ++count;
-      }
-      std::complex<double> v = data[i] + (count ? sum / double(count) : 0.0);
+      for (uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) sum += z[adjacent[e]] * connection[e];
+      const uint32_t count = offsets[i + 1] - offsets[i];
+      const std::complex<double> v = data[i] + (count ? sum / double(count) : 0.0);
       next[i] = std::abs(v) > 1e-12 ? v / std::abs(v) : z[i];
     });
     std::swap(z, next);
   }
   parallelFor(0, n, [&](size_t i) {
-    f.axis[i] = axes[i];
+    const double theta = std::arg(z[i]) / 4.0;
+    f.axis[i] = float(std::cos(theta)) * e1[i] + float(std::sin(theta)) * e2[i];
     std::complex<double> sum = 0;
-    int count = 0;
-    for (int m = 0; m < k; ++m) {
-      const uint32_t j = g.neighbours[i * size_t(k) + size_t(m)];
-      if (j == PointGeometry::kNoNeighbour) break;
-      sum += fourfold(axes[j], e1[i], e2[i]) * std::conj(fourfold(axes[i], e1[i], e2[i]));
-      ++count;
-    }
-    f.coherence[i] = count ? float(std::abs(sum) / count) : 0.0f;
+    for (uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) sum += z[adjacent[e]] * connection[e];
+    const uint32_t count = offsets[i + 1] - offsets[i];
+    f.coherence[i] = count ? float(std::abs(sum * std::conj(z[i])) / count) : 0.0f;
   });
   return f;
 }

@@ -251,7 +251,8 @@ HybridModel extractCurvatureLines(const HybridModel& cloud, const PointGeometry&
                                   CurvatureLineStats* statsOut) {
   validate(o);
   const size_t n = cloud.points.size();
-  if (geo.size() != n || geo.spacing.size() != n || geo.neighbours.size() != n * size_t(geo.k))
+  const bool graph = geo.neighbours.size() == n * size_t(geo.k) || geo.delaunayOffsets.size() == n + 1;
+  if (geo.size() != n || geo.spacing.size() != n || geo.flags.size() != n || !graph)
     throwBadParameter("geometry", "does not match the cloud (computePointGeometry with normals, neighbours and spacing)");
   CurvatureLineStats st;
   st.inputPoints = n;
@@ -270,7 +271,7 @@ HybridModel extractCurvatureLines(const HybridModel& cloud, const PointGeometry&
       base.points[i].radius = !geo.coverRadius.empty() && geo.coverRadius[i] > 0 ? geo.coverRadius[i] : geo.spacing[i];
   }
   base.attributes.normals = base.attributes.radii = true;
-  base.comments.push_back(fmt::format("curvature-lines: epsilon={} delta={} separation={} family={}", st.epsilon, o.delta,
+  base.comments.push_back(fmt::format("curvature-lines: epsilon={:.9g} delta={:.9g} separation={:.9g} family={}", st.epsilon, o.delta,
                                       o.separation, o.family == CurvatureFamily::Min ? "min" : o.family == CurvatureFamily::Max ? "max" : "both"));
   auto allPoints = [&] {
     st.keptPoints = n;

@@ -123,7 +123,6 @@ struct Extraction {
 Extraction extract(const HybridModel& cloud, CurvatureLineOptions o = {}) {
   GeometryOptions go;
   go.curvature = false;
-  go.delaunayNeighbours = false;
   Extraction r;
   r.geometry = computePointGeometry(cloud, go);
   o.provenance = true;

@@ -1,5 +1,5 @@
-// The extractions out of core (ooc/ooc_extract.h), (ε,δ) and shape approximation, against the
-// in-memory extractions.
+// The extractions out of core (ooc/ooc_extract.h), (ε,δ), shape approximation and lines of
+// curvature, against the in-memory extractions.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "linesurf/core/parallel.h"
+#include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/io/model_io.h"
@@ -189,6 +190,39 @@ TEST(OocShapeApprox, TilesKeepEveryPointOnceAtAnyThreadCount) {
   EXPECT_TRUE(slurp(d / "h1.ply") == slurp(d / "h2.ply"));
   EXPECT_FALSE(slurp(d / "h1.ply") == slurp(d / "ooc.ply"));  // the clustering option reached the tiles
   expectEveryPointOnce(cloud, readModel(d / "h1.ply"));
+}
+
+
+// Lines of curvature (§9.2) out of core: with one tile the in-memory bytes (the field smooths
+// over the local Delaunay stars in both); with many, every point once and lines ending at the
+// tile borders.
+TEST(OocCurvatureLines, OneTileIsTheInMemoryResultAndTilesKeepEveryPointOnce) {
+  const fs::path d = test::scratchDir("ooc_curvature_lines");
+  ooc::SyntheticScanOptions s;
+  s.count = 30000;
+  s.seed = 5;
+  ooc::writeSyntheticScan(d / "scan.ply", s);
+  const std::string q = "'" + d.string() + "/";
+  ASSERT_EQ(test::runCli("-q normals " + q + "scan.ply' -o " + q + "n.ply'").exitCode, 0);
+  ASSERT_EQ(test::runCli("-q extract curvature-lines " + q + "n.ply' -o " + q + "mem.ply'").exitCode, 0);
+  const auto one = test::runCli("-q extract curvature-lines " + q + "n.ply' -o " + q + "one.ply' --out-of-core --tiles 1");
+  ASSERT_EQ(one.exitCode, 0) << one.out;
+  EXPECT_EQ(slurp(d / "one.ply"), slurp(d / "mem.ply"));
+
+  const HybridModel cloud = readModel(d / "n.ply");
+  ooc::OocNormalsOptions o;
+  o.workDir = d / "tiles";
+  o.minTiles = 8;
+  CurvatureLineOptions c;
+  c.provenance = true;
+  const ooc::OocCurvatureLineReport r = ooc::extractCurvatureLinesOutOfCore(d / "n.ply", d / "ooc.ply", o, c);
+  EXPECT_GE(r.geometry.tiles, 8u);
+  const HybridModel out = readModel(d / "ooc.ply");
+  ASSERT_EQ(out.points.size(), r.keptPoints);
+  ASSERT_EQ(out.segments.size(), r.segments);
+  EXPECT_GT(r.lines, 0u);
+  EXPECT_GT(r.replacedPoints, cloud.points.size() / 2);
+  expectEveryPointOnce(cloud, out);
 }
 
 }  // namespace

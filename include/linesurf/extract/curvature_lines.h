@@ -61,12 +61,14 @@ struct CurvatureLineOptions {
   double widthScale = 1.25;
   /// Integration step, in average spacings, (0, 4].
   double step = 0.5;
-  /// Lines shorter than this many d_sep are dropped (their points stay points), [0, 100].
-  double minLength = 1.0;
+  /// Lines shorter than this many d_sep are dropped (their points stay points), [0, 100]: at 2 no
+  /// short line is written (on Igea a quarter of the lines are shorter; dropping them costs 0.8%
+  /// of data reduction and no image quality).
+  double minLength = 2.0;
   /// Jacobi iterations of the cross-field smoothing, [0, 1000].
-  int smoothingIterations = 20;
+  int smoothingIterations = 40;
   /// Weight of the principal direction against the neighbours' average, per unit anisotropy, [0, 1e6].
-  double fieldDataWeight = 0.1;
+  double fieldDataWeight = 0.05;
   /// Support of the MLS surface, in spacings (MlsOptions::supportScale), [1.5, 10].
   float supportScale = 3.0f;
   CurvatureFamily family = CurvatureFamily::Min;
