@@ -229,6 +229,273 @@ struct Line {
   double dsep = 0;  ///< mean d_sep along it
 };
 
+/// §9.2 step 2: evenly spaced lines, placed one after another (Jobard & Lefer 1997).
+std::vector<Line> placeLines(Tracer& tr) {
+  const CurvatureLineOptions& o = tr.o;
+  const double s = tr.spacing;
+  std::vector<Line> lines;
+  double dsepSum = 0;
+  size_t dsepCount = 0;
+  // Tries a seed at x (projected onto the surface) along the cross axis nearest to `ref`.
+  auto trySeed = [&](const Vec3d& x, const Vec3f* ref, bool useMax, double dsepHint) -> bool {
+    // Most candidates lie near a line already: ask the grid before projecting.
+    if (tr.grid.near(tr.samples, x, ref ? *ref : Vec3f::Zero(), 0.9 * dsepHint, tr.sameFamilyOnly && ref, UINT32_MAX, 0, 0))
+      return false;
+    const MlsProjection pr = tr.surface.project(x);
+    if (!pr.converged) return false;
+    Vec3f r;
+    if (ref) {
+      r = *ref;
+    } else {
+      uint32_t idx;
+      float d2;
+      const float q[3] = {float(pr.point.x()), float(pr.point.y()), float(pr.point.z())};
+      tr.tree.knnSearch(q, 1, &idx, &d2);
+      r = tr.field.minDir[idx];
+      if (r == Vec3f::Zero()) r = tr.field.axis[idx];
+      if (useMax) r = tr.field.normal[idx].cross(r);
+    }
+    const FieldSample f = tr.fieldAt(pr.point, r);
+    if (!f.valid || f.nearest > 2.0f || f.coherence < 0.5f) return false;
+    const double dsep = tr.separationFor(f.across);
+    const uint32_t lineId = uint32_t(lines.size());
+    if (tr.grid.near(tr.samples, pr.point, f.dir, dsep, tr.sameFamilyOnly, UINT32_MAX, 0, 0)) return false;
+    Sample smp;
+    smp.p = pr.point;
+    smp.n = pr.normal.cast<float>();
+    if (smp.n.dot(f.normal) < 0) smp.n = -smp.n;
+    smp.t = f.dir, smp.dsep = float(dsep), smp.line = lineId, smp.arc = 0;
+    tr.samples.push_back(smp);
+    const uint32_t seed = uint32_t(tr.samples.size() - 1);
+    tr.grid.insert(tr.samples, seed);
+    std::vector<uint32_t> fwd{seed}, bwd{seed};
+    const Stop a = tr.trace(lineId, seed, f.dir, 1.0f, fwd);
+    tr.count(a);
+    Line ln;
+    if (a == Stop::Closed) {
+      ln.closed = true;
+      ++tr.st.stopClosed;  // both ends
+      ln.ids = fwd;
+      ln.ids.push_back(seed);  // bit-equal: the chain closes on its first endpoint
+    } else {
+      const Stop b = tr.trace(lineId, seed, Vec3f(-f.dir), -1.0f, bwd);
+      tr.count(b);
+      ln.ids.assign(bwd.rbegin(), bwd.rend());
+      ln.ids.insert(ln.ids.end(), fwd.begin() + 1, fwd.end());
+    }
+    for (size_t k = 1; k < ln.ids.size(); ++k) ln.length += (tr.samples[ln.ids[k]].p - tr.samples[ln.ids[k - 1]].p).norm();
+    double ds = 0;
+    for (uint32_t id : ln.ids) ds += tr.samples[id].dsep;
+    ln.dsep = ds / double(ln.ids.size());
+    dsepSum += dsep, ++dsepCount;
+    lines.push_back(std::move(ln));
+    return true;
+  };
+  const int passes = o.family == CurvatureFamily::Both ? 2 : 1;
+  size_t lastReport = 0;
+  for (int pass = 0; pass < passes; ++pass) {
+    const bool useMax = o.family == CurvatureFamily::Max || pass == 1;
+    size_t scan = 0;
+    size_t queued = lines.size();
+    while (true) {
+      // Seeds at d_sep either side of every accepted line, in the order the lines came.
+      while (queued < lines.size()) {
+        const Line ln = lines[queued++];
+        size_t stride = 1;
+        for (size_t k = 0; k < ln.ids.size(); k += stride) {
+          const Sample smp = tr.samples[ln.ids[k]];
+          stride = std::max<size_t>(1, size_t(std::lround(0.5 * smp.dsep / tr.step)));
+          const Vec3f side = smp.n.cross(smp.t).normalized();
+          for (float sgn : {1.0f, -1.0f}) trySeed(smp.p + double(sgn * smp.dsep) * side.cast<double>(), &smp.t, useMax, smp.dsep);
+        }
+        if (lines.size() - lastReport >= 64) {
+          lastReport = lines.size();
+          reportProgress(o.progress, "trace", std::min(0.99, double(tr.samples.size()) * tr.step * s / (double(tr.cloud.points.size()) * s * s)));
+        }
+      }
+      // A new component (or a gap no neighbour seed reached): the next input point, in order,
+      // at least d_sep from every line.
+      bool seeded = false;
+      for (; scan < tr.cloud.points.size() && !seeded; ++scan) {
+        if (tr.geo.flags[scan] & (kPointIsolated | kPointDuplicate)) continue;
+        seeded = trySeed(tr.cloud.points[scan].position.cast<double>(), nullptr, useMax, tr.dsepMin);
+      }
+      if (!seeded) break;
+    }
+  }
+  tr.st.meanSeparation = dsepCount ? dsepSum / double(dsepCount) : 0.0;
+  return lines;
+
+}
+
+/// §9.2 step 3: each line straightened into a chain of chords under §3.1's epsilon and delta.
+std::vector<Segment> straighten(const Tracer& tr, const std::vector<Line>& lines, CurvatureLineStats& st) {
+  const CurvatureLineOptions& o = tr.o;
+  std::vector<Segment> segments;
+  const float cosLimit = float(1.0 - o.delta);
+  for (size_t li = 0; li < lines.size(); ++li) {
+    const Line& ln = lines[li];
+    if (ln.ids.size() < 2 || ln.length < o.minLength * ln.dsep) {
+      ++st.prunedLines;
+      continue;
+    }
+    const size_t first = segments.size();
+    size_t a = 0;
+    const size_t m = ln.ids.size();
+    while (a + 1 < m) {
+      size_t b = a + 1;
+      // Extend b while the chord a..b+1 holds every sample between within epsilon and delta.
+      while (b + 1 < m && b + 1 - a <= 512) {
+        const size_t c = b + 1;
+        const Vec3d pa = tr.samples[ln.ids[a]].p, pc = tr.samples[ln.ids[c]].p;
+        const Vec3d d = pc - pa;
+        const double len2 = d.squaredNorm();
+        if (!(len2 > 0)) break;
+        Vec3f nsum = Vec3f::Zero();
+        for (size_t k = a; k <= c; ++k) nsum += tr.samples[ln.ids[k]].n;
+        Vec3d nc = nsum.cast<double>();
+        nc -= nc.dot(d) / len2 * d;
+        if (!(nc.norm() > 1e-9)) break;
+        nc.normalize();
+        // §3.1's epsilon bounds the distance to the surface: the samples' offset from the strip's
+        // plane. Their sideways drift within the plane moves the strip over the surface, not off
+        // it; a tenth of the strip's half-width keeps its cover.
+        double lateralLimit = 1e300;
+        for (size_t k = a; k <= c; ++k) lateralLimit = std::min(lateralLimit, 0.05 * o.widthScale * tr.samples[ln.ids[k]].dsep);
+        bool ok = true;
+        for (size_t k = a + 1; k < c && ok; ++k) {
+          const Vec3d r = tr.samples[ln.ids[k]].p - pa;
+          const Vec3d off = r - r.dot(d) / len2 * d;
+          const double normal = std::abs(off.dot(nc));
+          ok = normal <= st.epsilon && (off - off.dot(nc) * nc).norm() <= lateralLimit;
+        }
+        for (size_t k = a; k <= c && ok; ++k) ok = tr.samples[ln.ids[k]].n.cast<double>().dot(nc) >= cosLimit;
+        if (!ok) break;
+        b = c;
+      }
+      const Sample& sa = tr.samples[ln.ids[a]];
+      const Sample& sb = tr.samples[ln.ids[b]];
+      Segment sg;
+      sg.p0 = sa.p.cast<float>(), sg.p1 = sb.p.cast<float>();
+      // Consecutive chords share a sample, so their float endpoints are bit-equal.
+      Vec3f nsum = Vec3f::Zero();
+      float dsum = 0;
+      for (size_t k = a; k <= b; ++k) nsum += tr.samples[ln.ids[k]].n, dsum += tr.samples[ln.ids[k]].dsep;
+      sg.normal = nsum;
+      const Vec3f dir = sg.p1 - sg.p0;
+      if (dir.squaredNorm() > 0) sg.normal -= sg.normal.dot(dir) / dir.squaredNorm() * dir;
+      sg.normal.normalize();
+      if (!sg.normal.allFinite()) sg.normal = sa.n;
+      detail::setEndpointNormals(sg, sa.n, sb.n);
+      sg.radius = float(0.5 * o.widthScale * dsum / float(b - a + 1));
+      if (sg.p0 != sg.p1) {
+        segments.push_back(sg);
+      }
+      a = b;
+    }
+    if (segments.size() > first) {
+      ++st.lines;
+      st.closedLines += ln.closed;
+      st.lineLength += ln.length;
+      if (ln.length < 2 * ln.dsep) ++st.shortLines, st.shortLength += ln.length;
+    }
+  }
+
+  return segments;
+}
+
+/// §9.2 step 4: each input point within a strip goes to the nearest such strip (its index), the
+/// rest stay points (-1).
+std::vector<int64_t> coverPoints(const HybridModel& cloud, const MlsSurface& surface, const std::vector<Segment>& segments,
+                                 double epsilon) {
+  const size_t n = cloud.points.size();
+  Cloud mids;
+  double reach = 0;
+  for (const Segment& sg : segments) {
+    mids.pts.push_back(0.5f * (sg.p0 + sg.p1));
+    reach = std::max(reach, 0.5 * double(sg.length()) + double(sg.radius));
+  }
+  std::vector<int64_t> owner(n, -1);
+  if (!segments.empty()) {
+    Tree segTree(3, mids, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    segTree.buildIndex();
+    parallelFor(0, n, [&](size_t i) {
+      const Vec3d q = cloud.points[i].position.cast<double>();
+      thread_local std::vector<std::pair<uint32_t, float>> found;
+      found.clear();
+      const float qq[3] = {float(q.x()), float(q.y()), float(q.z())};
+      nanoflann::SearchParams params;
+      params.sorted = false;
+      segTree.radiusSearch(qq, float(reach * reach), found, params);
+      if (found.empty()) return;
+      const MlsSample fs = surface.evaluate(q, false);
+      const double off = fs.valid() ? std::abs(fs.value) : 0.0;
+      double best = 1e300;
+      int64_t bestSeg = -1;
+      for (const auto& [j, unused] : found) {
+        const Segment& sg = segments[j];
+        const Vec3d p0 = sg.p0.cast<double>(), d = (sg.p1 - sg.p0).cast<double>();
+        const double t = std::clamp((q - p0).dot(d) / d.squaredNorm(), 0.0, 1.0);
+        const Vec3d r = q - (p0 + t * d);
+        const Vec3d nn = sg.normal.cast<double>();
+        const double plane = std::abs(r.dot(nn));
+        const double lateral = (r - r.dot(nn) * nn).norm();
+        // The strip stands within epsilon of the surface along its chord and within epsilon
+        // across its width; the point adds its own distance to the surface.
+        if (lateral > double(sg.radius) || plane > 2 * epsilon + off) continue;
+        if (lateral < best || (lateral == best && int64_t(j) < bestSeg)) best = lateral, bestSeg = int64_t(j);
+      }
+      owner[i] = bestSeg;
+    });
+  }
+
+  return owner;
+}
+
+/// The output: kept points in input order, then the chains.
+HybridModel assemble(const HybridModel& cloud, const HybridModel& base, const std::vector<Segment>& segments,
+                     const std::vector<int64_t>& owner, bool provenance) {
+  const size_t n = cloud.points.size();
+  HybridModel out;
+  out.attributes = base.attributes;
+  out.attributes.endpointNormals = true;
+  out.comments = base.comments;
+  out.texture = cloud.texture;
+  for (const auto& [name, values] : base.pointProperties) out.pointProperties[name];
+  std::vector<Eigen::Vector4d> colorSum(segments.size(), Eigen::Vector4d::Zero());
+  std::vector<uint32_t> members(segments.size(), 0);
+  if (provenance) out.provenance.assign(segments.size(), {});
+  for (size_t i = 0; i < n; ++i) {
+    if (owner[i] < 0) {
+      out.points.push_back(base.points[i]);
+      for (const auto& [name, values] : base.pointProperties)
+        if (values.size() == n) out.pointProperties[name].push_back(values[i]);
+      if (base.attributes.shadingNormals && cloud.pointShadingNormals.size() == n)
+        out.pointShadingNormals.push_back(cloud.pointShadingNormals[i]);
+      continue;
+    }
+    const size_t j = size_t(owner[i]);
+    const Color& c = cloud.points[i].color;
+    colorSum[j] += c.cast<double>();
+    ++members[j];
+    if (provenance) out.provenance[j].push_back(uint32_t(i));
+  }
+  for (auto it = out.pointProperties.begin(); it != out.pointProperties.end();)
+    it = it->second.size() == out.points.size() ? std::next(it) : out.pointProperties.erase(it);
+  if (out.pointShadingNormals.size() != out.points.size()) {
+    out.pointShadingNormals.clear();
+    out.attributes.shadingNormals = false;
+  }
+  for (size_t j = 0; j < segments.size(); ++j) {
+    Segment sg = segments[j];
+    if (members[j] > 0) {
+      sg.color = (colorSum[j] / double(members[j])).cast<float>();
+    }
+    out.segments.push_back(sg);
+  }
+  return out;
+}
+
 }  // namespace
 
 void validate(const CurvatureLineOptions& o) {
@@ -303,255 +570,17 @@ HybridModel extractCurvatureLines(const HybridModel& cloud, const PointGeometry&
   const double s = geo.averageSpacing;
   Tracer tr{cloud, geo, field, surface, tree, o, st.epsilon, s, o.step * s, o.separation * s, o.minSeparation * s,
             o.family == CurvatureFamily::Both, {}, SampleGrid(o.separation * s), st};
-  std::vector<Line> lines;
-  double dsepSum = 0;
-  size_t dsepCount = 0;
-  // Tries a seed at x (projected onto the surface) along the cross axis nearest to `ref`.
-  auto trySeed = [&](const Vec3d& x, const Vec3f* ref, bool useMax, double dsepHint) -> bool {
-    // Most candidates lie near a line already: ask the grid before projecting.
-    if (tr.grid.near(tr.samples, x, ref ? *ref : Vec3f::Zero(), 0.9 * dsepHint, tr.sameFamilyOnly && ref, UINT32_MAX, 0, 0))
-      return false;
-    const MlsProjection pr = tr.surface.project(x);
-    if (!pr.converged) return false;
-    Vec3f r;
-    if (ref) {
-      r = *ref;
-    } else {
-      uint32_t idx;
-      float d2;
-      const float q[3] = {float(pr.point.x()), float(pr.point.y()), float(pr.point.z())};
-      tree.knnSearch(q, 1, &idx, &d2);
-      r = field.minDir[idx];
-      if (r == Vec3f::Zero()) r = field.axis[idx];
-      if (useMax) r = field.normal[idx].cross(r);
-    }
-    const FieldSample f = tr.fieldAt(pr.point, r);
-    if (!f.valid || f.nearest > 2.0f || f.coherence < 0.5f) return false;
-    const double dsep = tr.separationFor(f.across);
-    const uint32_t lineId = uint32_t(lines.size());
-    if (tr.grid.near(tr.samples, pr.point, f.dir, dsep, tr.sameFamilyOnly, UINT32_MAX, 0, 0)) return false;
-    Sample smp;
-    smp.p = pr.point;
-    smp.n = pr.normal.cast<float>();
-    if (smp.n.dot(f.normal) < 0) smp.n = -smp.n;
-    smp.t = f.dir, smp.dsep = float(dsep), smp.line = lineId, smp.arc = 0;
-    tr.samples.push_back(smp);
-    const uint32_t seed = uint32_t(tr.samples.size() - 1);
-    tr.grid.insert(tr.samples, seed);
-    std::vector<uint32_t> fwd{seed}, bwd{seed};
-    const Stop a = tr.trace(lineId, seed, f.dir, 1.0f, fwd);
-    tr.count(a);
-    Line ln;
-    if (a == Stop::Closed) {
-      ln.closed = true;
-      ++tr.st.stopClosed;  // both ends
-      ln.ids = fwd;
-      ln.ids.push_back(seed);  // bit-equal: the chain closes on its first endpoint
-    } else {
-      const Stop b = tr.trace(lineId, seed, Vec3f(-f.dir), -1.0f, bwd);
-      tr.count(b);
-      ln.ids.assign(bwd.rbegin(), bwd.rend());
-      ln.ids.insert(ln.ids.end(), fwd.begin() + 1, fwd.end());
-    }
-    for (size_t k = 1; k < ln.ids.size(); ++k) ln.length += (tr.samples[ln.ids[k]].p - tr.samples[ln.ids[k - 1]].p).norm();
-    double ds = 0;
-    for (uint32_t id : ln.ids) ds += tr.samples[id].dsep;
-    ln.dsep = ds / double(ln.ids.size());
-    dsepSum += dsep, ++dsepCount;
-    lines.push_back(std::move(ln));
-    return true;
-  };
-  const int passes = o.family == CurvatureFamily::Both ? 2 : 1;
-  size_t lastReport = 0;
-  for (int pass = 0; pass < passes; ++pass) {
-    const bool useMax = o.family == CurvatureFamily::Max || pass == 1;
-    size_t scan = 0;
-    size_t queued = lines.size();
-    while (true) {
-      // Seeds at d_sep either side of every accepted line, in the order the lines came.
-      while (queued < lines.size()) {
-        const Line ln = lines[queued++];
-        size_t stride = 1;
-        for (size_t k = 0; k < ln.ids.size(); k += stride) {
-          const Sample smp = tr.samples[ln.ids[k]];
-          stride = std::max<size_t>(1, size_t(std::lround(0.5 * smp.dsep / tr.step)));
-          const Vec3f side = smp.n.cross(smp.t).normalized();
-          for (float sgn : {1.0f, -1.0f}) trySeed(smp.p + double(sgn * smp.dsep) * side.cast<double>(), &smp.t, useMax, smp.dsep);
-        }
-        if (lines.size() - lastReport >= 64) {
-          lastReport = lines.size();
-          reportProgress(o.progress, "trace", std::min(0.99, double(tr.samples.size()) * tr.step * s / (double(n) * s * s)));
-        }
-      }
-      // A new component (or a gap no neighbour seed reached): the next input point, in order,
-      // at least d_sep from every line.
-      bool seeded = false;
-      for (; scan < n && !seeded; ++scan) {
-        if (geo.flags[scan] & (kPointIsolated | kPointDuplicate)) continue;
-        seeded = trySeed(cloud.points[scan].position.cast<double>(), nullptr, useMax, tr.dsepMin);
-      }
-      if (!seeded) break;
-    }
-  }
-  st.meanSeparation = dsepCount ? dsepSum / double(dsepCount) : 0.0;
+  const std::vector<Line> lines = placeLines(tr);
   st.traceSeconds = timer.seconds();
   reportProgress(o.progress, "trace", 1.0);
-
-  // Step 3: each line straightened into a chain of chords (§3.1's epsilon and delta).
   timer.reset();
-  std::vector<Segment> segments;
-  std::vector<uint32_t> segmentLine;
-  const float cosLimit = float(1.0 - o.delta);
-  for (size_t li = 0; li < lines.size(); ++li) {
-    const Line& ln = lines[li];
-    if (ln.ids.size() < 2 || ln.length < o.minLength * ln.dsep) {
-      ++st.prunedLines;
-      continue;
-    }
-    const size_t first = segments.size();
-    size_t a = 0;
-    const size_t m = ln.ids.size();
-    while (a + 1 < m) {
-      size_t b = a + 1;
-      // Extend b while the chord a..b+1 holds every sample between within epsilon and delta.
-      while (b + 1 < m && b + 1 - a <= 512) {
-        const size_t c = b + 1;
-        const Vec3d pa = tr.samples[ln.ids[a]].p, pc = tr.samples[ln.ids[c]].p;
-        const Vec3d d = pc - pa;
-        const double len2 = d.squaredNorm();
-        if (!(len2 > 0)) break;
-        Vec3f nsum = Vec3f::Zero();
-        for (size_t k = a; k <= c; ++k) nsum += tr.samples[ln.ids[k]].n;
-        Vec3d nc = nsum.cast<double>();
-        nc -= nc.dot(d) / len2 * d;
-        if (!(nc.norm() > 1e-9)) break;
-        nc.normalize();
-        // §3.1's epsilon bounds the distance to the surface: the samples' offset from the strip's
-        // plane. Their sideways drift within the plane moves the strip over the surface, not off
-        // it; a tenth of the strip's half-width keeps its cover.
-        double lateralLimit = 1e300;
-        for (size_t k = a; k <= c; ++k) lateralLimit = std::min(lateralLimit, 0.05 * o.widthScale * tr.samples[ln.ids[k]].dsep);
-        bool ok = true;
-        for (size_t k = a + 1; k < c && ok; ++k) {
-          const Vec3d r = tr.samples[ln.ids[k]].p - pa;
-          const Vec3d off = r - r.dot(d) / len2 * d;
-          const double normal = std::abs(off.dot(nc));
-          ok = normal <= st.epsilon && (off - off.dot(nc) * nc).norm() <= lateralLimit;
-        }
-        for (size_t k = a; k <= c && ok; ++k) ok = tr.samples[ln.ids[k]].n.cast<double>().dot(nc) >= cosLimit;
-        if (!ok) break;
-        b = c;
-      }
-      const Sample& sa = tr.samples[ln.ids[a]];
-      const Sample& sb = tr.samples[ln.ids[b]];
-      Segment sg;
-      sg.p0 = sa.p.cast<float>(), sg.p1 = sb.p.cast<float>();
-      // Consecutive chords share a sample, so their float endpoints are bit-equal.
-      Vec3f nsum = Vec3f::Zero();
-      float dsum = 0;
-      for (size_t k = a; k <= b; ++k) nsum += tr.samples[ln.ids[k]].n, dsum += tr.samples[ln.ids[k]].dsep;
-      sg.normal = nsum;
-      const Vec3f dir = sg.p1 - sg.p0;
-      if (dir.squaredNorm() > 0) sg.normal -= sg.normal.dot(dir) / dir.squaredNorm() * dir;
-      sg.normal.normalize();
-      if (!sg.normal.allFinite()) sg.normal = sa.n;
-      detail::setEndpointNormals(sg, sa.n, sb.n);
-      sg.radius = float(0.5 * o.widthScale * dsum / float(b - a + 1));
-      if (sg.p0 != sg.p1) {
-        segments.push_back(sg);
-        segmentLine.push_back(uint32_t(li));
-      }
-      a = b;
-    }
-    if (segments.size() > first) {
-      ++st.lines;
-      st.closedLines += ln.closed;
-      st.lineLength += ln.length;
-      if (ln.length < 2 * ln.dsep) ++st.shortLines, st.shortLength += ln.length;
-    }
-  }
+  const std::vector<Segment> segments = straighten(tr, lines, st);
   st.straightenSeconds = timer.seconds();
-
-  // Step 4: every input point within a strip is replaced by the nearest one; the rest are kept.
   timer.reset();
-  Cloud mids;
-  double reach = 0;
-  for (const Segment& sg : segments) {
-    mids.pts.push_back(0.5f * (sg.p0 + sg.p1));
-    reach = std::max(reach, 0.5 * double(sg.length()) + double(sg.radius));
-  }
-  std::vector<int64_t> owner(n, -1);
-  if (!segments.empty()) {
-    Tree segTree(3, mids, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-    segTree.buildIndex();
-    parallelFor(0, n, [&](size_t i) {
-      const Vec3d q = cloud.points[i].position.cast<double>();
-      thread_local std::vector<std::pair<uint32_t, float>> found;
-      found.clear();
-      const float qq[3] = {float(q.x()), float(q.y()), float(q.z())};
-      nanoflann::SearchParams params;
-      params.sorted = false;
-      segTree.radiusSearch(qq, float(reach * reach), found, params);
-      if (found.empty()) return;
-      const MlsSample fs = surface.evaluate(q, false);
-      const double off = fs.valid() ? std::abs(fs.value) : 0.0;
-      double best = 1e300;
-      int64_t bestSeg = -1;
-      for (const auto& [j, unused] : found) {
-        const Segment& sg = segments[j];
-        const Vec3d p0 = sg.p0.cast<double>(), d = (sg.p1 - sg.p0).cast<double>();
-        const double t = std::clamp((q - p0).dot(d) / d.squaredNorm(), 0.0, 1.0);
-        const Vec3d r = q - (p0 + t * d);
-        const Vec3d nn = sg.normal.cast<double>();
-        const double plane = std::abs(r.dot(nn));
-        const double lateral = (r - r.dot(nn) * nn).norm();
-        // The strip stands within epsilon of the surface along its chord and within epsilon
-        // across its width; the point adds its own distance to the surface.
-        if (lateral > double(sg.radius) || plane > 2 * st.epsilon + off) continue;
-        if (lateral < best || (lateral == best && int64_t(j) < bestSeg)) best = lateral, bestSeg = int64_t(j);
-      }
-      owner[i] = bestSeg;
-    });
-  }
+  const std::vector<int64_t> owner = coverPoints(cloud, surface, segments, st.epsilon);
   st.coverSeconds = timer.seconds();
-
-  HybridModel out;
-  out.attributes = base.attributes;
-  out.attributes.endpointNormals = true;
-  out.comments = base.comments;
-  out.texture = cloud.texture;
-  for (const auto& [name, values] : base.pointProperties) out.pointProperties[name];
-  std::vector<Eigen::Vector4d> colorSum(segments.size(), Eigen::Vector4d::Zero());
-  std::vector<uint32_t> members(segments.size(), 0);
-  if (o.provenance) out.provenance.assign(segments.size(), {});
-  for (size_t i = 0; i < n; ++i) {
-    if (owner[i] < 0) {
-      out.points.push_back(base.points[i]);
-      for (const auto& [name, values] : base.pointProperties)
-        if (values.size() == n) out.pointProperties[name].push_back(values[i]);
-      if (base.attributes.shadingNormals && cloud.pointShadingNormals.size() == n)
-        out.pointShadingNormals.push_back(cloud.pointShadingNormals[i]);
-      continue;
-    }
-    const size_t j = size_t(owner[i]);
-    const Color& c = cloud.points[i].color;
-    colorSum[j] += c.cast<double>();
-    ++members[j];
-    if (o.provenance) out.provenance[j].push_back(uint32_t(i));
-  }
-  for (auto it = out.pointProperties.begin(); it != out.pointProperties.end();)
-    it = it->second.size() == out.points.size() ? std::next(it) : out.pointProperties.erase(it);
-  if (out.pointShadingNormals.size() != out.points.size()) {
-    out.pointShadingNormals.clear();
-    out.attributes.shadingNormals = false;
-  }
-  for (size_t j = 0; j < segments.size(); ++j) {
-    Segment sg = segments[j];
-    if (members[j] > 0) {
-      sg.color = (colorSum[j] / double(members[j])).cast<float>();
-    }
-    out.segments.push_back(sg);
-  }
+  HybridModel out = assemble(cloud, base, segments, owner, o.provenance);
+  reportProgress(o.progress, "cover", 1.0);
   st.keptPoints = out.points.size();
   st.replacedPoints = n - st.keptPoints;
   st.segments = out.segments.size();
