@@ -40,6 +40,19 @@ def test_shape_approx_counts_equal_cli(cli, tmp_path, santa, method):
     assert got.labels.shape == (len(santa.points),) and got.labels.max() + 1 == got.stats["clusters"]
 
 
+def test_curvature_lines_equal_cli(cli, tmp_path, santa):
+    out = tmp_path / "cl.ply"
+    r = cli("-q", "extract", "curvature-lines", DATA / "santa_points.ply", "-o", out, "--family", "max")
+    assert r.returncode == 0, r.stderr
+    ref = linesurf.read(str(out))
+    got = linesurf.extract_curvature_lines(santa, family="max")
+    assert got.stats["segments"] == len(ref.segments) > 0
+    assert got.stats["kept_points"] == len(ref.points)
+    assert got.stats["lines"] > 0 and 0 < got.stats["data_reduction"] < got.stats["chain_data_reduction"]
+    np.testing.assert_array_equal(got.model.segments, ref.segments)
+    np.testing.assert_array_equal(got.model.points, ref.points)
+
+
 def test_contour_counts_equal_cli(cli, tmp_path):
     out = tmp_path / "c.ply"
     r = cli("-q", "extract", "contour", DATA / "al_mesh.ply", "-o", out, "--points-below", "0.01")
