@@ -71,7 +71,8 @@ class SampleGrid {
   }
 
  private:
-  int64_t coord(double v) const { return int64_t(std::floor(v / cell_)); }
+  // Clamped before the conversion (a float beyond int64 is undefined); cells wrap at 2^21 anyway.
+  int64_t coord(double v) const { return int64_t(std::clamp(std::floor(v / cell_), -1e15, 1e15)); }
   static uint64_t pack(int64_t x, int64_t y, int64_t z) {
     return (uint64_t(x & 0x1FFFFF) << 42) | (uint64_t(y & 0x1FFFFF) << 21) | uint64_t(z & 0x1FFFFF);
   }
