@@ -13,6 +13,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/io/atomic_file.h"
+#include "linesurf/io/las_io.h"
 #include "linesurf/io/image_io.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_io.h"
@@ -36,6 +37,7 @@ struct RenderArgs {
   DrawingOptions drawing;  ///< a style other than splat: strokes from the segments (§9.4, §9.5)
   std::string primitive = "auto";
   uint64_t budget = 0;  ///< splats a view from a .lod hierarchy (0 = every leaf)
+  const CLI::Option* upAxisFlag = nullptr;  ///< --up-axis: a file's recorded axis applies when not given
 };
 
 std::filesystem::path viewPath(const std::filesystem::path& out, int i) {
@@ -119,6 +121,12 @@ void run(RenderArgs& a) {
     model = readModel(a.model);
   }
   if (!triMesh && !lodFile && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
+  // LAS is z-up, and a file made from one says so: orbit about its axis unless told otherwise.
+  if (const std::string up = lodFile || triMesh ? std::string() : recordedUpAxis(model);
+      !up.empty() && a.upAxisFlag && a.upAxisFlag->count() == 0 && a.view.eye == std::nullopt && a.view.target == std::nullopt) {
+    a.view.upAxis = parseUpAxis(up);
+    say(fmt::format("{}: up axis {} (recorded in the file; --up-axis overrides)", a.model, up));
+  }
   // Scale-free (model_frame.h): a model far from unit size is rendered in a normalised frame;
   // camera positions and distances given in object units are mapped into it.
   const ModelFrame frame =
@@ -246,7 +254,7 @@ RegisterCommand reg(40, [](CLI::App& app) {
   sub->add_option("-o,--output", a->output, "Output PNG, or SVG with --style lines / hatch (with --views N: OUT_000.png ...)")->type_name("FILE")->capture_default_str();
   // Every flag of the camera, the preparation, the renderer and the mesh rasteriser comes from
   // the option tables (pipeline/option_tables.h).
-  bindOptions(sub, v);
+  a->upAxisFlag = bindOptions(sub, v).option("upAxis");
   bindOptions(sub, a->prepare);
   bindOptions(sub, o);
   bindOptions(sub, a->mesh);

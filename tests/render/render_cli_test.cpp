@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "linesurf/io/image_io.h"
+#include "linesurf/io/model_io.h"
 #include "test_util.h"
 
 namespace linesurf {
@@ -30,6 +31,28 @@ TEST(RenderCli, RawScanRendersWithSummaryAndBuffers) {
   EXPECT_GT(im.at(0, 0).head<3>().minCoeff(), 0.99f);
   EXPECT_TRUE(std::filesystem::exists(dir / "d.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "n.png"));
+}
+
+// A file that recorded its up axis (LAS is z-up; a PLY made from one keeps the comment) orbits
+// about it unless --up-axis is given.
+TEST(RenderCli, RecordedUpAxisIsTheDefault) {
+  auto dir = test::scratchDir("render_cli_up");
+  HybridModel santa = readModel(test::bundledData() / "santa_points.ply");
+  santa.comments.push_back("linesurf_up_axis z");
+  writeModel(dir / "santa_z.ply", santa);
+  auto run = [&](const std::string& in, const std::string& flags, const std::string& out) {
+    auto r = test::runCli("render '" + in + "' -o '" + (dir / out).string() + "' --size 64x48 " + flags);
+    EXPECT_EQ(r.exitCode, 0) << r.out;
+    return r.out;
+  };
+  const std::string orig = (test::bundledData() / "santa_points.ply").string(), tagged = (dir / "santa_z.ply").string();
+  EXPECT_NE(run(tagged, "", "a.png").find("up axis z (recorded in the file"), std::string::npos);
+  run(orig, "--up-axis z", "b.png");
+  EXPECT_EQ(run(tagged, "--up-axis y", "c.png").find("recorded in the file"), std::string::npos);
+  run(orig, "--up-axis y", "d.png");
+  EXPECT_EQ(readImage(dir / "a.png").pixels, readImage(dir / "b.png").pixels);
+  EXPECT_EQ(readImage(dir / "c.png").pixels, readImage(dir / "d.png").pixels);
+  EXPECT_NE(readImage(dir / "a.png").pixels, readImage(dir / "c.png").pixels);
 }
 
 TEST(RenderCli, ViewsAreNumbered) {

@@ -30,6 +30,15 @@ inline constexpr std::string_view kLasCrsComment = "linesurf_las_crs";
 /// is none: object-space point = origin + position. Throws BadParameter for a malformed comment.
 Vec3d modelOrigin(const HybridModel& model);
 
+/// The up axis a file recorded (the `linesurf_up_axis` comment: "z" for LAS), empty when none.
+inline std::string recordedUpAxis(const HybridModel& model) {
+  for (const std::string& c : model.comments)
+    if (c.size() > kUpAxisComment.size() + 1 && c.compare(0, kUpAxisComment.size(), kUpAxisComment) == 0 &&
+        c[kUpAxisComment.size()] == ' ')
+      return c.substr(kUpAxisComment.size() + 1);
+  return {};
+}
+
 struct LasWriteOptions {
   /// Point data format 0-10; -1: 7 (with RGB) when the model has colours, else 6. Formats 0-5
   /// hold a class of 0-31 only.
