@@ -2,7 +2,6 @@
 #include "linesurf/extract/curvature_lines.h"
 
 #include <fmt/format.h>
-#include <nanoflann.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -16,20 +15,13 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/surface/mls.h"
+#include "surface/detail/point_tree.h"
 
 namespace linesurf {
 namespace {
 
-struct Cloud {
-  std::vector<Vec3f> pts;
-  size_t kdtree_get_point_count() const { return pts.size(); }
-  float kdtree_get_pt(size_t i, size_t d) const { return pts[i][int(d)]; }
-  template <class B>
-  bool kdtree_get_bbox(B&) const {
-    return false;
-  }
-};
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud, 3, uint32_t>;
+using Cloud = detail::PointCloud;
+using Tree = detail::PointTree;
 
 /// A sample of a traced line: on the surface, with its normal and direction.
 struct Sample {

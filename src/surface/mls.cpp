@@ -1,14 +1,13 @@
 // The MLS surface of a point model (thesis §9.1; see surface/mls.h).
 #include "linesurf/surface/mls.h"
 
-#include <nanoflann.hpp>
-
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 
+#include "detail/point_tree.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/geometry/point_geometry.h"
@@ -16,16 +15,8 @@
 namespace linesurf {
 namespace {
 
-struct Cloud {
-  std::vector<Vec3f> pts;
-  size_t kdtree_get_point_count() const { return pts.size(); }
-  float kdtree_get_pt(size_t i, size_t d) const { return pts[i][int(d)]; }
-  template <class B>
-  bool kdtree_get_bbox(B&) const {
-    return false;
-  }
-};
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud, 3, uint32_t>;
+using Cloud = detail::PointCloud;
+using Tree = detail::PointTree;
 
 /// A polynomial in the segment parameter s, degree < 12 (the integrands reach degree 10).
 struct Poly {
