@@ -39,14 +39,12 @@ CrossField computeCrossField(const HybridModel& cloud, const PointGeometry& g, c
   f.minDir.assign(n, Vec3f::Zero());
   std::vector<Vec3f> e1(n), e2(n);
   std::vector<std::complex<double>> data(n), z(n), next(n);
-  std::vector<uint8_t> bad(n, 0);
   const double k0 = 0.002 / std::max(double(g.averageSpacing), 1e-30);
   parallelFor(0, n, [&](size_t i) {
     tangentFrame(g.normals[i], e1[i], e2[i]);
     const MlsCurvature c = surface.curvature(cloud.points[i].position.cast<double>());
     if (!c.valid || !std::isfinite(c.kMin) || !std::isfinite(c.kMax)) {
-      bad[i] = 1;
-      data[i] = 0;
+      data[i] = 0;  // no direction here: the neighbours' carry over
       return;
     }
     f.kMin[i] = float(c.kMin), f.kMax[i] = float(c.kMax);
@@ -54,7 +52,6 @@ CrossField computeCrossField(const HybridModel& cloud, const PointGeometry& g, c
     const double aniso = std::abs(c.kMax - c.kMin) / (std::abs(c.kMax) + std::abs(c.kMin) + k0);
     data[i] = dataWeight * aniso * fourfold(f.minDir[i], e1[i], e2[i]);
   });
-  for (size_t i = 0; i < n; ++i) f.invalid += bad[i];
   z = data;
   // Points with no direction at all (a plane) start from the frame's own axis: the smoothing
   // then makes the field as parallel as the frames allow.

@@ -5,8 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
-#include <numeric>
 #include <unordered_map>
 
 #include "detail/cross_field.h"
@@ -41,7 +39,7 @@ class SampleGrid {
   /// direction within 45 degrees of t's line when `sameFamily`). Samples of `line` count only when
   /// their arc length differs from `arc` by more than `selfGap`.
   bool near(const std::vector<Sample>& all, const Vec3d& x, const Vec3f& t, double radius, bool sameFamily,
-            uint32_t line, float arc, float selfGap, uint32_t* hitLine = nullptr, float* hitArc = nullptr) const {
+            uint32_t line, float arc, float selfGap) const {
     const int64_t cx = coord(x.x()), cy = coord(x.y()), cz = coord(x.z());
     const double r2 = radius * radius;
     for (int64_t dx = -1; dx <= 1; ++dx)
@@ -54,8 +52,6 @@ class SampleGrid {
             if ((q.p - x).squaredNorm() > r2) continue;
             if (q.line == line && std::abs(q.arc - arc) <= selfGap) continue;
             if (sameFamily && std::abs(q.t.dot(t)) < 0.7071f) continue;
-            if (hitLine) *hitLine = q.line;
-            if (hitArc) *hitArc = q.arc;
             return true;
           }
         }
@@ -145,6 +141,16 @@ struct Tracer {
     return std::max(d, dsepMin);
   }
 
+  /// Appends a sample on the surface at p (its normal `n` turned to the side of the field's
+  /// `side`) to the samples and the grid; its index.
+  uint32_t addSample(const Vec3d& p, Vec3f n, const Vec3f& side, const Vec3f& t, double dsep, uint32_t line, float arc) {
+    if (n.dot(side) < 0) n = -n;
+    samples.push_back({p, n, t, float(dsep), line, arc});
+    const uint32_t id = uint32_t(samples.size() - 1);
+    grid.insert(samples, id);
+    return id;
+  }
+
   /// Traces from the seed (already sample `seed`) in direction dir; appends samples.
   Stop trace(uint32_t line, uint32_t seed, Vec3f dir, float sign, std::vector<uint32_t>& out) {
     Vec3d x = samples[seed].p;
@@ -182,21 +188,9 @@ struct Tracer {
       arc += sign * float(moved.norm());
       const double dsep = separationFor(here.across);
       // Closing on itself: back at the seed after going round.
-      const Sample& s0 = samples[out.front()];
-      if (std::abs(arc) > 2 * dsep && (pr.point - s0.p).norm() < 1.5 * h && s0.line == line) return Stop::Closed;
+      if (std::abs(arc) > 2 * dsep && (pr.point - samples[out.front()].p).norm() < 1.5 * h) return Stop::Closed;
       if (grid.near(samples, pr.point, tNew, 0.5 * dsep, sameFamilyOnly, line, arc, float(3 * dsep))) return Stop::Separation;
-      Sample smp;
-      smp.p = pr.point;
-      smp.n = pr.normal.cast<float>();
-      if (smp.n.dot(here.normal) < 0) smp.n = -smp.n;
-      smp.t = tNew;
-      smp.dsep = float(dsep);
-      smp.line = line;
-      smp.arc = arc;
-      samples.push_back(smp);
-      const uint32_t id = uint32_t(samples.size() - 1);
-      grid.insert(samples, id);
-      out.push_back(id);
+      out.push_back(addSample(pr.point, pr.normal.cast<float>(), here.normal, tNew, dsep, line, arc));
       x = pr.point;
       t = tNew;
     }
@@ -253,14 +247,7 @@ std::vector<Line> placeLines(Tracer& tr) {
     const double dsep = tr.separationFor(f.across);
     const uint32_t lineId = uint32_t(lines.size());
     if (tr.grid.near(tr.samples, pr.point, f.dir, dsep, tr.sameFamilyOnly, UINT32_MAX, 0, 0)) return false;
-    Sample smp;
-    smp.p = pr.point;
-    smp.n = pr.normal.cast<float>();
-    if (smp.n.dot(f.normal) < 0) smp.n = -smp.n;
-    smp.t = f.dir, smp.dsep = float(dsep), smp.line = lineId, smp.arc = 0;
-    tr.samples.push_back(smp);
-    const uint32_t seed = uint32_t(tr.samples.size() - 1);
-    tr.grid.insert(tr.samples, seed);
+    const uint32_t seed = tr.addSample(pr.point, pr.normal.cast<float>(), f.normal, f.dir, dsep, lineId, 0);
     std::vector<uint32_t> fwd{seed}, bwd{seed};
     const Stop a = tr.trace(lineId, seed, f.dir, 1.0f, fwd);
     tr.count(a);
@@ -293,7 +280,7 @@ std::vector<Line> placeLines(Tracer& tr) {
     while (true) {
       // Seeds at d_sep either side of every accepted line, in the order the lines came.
       while (queued < lines.size()) {
-        const Line ln = lines[queued++];
+        const Line ln = lines[queued++];  // a copy: trySeed appends to `lines`
         size_t stride = 1;
         for (size_t k = 0; k < ln.ids.size(); k += stride) {
           const Sample smp = tr.samples[ln.ids[k]];

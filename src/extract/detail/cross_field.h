@@ -25,7 +25,6 @@ struct CrossField {
   /// The MLS principal curvatures and minimum-curvature direction at each point (unsmoothed).
   std::vector<float> kMin, kMax;
   std::vector<Vec3f> minDir;
-  size_t invalid = 0;  ///< points where the MLS curvature was undefined (no source, no gradient)
 };
 
 /// §9.2 step 1: the MLS curvature at every point, then `iterations` Jacobi steps of
