@@ -31,13 +31,21 @@ struct ViewArgs {
   // .lod hierarchies: served, not written
   int port = 8080;
   std::string host = "127.0.0.1";
+  bool allowRemote = false;
+  double headerSeconds = kDefaultHeaderSeconds;
   uint64_t budget = 1'000'000;
-  CLI::Option *portOption = nullptr, *hostOption = nullptr, *budgetOption = nullptr, *outputOption = nullptr;
+  CLI::Option *portOption = nullptr, *hostOption = nullptr, *budgetOption = nullptr, *outputOption = nullptr,
+              *allowRemoteOption = nullptr, *headerTimeoutOption = nullptr;
 };
 
 // A hierarchy: check its header and node table, then serve the page and the file until stopped.
 void serveHierarchy(const ViewArgs& a, ViewerPageOptions o) {
   if (a.outputOption->count()) throwBadOption("output", "does not apply to a .lod hierarchy (it is served, not written)");
+  // The server answers anyone who reaches it: another machine only when asked for in so many words.
+  if (!isLoopbackHost(a.host) && !a.allowRemote)
+    throwBadOption("host", a.host + " is not a loopback address (other machines could read the file); add --allow-remote to serve there");
+  if (!(a.headerSeconds >= 0.05 && a.headerSeconds <= 3600))
+    throwBadOption("header-timeout", fmt::format("expected seconds in [0.05, 3600], got {}", a.headerSeconds));
   const lod::LodFile file(a.model);  // throws BadInput naming the file when it is not a valid hierarchy
   std::error_code ec;
   const uint64_t bytes = std::filesystem::file_size(a.model, ec);
@@ -45,6 +53,7 @@ void serveHierarchy(const ViewArgs& a, ViewerPageOptions o) {
   LodServeOptions s;
   s.host = a.host;
   s.port = a.port;
+  s.headerSeconds = a.headerSeconds;
   s.file = a.model;
   s.page = lodViewerPage(file.header(), {.url = "/model.lod", .fileBytes = bytes, .budget = a.budget}, o);
   s.listening = [&](int port) {
@@ -75,7 +84,7 @@ void run(const ViewArgs& a) {
   std::string ext = std::filesystem::path(a.model).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (lod::isLodFile(a.model) || ext == ".lod") return serveHierarchy(a, o);
-  for (const CLI::Option* opt : {a.portOption, a.hostOption, a.budgetOption})
+  for (const CLI::Option* opt : {a.portOption, a.hostOption, a.allowRemoteOption, a.headerTimeoutOption, a.budgetOption})
     if (opt->count()) throwBadOption(opt->get_name().substr(2), "needs a level-of-detail hierarchy (linesurf lod build), got " + a.model);
   const std::string out =
       a.output.empty() ? std::filesystem::path(a.model).filename().replace_extension(".html").string() : a.output;
@@ -132,7 +141,17 @@ RegisterCommand reg(45, [](CLI::App& app) {
   a->portOption = sub->add_option("--port", a->port, "With a .lod hierarchy: the HTTP port to serve on (0: any free port)")
                       ->capture_default_str()
                       ->check(CLI::Range(0, 65535));
-  a->hostOption = sub->add_option("--host", a->host, "With a .lod hierarchy: the address to serve on")->capture_default_str();
+  a->hostOption = sub->add_option("--host", a->host,
+                                  "With a .lod hierarchy: the address to serve on (one that is not loopback needs "
+                                  "--allow-remote)")
+                      ->capture_default_str();
+  a->allowRemoteOption = sub->add_flag("--allow-remote", a->allowRemote,
+                                       "With a .lod hierarchy: let --host be an address other machines can reach");
+  a->headerTimeoutOption =
+      sub->add_option("--header-timeout", a->headerSeconds,
+                      "With a .lod hierarchy: seconds a request's header may take from its connection's accept "
+                      "before the connection is closed")
+          ->capture_default_str();
   a->budgetOption = sub->add_option("--budget", a->budget,
                                     "With a .lod hierarchy: the page's initial splat budget (its panel changes it)")
                         ->capture_default_str()
