@@ -65,6 +65,7 @@ struct MlsSurface::Impl {
   std::vector<Vec3d> normal;
   std::vector<double> area, h2;  ///< a_i, h_i^2
   double reach = 0;              ///< the largest h_i
+  double medianSpacing = 0;
   /// Queries search the tree with `narrowReach` (the 90th percentile of h_i) and the few
   /// sources of a larger support in `wide` with `reach`: exact, with a fraction of the
   /// candidates one search with the largest support would visit on an uneven sampling.
@@ -151,6 +152,7 @@ MlsSurface::MlsSurface(const HybridModel& model, const MlsOptions& options) : im
     medianSpacing = r[r.size() / 2];
   }
   if (!(medianSpacing > 0)) throwBadParameter("model", "has no spacing (coincident points)");
+  m.medianSpacing = medianSpacing;
   m.cloud.pts.resize(n);
   m.normal.resize(n), m.area.resize(n), m.h2.resize(n);
   for (size_t i = 0; i < n; ++i) {
@@ -210,6 +212,7 @@ MlsSurface::MlsSurface(MlsSurface&&) noexcept = default;
 MlsSurface& MlsSurface::operator=(MlsSurface&&) noexcept = default;
 
 size_t MlsSurface::sources() const { return impl_->cloud.pts.size() + impl_->segments.size(); }
+double MlsSurface::medianSpacing() const { return impl_->medianSpacing; }
 
 MlsSample MlsSurface::evaluate(const Vec3d& x, bool second) const {
   const Impl& m = *impl_;

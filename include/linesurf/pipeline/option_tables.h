@@ -20,6 +20,7 @@
 #include "linesurf/render/drawing.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/render_options.h"
+#include "linesurf/surface/mesh_extract.h"
 
 namespace linesurf {
 
@@ -305,6 +306,17 @@ void describeOptions(ContourOptions& o, V&& v) {
   v(o.pointsBelow, {"pointsBelow", "Turn segments shorter than LEN (object units) into points: hybrid model (0 = none)",
                     closedRange(0, 1e30)});
   v(o.allPoints, {"allPoints", "Turn every segment into ceil(l/d)+1 points: pure point model (Table 5)"});
+}
+
+/// A mesh of the MLS surface, thesis §9.1.
+template <typename V>
+void describeOptions(MeshOptions& o, V&& v) {
+  v.group("mesh", "Mesh of the MLS surface (§9.1)");
+  v(o.cellScale, {"cellScale", "Grid cell edge, median spacings", closedRange(0.25, 8), kUseCliPython, "--cell"});
+  v(o.mls.supportScale, {"supportScale", "MLS kernel support h, spacings", closedRange(1.5, 10)});
+  v(o.minWeight, {"minWeight", "Grid corners whose sources' weights sum below this x spacing^2 are out of reach",
+                  closedRange(0, 1)});
+  v(o.project, {"project", "One Newton step from each interpolated vertex onto the surface"});
 }
 
 }  // namespace linesurf

@@ -88,6 +88,9 @@ class MlsSurface {
   /// The support radius of the nearest source to x (the length tolerances are relative to).
   double localSupport(const Vec3d& x) const;
   size_t sources() const;
+  /// The median spacing of the points (of the strips' half-widths for a model of segments alone):
+  /// the unit of the supports, and of a mesh's cells (surface/mesh_extract.h).
+  double medianSpacing() const;
 
  private:
   struct Impl;
