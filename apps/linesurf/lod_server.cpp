@@ -28,8 +28,10 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <random>
 #include <set>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "linesurf/core/read_only_file.h"
@@ -353,6 +355,53 @@ bool fitRanges(httplib::Ranges& ranges, uint64_t size) {
   return !ranges.empty() && ranges.size() <= kMaxRequestRanges;
 }
 
+// Up to 1 MB of the file from `offset` into the response; false when the file ends early (it
+// shrank: the response ends short).
+bool sendFileBytes(const ReadOnlyFile& file, uint64_t offset, uint64_t length, httplib::DataSink& sink) {
+  std::vector<char> buf(size_t(std::min<uint64_t>(length, uint64_t(1) << 20)));
+  const size_t got = file.read(offset, buf.data(), buf.size());
+  return got > 0 && sink.write(buf.data(), got);
+}
+
+// Several ranges as one multipart/byteranges body (RFC 9110 §14.6), written here rather than by
+// cpp-httplib: 0.11 labels each part of a provider's content `Content-Range: bytes A-B/0` (it
+// takes the total from the in-memory body, empty here). The same framing as the library's.
+void serveParts(httplib::Response& res, std::shared_ptr<ReadOnlyFile> file, uint64_t size, httplib::Ranges ranges) {
+  struct Piece {
+    std::string text;  ///< framing, or empty for file bytes
+    uint64_t offset = 0, length = 0;  ///< in the file (bytes), or of the text
+  };
+  std::random_device rd;
+  const char* alnum = "0123456789abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ";
+  std::string boundary = "linesurf-parts-";
+  for (int i = 0; i < 24; ++i) boundary += alnum[rd() % 62];
+  auto pieces = std::make_shared<std::vector<Piece>>();
+  auto text = [&](std::string t) { pieces->push_back({t, 0, t.size()}); };
+  for (const auto& [first, last] : ranges) {
+    text(fmt::format("--{}\r\nContent-Type: application/octet-stream\r\nContent-Range: bytes {}-{}/{}\r\n\r\n",
+                     boundary, first, last, size));
+    pieces->push_back({"", uint64_t(first), uint64_t(last - first + 1)});
+    text("\r\n");
+  }
+  text(fmt::format("--{}--\r\n", boundary));
+  uint64_t total = 0;
+  for (const Piece& p : *pieces) total += p.length;
+  res.status = 206;
+  res.set_content_provider(size_t(total), "multipart/byteranges; boundary=" + boundary,
+                           [file, pieces](size_t offset, size_t, httplib::DataSink& sink) {
+                             uint64_t at = offset;
+                             for (const Piece& p : *pieces) {
+                               if (at >= p.length) {
+                                 at -= p.length;
+                                 continue;
+                               }
+                               if (!p.text.empty()) return sink.write(p.text.data() + at, size_t(p.length - at));
+                               return sendFileBytes(*file, p.offset + at, p.length - at, sink);
+                             }
+                             return false;
+                           });
+}
+
 }  // namespace
 
 void serveLod(const LodServeOptions& o) {
@@ -386,13 +435,11 @@ void serveLod(const LodServeOptions& o) {
       res.set_header("Content-Range", fmt::format("bytes */{}", size));
       return;
     }
-    // cpp-httplib applies the request's Range to the provider: it asks for [offset, offset + length).
+    if (ranges.size() > 1) return serveParts(res, file, size, std::exchange(ranges, {}));
+    // cpp-httplib applies one range to the provider: it asks for [offset, offset + length).
     res.set_content_provider(size, "application/octet-stream",
                              [file](size_t offset, size_t length, httplib::DataSink& sink) {
-                               std::vector<char> buf(std::min<size_t>(length, size_t(1) << 20));
-                               const size_t got = file->read(offset, buf.data(), buf.size());
-                               if (got == 0) return false;  // the file shrank: the response ends short
-                               return sink.write(buf.data(), got);
+                               return sendFileBytes(*file, offset, length, sink);
                              });
   });
 

@@ -217,10 +217,22 @@ TEST(LodServer, RangesAreMergedAndBoundedByTheFile) {
   EXPECT_EQ(headerValue(merged, "Content-Range"), "bytes 0-41/" + std::to_string(size));
   EXPECT_EQ(merged.body.size(), 42u);
 
-  const Response two = get(server.port(), "0-9,100-109");  // two parts of a multipart answer
+  const Response two = get(server.port(), "100-109,0-9");  // two parts of a multipart answer, in file order
   EXPECT_EQ(two.status, 206) << two.head;
   EXPECT_NE(headerValue(two, "Content-Type").find("multipart/byteranges"), std::string::npos) << two.head;
   EXPECT_LT(two.body.size(), 1000u);
+  EXPECT_EQ(headerValue(two, "Content-Length"), std::to_string(two.body.size()));
+  std::ifstream in(smallLod(), std::ios::binary);
+  std::string bytes(110, '\0');
+  in.read(bytes.data(), 110);
+  for (const auto& [first, part] : {std::pair{0, std::string("0-9")}, std::pair{100, std::string("100-109")}}) {
+    const std::string label = "Content-Range: bytes " + part + "/" + std::to_string(size) + "\r\n\r\n";
+    const size_t at = two.body.find(label);
+    ASSERT_NE(at, std::string::npos) << two.body;
+    EXPECT_EQ(two.body.substr(at + label.size(), 12), bytes.substr(size_t(first), 10) + "\r\n");
+  }
+  const std::string boundary = headerValue(two, "Content-Type").substr(headerValue(two, "Content-Type").find("boundary=") + 9);
+  EXPECT_EQ(two.body.substr(two.body.size() - boundary.size() - 6), "--" + boundary + "--\r\n");
 
   std::string sixteen, seventeen;
   for (int i = 0; i < 17; ++i) (i < 16 ? sixteen : seventeen) += (i ? "," : "") + std::to_string(2 * i) + "-" + std::to_string(2 * i);
