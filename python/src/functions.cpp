@@ -23,6 +23,7 @@
 #include "linesurf/pipeline/verify_job.h"
 #include "linesurf/render/drawing.h"
 #include "linesurf/render/renderer.h"
+#include "linesurf/surface/mesh_extract.h"
 #include "linesurf/surface/mls.h"
 #include "model.h"
 #include "options.h"
@@ -238,6 +239,35 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
       "Kolluri's IMLS; segments integrated along their length): points, normals (N, 3) float32 and\n"
       "converged (N,) bool (a failed projection: the last iterate); with curvature, k_min, k_max (N,) and\n"
       "min_curvature_dir, max_curvature_dir (N, 3) of the surface there. A SimpleNamespace.");
+  m.def("_mesh_options", [] {
+    py::list l;
+    optionSpecs(l, MeshOptions{});
+    return l;
+  });
+  m.def(
+      "_mesh",
+      [](py::object model, py::dict options, double max_mb) {
+        py::dict kw(options);
+        MeshOptions o;
+        applyOptions(kw, o);
+        rejectUnknown(kw);
+        validate(o);
+        const Budget budget(max_mb, "max_mb");
+        ModelArg a = modelArg(model);
+        TriangleMesh mesh;
+        {
+          py::gil_scoped_release release;
+          mesh = extractMesh(*a.model, o, nullptr, budget);
+        }
+        auto faces = newArray<int64_t>({py::ssize_t(mesh.faces.size()), 3});
+        for (size_t i = 0; i < mesh.faces.size(); ++i)
+          for (int k = 0; k < 3; ++k) faces.mutable_data()[3 * i + size_t(k)] = mesh.faces[i][size_t(k)];
+        return py::make_tuple(vec3Array(mesh.positions.size(), [&](size_t i) { return mesh.positions[i]; }), faces);
+      },
+      py::arg("model"), py::arg("options") = py::dict(), py::arg("max_mb") = 4096.0,
+      "A triangle mesh of the MLS surface of a model's oriented points and segments (thesis §9.1; =\n"
+      "`linesurf mesh`): (vertices (V, 3) float32, faces (F, 3) int64), wound so that normals face where the\n"
+      "model's do; open where the data is open. Refused (ValueError) when it needs more than max_mb MiB.");
   m.def(
       "normals",
       [](py::object model, int k, bool recompute_normals, bool orient_normals, float orientation_penalty,
