@@ -104,7 +104,13 @@ void run(LodArgs& a) {
   endProgress();
   Timer build;
   lod::BuildReport rep;
-  const std::string bytes = lod::buildLod(model, frame, a.build, &rep);
+  std::string bytes;
+  try {
+    bytes = lod::buildLod(model, frame, a.build, &rep);
+  } catch (const Error& e) {  // the library's model has no path: name the file
+    if (!e.path().empty()) throw;
+    throw Error(e.kind(), a.model, e.where(), e.reason());
+  }
   const double buildSeconds = build.seconds();
   writeFileAtomically(a.output, bytes);
   say(fmt::format("{}: {} points, {} segments; {} threads", a.model, model.points.size(), model.segments.size(),

@@ -89,7 +89,9 @@ void run(RenderArgs& a) {
     lodFile.emplace(a.model);
     // One view holds its splats as a model (~100 bytes each with the renderer's setup).
     const uint64_t all = lodFile->header().points + lodFile->header().segments;
-    const uint64_t drawn = a.budget > 0 ? std::min(a.budget, all) : all;
+    // The root is drawn even over the budget (when its block is in the file: else it is not held).
+    const uint64_t root = lodFile->inFile(0) ? lodFile->nodes()[0].count() : 0;
+    const uint64_t drawn = a.budget > 0 ? std::min(std::max(a.budget, root), all) : all;
     checkSize(a.budget > 0 ? "--budget" : a.model, 100.0 * double(drawn),
               fmt::format("drawing {} splats a view{}", drawn, a.budget > 0 ? "" : " (every leaf; set --budget)"));
   }

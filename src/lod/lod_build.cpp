@@ -210,7 +210,17 @@ Bounds3f unite(Bounds3f a, const Bounds3f& b) {
   return a;
 }
 
-HeaderJson headerJson(const HeaderFacts& f, const BuildOptions& options) {
+HeaderJson headerJson(const HeaderFacts& f, const BuildOptions& options, const std::string& path) {
+  {  // nothing is written that the readers refuse (a model far from its rendering frame)
+    LodHeader h;
+    h.frame = f.frame, h.sphere = f.sphere, h.maxRadius = f.maxRadius;
+    h.points = f.points, h.segments = f.segments, h.options = options;
+    try {
+      validateHeader(h, "");
+    } catch (const Error& e) {
+      throwBadInput(path, "", "cannot be stored as a hierarchy: " + e.reason());
+    }
+  }
   const Attributes& a = f.attributes;
   const std::string placeholder(16, '0');
   const Vec3f& c = f.sphere.center;
@@ -295,34 +305,6 @@ void validate(const BuildOptions& o) {
   if (o.grid < 2 || o.grid > 256) throwBadOption("grid", fmt::format("must be in [2, 256], got {}", o.grid));
 }
 
-uint64_t lodChecksum(const void* data, size_t bytes) {
-  // Four independent FNV-1a-like lanes over 64-bit words (a frame checks every block it draws,
-  // so the hash runs at memory speed rather than one multiply chain's latency), then combined.
-  constexpr uint64_t kBasis = 0xcbf29ce484222325ULL, kPrime = 0x100000001b3ULL;
-  const auto* p = static_cast<const unsigned char*>(data);
-  uint64_t h[4] = {kBasis, kBasis ^ 1, kBasis ^ 2, kBasis ^ 3};
-  auto mix = [](uint64_t x, uint64_t w) {
-    x = (x ^ w) * kPrime;
-    return x ^ (x >> 29);
-  };
-  size_t i = 0;
-  for (; i + 32 <= bytes; i += 32)
-    for (int l = 0; l < 4; ++l) {
-      uint64_t w;
-      std::memcpy(&w, p + i + 8 * l, 8);
-      h[l] = mix(h[l], w);
-    }
-  for (; i + 8 <= bytes; i += 8) {
-    uint64_t w;
-    std::memcpy(&w, p + i, 8);
-    h[0] = mix(h[0], w);
-  }
-  for (; i < bytes; ++i) h[1] = mix(h[1], p[i]);
-  uint64_t r = kBasis;
-  for (uint64_t x : h) r = mix(r, x);
-  return mix(r, uint64_t(bytes));
-}
-
 std::string buildLod(const HybridModel& model, const ModelFrame& frame, const BuildOptions& options,
                      BuildReport* report) {
   validate(options);
@@ -364,7 +346,7 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   facts.points = P, facts.segments = S, facts.nodes = count, facts.depth = depth;
   facts.frame = frame, facts.sphere = sphere, facts.maxRadius = maxRadius;
   facts.attributes = model.attributes, facts.shading = shading, facts.masses = masses != nullptr;
-  const HeaderJson hj = headerJson(facts, options);
+  const HeaderJson hj = headerJson(facts, options, "");
   const uint64_t tableOffset = format::kPreambleBytes + hj.json.size();
   const uint64_t blocksOffset = tableOffset + uint64_t(count) * format::kRecordBytes;
 

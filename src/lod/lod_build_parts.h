@@ -61,7 +61,8 @@ struct HeaderJson {
   std::string json;
   size_t idAt = 0;
 };
-HeaderJson headerJson(const HeaderFacts& facts, const BuildOptions& options);
+/// Throws Error (BadInput, naming `path`) for facts the readers would refuse (validateHeader).
+HeaderJson headerJson(const HeaderFacts& facts, const BuildOptions& options, const std::string& path);
 /// The hierarchy id from the blocks' checksums (id field zero) and the build parameters.
 uint64_t hierarchyId(std::vector<uint64_t> sums, const BuildOptions& options);
 /// The file's first bytes: preamble, JSON (id filled in) and node table.

@@ -1,185 +1,19 @@
-// Reading a level-of-detail hierarchy, choosing its nodes for a view and rendering them with a
-// splat budget (include/linesurf/lod/lod.h; the §6.2 pipeline through the public Renderer).
+// Choosing a level-of-detail hierarchy's nodes for a view, assembling them and rendering them
+// with a splat budget (include/linesurf/lod/lod.h; the §6.2 pipeline through the public
+// Renderer). The file itself is read and validated in lod_file.cpp.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <nlohmann/json.hpp>
-#include <memory>
 #include <queue>
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/core/read_only_file.h"
 #include "linesurf/core/timer.h"
-#include "linesurf/io/atomic_file.h"
 #include "linesurf/lod/lod.h"
 #include "lod_format.h"
 
 namespace linesurf::lod {
-namespace {
-
-Vec3f vec3(const nlohmann::json& j) { return Vec3f(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()); }
-
-}  // namespace
-
-bool isLodFile(const std::filesystem::path& path) {
-  // Only a regular file can be a hierarchy: opening a FIFO or a device to sniff its magic would
-  // block or read for ever; the model readers report those.
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return false;
-  ReadOnlyFile f(path);
-  if (!f.isOpen()) return false;
-  char m[8];
-  return f.read(0, m, 8) == 8 && std::memcmp(m, format::kMagic, 8) == 0;
-}
-
-LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
-  noteInput(path);
-  const std::string ps = path.string();
-  ReadOnlyFile f(path);
-  if (!f.isOpen()) throwBadInput(ps, "", "cannot open the file");
-  std::error_code ec;
-  fileSize_ = std::filesystem::file_size(path, ec);
-  if (ec) throwBadInput(ps, "", "cannot read the file size");
-  char pre[format::kPreambleBytes];
-  if (f.read(0, pre, sizeof pre) != sizeof pre || std::memcmp(pre, format::kMagic, 8) != 0)
-    throwBadInput(ps, "header", "not a linesurf level-of-detail hierarchy (no LINESLOD magic)");
-  if (uint32_t v = format::get<uint32_t>(pre + 8); v != format::kVersion)
-    throwBadInput(ps, "header", fmt::format("version {} (this linesurf reads version {})", v, format::kVersion));
-  const uint32_t jsonBytes = format::get<uint32_t>(pre + 12);
-  header_.hierarchyId = format::get<uint64_t>(pre + 16);
-  const uint64_t count = format::get<uint64_t>(pre + 24);
-  const uint64_t tableOffset = format::kPreambleBytes + uint64_t(jsonBytes);
-  if (count == 0 || count > fileSize_ / format::kRecordBytes || tableOffset + count * format::kRecordBytes > fileSize_)
-    throwBadInput(ps, "header", fmt::format("truncated: the header and the table of {} nodes need more than the file's {} bytes",
-                                            count, fileSize_));
-  std::string js(jsonBytes, '\0');
-  f.read(format::kPreambleBytes, js.data(), jsonBytes);
-  try {
-    const auto j = nlohmann::json::parse(js);
-    if (j.at("format") != "linesurf-lod") throwBadInput(ps, "header", "format is not linesurf-lod");
-    if (j.at("hierarchy").get<std::string>() != fmt::format("{:016x}", header_.hierarchyId))
-      throwBadInput(ps, "header", "the JSON header names another hierarchy than the preamble");
-    if (j.at("nodes").get<uint64_t>() != count) throwBadInput(ps, "header", "node counts of the preamble and the JSON differ");
-    const auto& fr = j.at("frame");
-    header_.frame.centre = Vec3d(fr.at("centre").at(0).get<double>(), fr.at("centre").at(1).get<double>(),
-                                 fr.at("centre").at(2).get<double>());
-    header_.frame.scale = fr.at("scale").get<double>();
-    header_.sphere.center = vec3(j.at("sphere").at("center"));
-    header_.sphere.radius = j.at("sphere").at("radius").get<float>();
-    header_.maxRadius = j.at("maxRadius").get<float>();
-    const auto& a = j.at("attributes");
-    header_.attributes.normals = a.at("normals");
-    header_.attributes.colors = a.at("colors");
-    header_.attributes.radii = a.at("radii");
-    header_.attributes.texcoords = a.at("texcoords");
-    header_.attributes.endpointNormals = a.at("endpointNormals");
-    header_.attributes.shadingNormals = a.at("shadingNormals");
-    header_.pointMasses = j.at("pointMasses");
-    header_.points = j.at("points");
-    header_.segments = j.at("segments");
-    header_.options.leafSize = j.at("leafSize");
-    header_.options.grid = j.at("grid");
-  } catch (const nlohmann::json::exception& e) {
-    throwBadInput(ps, "header", std::string("invalid JSON header: ") + e.what());
-  }
-  std::string table(count * format::kRecordBytes, '\0');
-  f.read(tableOffset, table.data(), table.size());
-  nodes_.resize(count);
-  uint64_t leafPrimitives = 0;
-  for (uint64_t i = 0; i < count; ++i) {
-    const char* r = table.data() + i * format::kRecordBytes;
-    NodeInfo& n = nodes_[i];
-    const std::string where = fmt::format("node {}", i);
-    if (format::get<uint64_t>(r) != header_.hierarchyId)
-      throwBadInput(ps, where, "its table record belongs to another hierarchy; refused");
-    n.offset = format::get<uint64_t>(r + 8);
-    n.size = format::get<uint64_t>(r + 16);
-    n.checksum = format::get<uint64_t>(r + 24);
-    n.cubeMin = format::getVec(r + 32);
-    n.side = format::get<float>(r + 44);
-    n.boundsMin = format::getVec(r + 48);
-    n.boundsMax = format::getVec(r + 60);
-    if (!n.boundsMin.allFinite() || !n.boundsMax.allFinite() || (n.boundsMin.array() > n.boundsMax.array()).any())
-      throwBadInput(ps, where, "invalid bounds in the node table");
-    n.points = format::get<uint32_t>(r + 72);
-    n.segments = format::get<uint32_t>(r + 76);
-    n.firstChild = format::get<uint32_t>(r + 80);
-    n.childCount = uint8_t(r[84]);
-    n.level = uint8_t(r[85]);
-    n.leaf = r[86] != 0;
-    // Children lie after their parent (breadth first), so the tree has no cycles.
-    if (n.leaf != (n.childCount == 0) || n.childCount > 8 ||
-        (!n.leaf && (n.firstChild <= i || uint64_t(n.firstChild) + n.childCount > count)))
-      throwBadInput(ps, where, "invalid tree links in the node table");
-    if (n.size != format::kBlockHeaderBytes + format::kPointBytes * uint64_t(n.points) +
-                      format::kSegmentBytes * uint64_t(n.segments))
-      throwBadInput(ps, where, "block size does not match its point and segment counts");
-    if (n.leaf) leafPrimitives += n.count();
-  }
-  if (leafPrimitives != header_.points + header_.segments)
-    throwBadInput(ps, "node table", fmt::format("the leaves hold {} primitives, the header says {}", leafPrimitives,
-                                                header_.points + header_.segments));
-}
-
-void LodFile::readBlock(uint32_t i, std::vector<char>& buf) const {
-  const std::string ps = path_.string(), where = fmt::format("node {}", i);
-  if (i >= nodes_.size()) throwBadInput(ps, where, "no such node");
-  const NodeInfo& n = nodes_[i];
-  if (n.offset + n.size > fileSize_)
-    throwBadInput(ps, where, fmt::format("missing or truncated: its block [{}, {}) lies past the file's end ({} bytes)",
-                                         n.offset, n.offset + n.size, fileSize_));
-  if (buf.size() < n.size) buf.resize(n.size);
-  ReadOnlyFile f(path_);
-  if (!f.isOpen() || f.read(n.offset, buf.data(), n.size) != n.size)
-    throwBadInput(ps, where, "missing or truncated: its block cannot be read in full");
-  const char* p = buf.data();
-  if (std::memcmp(p, format::kBlockMagic, 8) != 0) throwBadInput(ps, where, "its block is not a node block");
-  if (uint64_t id = format::get<uint64_t>(p + 8); id != header_.hierarchyId)
-    throwBadInput(ps, where, fmt::format("its block belongs to another hierarchy ({:016x}, this one is {:016x}); refused",
-                                         id, header_.hierarchyId));
-  if (format::get<uint32_t>(p + 16) != i || format::get<uint32_t>(p + 20) != n.points ||
-      format::get<uint32_t>(p + 24) != n.segments)
-    throwBadInput(ps, where, "its block holds another node");
-  if (lodChecksum(p, n.size) != n.checksum) throwBadInput(ps, where, "checksum mismatch (corrupt block)");
-  // Indices in range (originals) or none (representatives), masses valid: checked before any
-  // index is used to place a primitive.
-  const char* q = p + format::kBlockHeaderBytes;
-  for (uint32_t k = 0; k < n.points; ++k, q += format::kPointBytes) {
-    const uint32_t idx = format::get<uint32_t>(q + 60);
-    if (!(n.leaf ? idx < header_.points : idx == kNoIndex) || !validPointMass(format::get<float>(q + 56)))
-      throwBadInput(ps, where, fmt::format("point {}: invalid index or mass", k));
-  }
-  for (uint32_t k = 0; k < n.segments; ++k, q += format::kSegmentBytes) {
-    const uint32_t idx = format::get<uint32_t>(q + 96);
-    if (!(n.leaf ? idx < header_.segments : idx == kNoIndex))
-      throwBadInput(ps, where, fmt::format("segment {}: invalid index", k));
-  }
-}
-
-NodeData LodFile::readNode(uint32_t i) const {
-  std::vector<char> buf;
-  readBlock(i, buf);
-  const NodeInfo& n = nodes_[i];
-  NodeData d;
-  const bool shading = header_.attributes.shadingNormals;
-  d.points.resize(n.points);
-  d.masses.resize(n.points);
-  d.pointIndex.resize(n.points);
-  if (shading) d.shadingNormals.resize(n.points);
-  const char* p = buf.data() + format::kBlockHeaderBytes;
-  for (uint32_t k = 0; k < n.points; ++k, p += format::kPointBytes) {
-    Vec3f sn;
-    format::getPoint(p, d.points[k], sn, d.masses[k], d.pointIndex[k]);
-    if (shading) d.shadingNormals[k] = sn;
-  }
-  d.segments.resize(n.segments);
-  d.segmentIndex.resize(n.segments);
-  for (uint32_t k = 0; k < n.segments; ++k, p += format::kSegmentBytes) format::getSegment(p, d.segments[k], d.segmentIndex[k]);
-  return d;
-}
-
 Selection selectNodes(const LodFile& file, const Camera& camera, uint64_t budget) {
   const auto& nodes = file.nodes();
   const LodHeader& h = file.header();
@@ -244,18 +78,26 @@ Assembled assemble(const LodFile& file, const Selection& selection, float radius
   // representatives in node order. When every leaf is drawn the originals are placed by their
   // model index, so the model drawn is today's model; otherwise they keep node order
   // (deterministic, and no sort in the frame). Blocks are decoded straight into place.
+  // A node whose block lies past the file's end gets no place, and the originals are placed by
+  // index only when every leaf's block is in the file: no count sizes memory beyond the bytes
+  // the file holds (its blocks do not overlap: validateHierarchy).
   uint64_t leafPoints = 0, leafSegments = 0, np = 0, ns = 0;
-  bool reps = false;
+  bool reps = false, leafPastEnd = false;
   for (uint32_t i : selection.nodes) {
+    if (!file.inFile(i)) {
+      leafPastEnd |= nodes[i].leaf;
+      continue;
+    }
     np += nodes[i].points, ns += nodes[i].segments;
     if (nodes[i].leaf) leafPoints += nodes[i].points, leafSegments += nodes[i].segments;
     else reps = true;
   }
-  const bool byIndex = leafPoints == h.points && leafSegments == h.segments;
+  const bool byIndex = !leafPastEnd && leafPoints == h.points && leafSegments == h.segments;
   std::vector<uint64_t> pointAt(n), segmentAt(n);
   uint64_t pl = 0, sl = 0, pr = leafPoints, sr = leafSegments;
   for (size_t k = 0; k < n; ++k) {
     const NodeInfo& nd = nodes[selection.nodes[k]];
+    if (!file.inFile(selection.nodes[k])) continue;
     if (nd.leaf) pointAt[k] = pl, segmentAt[k] = sl, pl += nd.points, sl += nd.segments;
     else pointAt[k] = pr, segmentAt[k] = sr, pr += nd.points, sr += nd.segments;
   }

@@ -373,7 +373,7 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   facts.points = P, facts.segments = S, facts.nodes = count, facts.depth = depth;
   facts.frame = frame, facts.sphere = sphere, facts.maxRadius = maxRadius;
   facts.attributes = attributes, facts.shading = shading, facts.masses = masses;
-  const HeaderJson hj = headerJson(facts, options);
+  const HeaderJson hj = headerJson(facts, options, name);
   const uint64_t blocksOffset = format::kPreambleBytes + hj.json.size() + uint64_t(count) * format::kRecordBytes;
 
   std::vector<uint64_t> offsets(count), sizes(count), sums(count);

@@ -266,8 +266,7 @@ std::string lodViewerPage(const lod::LodHeader& h, const LodPageSource& source, 
   validate(o.render);
   validate(o.view);
   if (source.budget < 1) throwBadParameter("budget", "must be >= 1");
-  if (!(h.sphere.radius > 0) || !h.sphere.center.allFinite())
-    throw Error(Error::Kind::BadInput, o.name, "header", "the hierarchy has no valid bounding sphere");
+  lod::validateHeader(h, o.name);  // what every reader of a hierarchy checks
   const Attributes& a = h.attributes;
   json meta = {{"format", "linesurf-view"}, {"version", 1}, {"name", o.name}};
   // The hierarchy's own description: the page checks what it reads against it (the preamble's

@@ -104,15 +104,38 @@ struct NodeData {
 };
 inline constexpr uint32_t kNoIndex = 0xffffffffu;
 
+/// The one validation of a hierarchy, run by every reader (LodFile: render, view, Python, info)
+/// before anything is sized from the file: the header's values (a power-of-two frame scale, a
+/// bounding sphere the cameras can frame: radius in [2^-30, 2^21], centre within 2^11 max(1, radius)
+/// of the origin, as the normalising frame leaves every model; finite maximum radius; primitive
+/// counts; build parameters in range) and the node table against itself and the header: one tree
+/// (every node but the root the child of exactly one node, one level below it, in its own octant
+/// of its parent's cube, its box inside its parent's), block sizes that match their counts, blocks
+/// that start after the table (`blocksBegin`) and do not overlap, leaves that add up to the
+/// header's counts. Throws Error (BadInput, "PATH: WHERE: WHAT", WHERE "header", "node I" or
+/// "node table"). Blocks themselves are checked when read (LodFile::readBlock).
+void validateHierarchy(const LodHeader& header, const std::vector<NodeInfo>& nodes, uint64_t blocksBegin,
+                       const std::string& path);
+/// The header's part of validateHierarchy; the writers run it on what they are about to write,
+/// so that nothing is written that the readers refuse.
+void validateHeader(const LodHeader& header, const std::string& path);
+
 /// A .lod file opened for reading nodes by byte range.
 class LodFile {
  public:
-  /// Reads the header and the node table; throws Error (BadInput) when they are not a valid
-  /// hierarchy (a node's block is only checked when read).
+  /// Reads the header and the node table and validates them (validateHierarchy); throws Error
+  /// (BadInput) when they are not a valid hierarchy. A node's block is only checked when read; a
+  /// block that lies past the file's end (a truncated file) is a node that fails to load.
   explicit LodFile(const std::filesystem::path& path);
   const LodHeader& header() const { return header_; }
   const std::vector<NodeInfo>& nodes() const { return nodes_; }
   const std::filesystem::path& path() const { return path_; }
+  uint64_t fileBytes() const { return fileSize_; }
+  /// Whether node `i`'s block lies within the file (else reading it fails: nothing is sized by
+  /// its counts).
+  bool inFile(uint32_t i) const {
+    return i < nodes_.size() && nodes_[i].size <= fileSize_ && nodes_[i].offset <= fileSize_ - nodes_[i].size;
+  }
   /// Reads node `i`'s block. Throws Error (BadInput, WHERE = "node i") when it is missing or
   /// truncated, belongs to another hierarchy, or does not match its checksum.
   NodeData readNode(uint32_t i) const;
