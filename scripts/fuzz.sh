@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
-# Bounded libFuzzer runs of the model readers: scripts/fuzz.sh [SECS] [TARGET...]
+# Bounded libFuzzer runs of the model and hierarchy readers: scripts/fuzz.sh [SECS] [TARGET...]
 #   SECS     seconds per target (default 30)
-#   TARGET   any of ply_fuzz obj_fuzz xyz_fuzz las_fuzz roundtrip_fuzz (default: all five, one after another)
+#   TARGET   any of ply_fuzz obj_fuzz xyz_fuzz las_fuzz roundtrip_fuzz lod_fuzz (default: all six, one after another)
 # Configures a separate clang build folder (build-fuzz, or $FUZZ_BUILD) with LINESURF_FUZZ=ON,
-# builds only the fuzz targets (an instrumented copy of src/core + src/io, no CGAL units) and runs
-# each on a copy of tests/fuzz/corpus_<name> with tests/fuzz/<name>.dict. Exits non-zero when
+# builds only the fuzz targets (an instrumented copy of src/core + src/io and the .lod reader, no
+# CGAL units) and runs each on a copy of tests/fuzz/corpus_<name> with tests/fuzz/<name>.dict. Exits non-zero when
 # libFuzzer finds a crash, a leak, an uncaught exception, a timeout or an allocation over the RSS
 # limit; the reproducer is left in build-fuzz/fuzz-artifacts/. Prints executions per target.
 set -euo pipefail
 SECS=${1:-30}
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(ply_fuzz obj_fuzz xyz_fuzz las_fuzz roundtrip_fuzz)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(ply_fuzz obj_fuzz xyz_fuzz las_fuzz roundtrip_fuzz lod_fuzz)
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${FUZZ_BUILD:-$ROOT/build-fuzz}
 if ! command -v clang++ >/dev/null; then echo "fuzz: clang++ not found, skipped"; exit 0; fi
