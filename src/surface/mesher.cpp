@@ -121,12 +121,15 @@ bool evenPermutation(const std::array<int, 4>& p) {
   return inversions % 2 == 0;
 }
 
-/// Bytes per visited cell: its key in the visited map and list, about one corner (key, value,
-/// weight flag, map entry) and, on the surface, about five edges (map entry, vertex position and
-/// normal in double while built, float in the mesh) and five triangles. Measured on the sphere and
-/// Igea at cellScale 1: 1.2 visited cells per source, 1.6 vertices and 3.2 triangles per visited cell.
-constexpr double kBytesPerCell = 2 * KeyMap::kBytesPerEntry + 8 + 13 + 1.6 * (KeyMap::kBytesPerEntry + 48 + 24) + 3.2 * 12;
-constexpr double kCellsPerSource = 1.5;
+/// Bytes per visited cell: its key in the visited map and the list, two corners (map entry, value,
+/// reach flag) and, on the surface, three vertices (edge map entry, position and fallback normal
+/// in double while built, position and normal in float in the mesh) and six triangles. Measured
+/// on Igea and a sphere at cellScale 1: 0.73 and 0.70 visited cells per source (x 1 / cellScale^2),
+/// 2.0 corners, 3.0 vertices and 6.1 triangles per visited cell; the estimate takes 1 cell per
+/// source, an upper bound of the order of the real figure (Igea: 135 MiB estimated, 110 MiB peak).
+constexpr double kBytesPerCell = KeyMap::kBytesPerEntry + 8 + 2 * (KeyMap::kBytesPerEntry + 5) +
+                                 3.1 * (KeyMap::kBytesPerEntry + 48 + 24) + 6.1 * 12;
+constexpr double kCellsPerSource = 1.0;
 /// The MLS surface per source: the §6.1 spacing's neighbour search (k = 12, transient), its tree,
 /// normals, areas and supports.
 constexpr double kSurfaceBytesPerSource = 8.0 * 12 + 128 + 64;
@@ -134,9 +137,14 @@ constexpr double kSurfaceBytesPerSource = 8.0 * 12 + 128 + 64;
 }  // namespace
 
 void validate(const MeshOptions& o) {
-  requireRange("cellScale", o.cellScale, 0.25, 8);
+  requireRange("cellScale", o.cellScale, 0.25, 4);
   requireRange("minWeight", o.minWeight, 0, 1);
   validate(o.mls);
+  // A crossed cell's corners lie within its diagonal of the surface; past about 0.4 h they leave
+  // the supports (Igea at h = 3 spacings: closed at 1.2 spacings, 34 boundary edges at 1.5, 16,336 at 2).
+  if (o.cellScale > 0.4f * o.mls.supportScale)
+    throwBadOption("cellScale", "must be at most 0.4 x `supportScale` (" + numberText(0.4 * o.mls.supportScale) +
+                                    "): coarser cells have corners out of every support");
 }
 
 double meshBytesEstimate(const HybridModel& model, const MeshOptions& o) {

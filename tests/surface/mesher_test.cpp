@@ -149,6 +149,17 @@ TEST(Mesher, BadInputIsRefusedNotMeshed) {
   nan.points[7].position.x() = NAN;
   EXPECT_THROW(extractMesh(nan), Error);
   EXPECT_THROW(extractMesh(shapes::sphere(1, 500), {.cellScale = 0.1f}), Error);
+  // Cells coarser than 0.4 x the support have corners no support reaches: refused, naming the bound.
+  MeshOptions coarse;
+  coarse.cellScale = 1.5f, coarse.mls.supportScale = 3.0f;
+  try {
+    extractMesh(shapes::sphere(1, 500), coarse);
+    ADD_FAILURE() << "cell 1.5 with support 3 was not refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("0.4 x"), std::string::npos) << e.what();
+  }
+  coarse.mls.supportScale = 4.0f;  // 1.5 <= 1.6: accepted
+  EXPECT_NO_THROW(extractMesh(shapes::sphere(1, 500), coarse));
   try {
     extractMesh(shapes::sphere(1, 500), {}, nullptr, Budget(0.01, "--max-mb"));
     ADD_FAILURE() << "no refusal";

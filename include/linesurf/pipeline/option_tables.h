@@ -312,7 +312,8 @@ void describeOptions(ContourOptions& o, V&& v) {
 template <typename V>
 void describeOptions(MeshOptions& o, V&& v) {
   v.group("mesh", "Mesh of the MLS surface (§9.1)");
-  v(o.cellScale, {"cellScale", "Grid cell edge, median spacings", closedRange(0.25, 8), kUseCliPython, "--cell"});
+  v(o.cellScale, {"cellScale", "Grid cell edge, median spacings (at most 0.4 x --support-scale)", closedRange(0.25, 4),
+                  kUseCliPython, "--cell"});
   v(o.mls.supportScale, {"supportScale", "MLS kernel support h, spacings", closedRange(1.5, 10)});
   v(o.minWeight, {"minWeight", "Grid corners whose sources' weights sum below this x spacing^2 are out of reach",
                   closedRange(0, 1)});

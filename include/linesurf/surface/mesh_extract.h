@@ -28,7 +28,8 @@
 namespace linesurf {
 
 struct MeshOptions {
-  /// Cell edge, in the model's median spacings: [0.25, 8]. 1 puts about one vertex pair per
+  /// Cell edge, in the model's median spacings: [0.25, 4] and at most 0.4 x mls.supportScale
+  /// (coarser cells reach out of the supports and open holes). 1 gives about two vertices per
   /// input point: finer adds triangles, not detail (the surface is smooth below its support
   /// radius, 3 spacings); coarser loses features below 2 cells.
   float cellScale = 1.0f;
