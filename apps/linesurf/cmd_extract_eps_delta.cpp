@@ -9,6 +9,7 @@
 #include "extract_common.h"
 #include "linesurf/core/timer.h"
 #include "linesurf/extract/eps_delta.h"
+#include "linesurf/geometry/noise.h"
 #include "options_bind.h"
 #include "linesurf/ooc/ooc_extract.h"
 #include "ooc_cli.h"
@@ -33,6 +34,9 @@ struct EpsDeltaArgs {
 void runOutOfCore(EpsDeltaArgs& a, const std::string& why) {
   Timer total;
   if (a.ascii) throwBadParameter("--ascii", "the out-of-core path writes binary PLY");
+  if (a.extract.epsilonNoise > 0)
+    throwBadParameter("--epsilon-noise", "estimates the noise of the whole cloud in memory; out of core, give --epsilon "
+                                         "(linesurf info prints the noise of a sample)");
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
   const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
@@ -89,6 +93,21 @@ void run(EpsDeltaArgs& a) {
   say(fmt::format("tolerances   epsilon {:.6g}{}  delta {:.6g} ({:.2f} deg)", st.epsilon,
                   o.epsilon > 0 ? std::string() : fmt::format(" ({} x average spacing {:.6g})", o.epsilonRelative, geo.averageSpacing),
                   st.delta, std::acos(std::max(-1.0, 1.0 - st.delta)) * 180.0 / 3.14159265358979));
+  {
+    // The noise tells whether the thesis's epsilon can do useful work on this scan.
+    double sigma = st.noiseSigma;
+    if (o.epsilonNoise <= 0) {
+      std::vector<Vec3f> pos(in.cloud.points.size());
+      for (size_t i = 0; i < pos.size(); ++i) pos[i] = in.cloud.points[i].position;
+      sigma = estimateNoise(pos).sigma;
+    }
+    say(fmt::format("noise        sigma {:.6g} ({:.3f} x average spacing){}", sigma,
+                    geo.averageSpacing > 0 ? sigma / geo.averageSpacing : 0.0,
+                    o.epsilonNoise > 0 ? fmt::format("; epsilon = max({} x spacing, {} x sigma)", o.epsilonRelative, o.epsilonNoise) : ""));
+    if (o.epsilon <= 0 && o.epsilonNoise <= 0 && sigma > st.epsilon)
+      say("note         the scan's noise exceeds epsilon, so few points lie within it of a segment: --epsilon-noise 2 "
+          "sets epsilon to twice the noise");
+  }
   say(fmt::format("output       {} points + {} segments -> {}", st.keptPoints, st.segments, a.output));
   say(fmt::format("replaced     {} points ({:.2f}%), {:.2f} points per segment", st.replacedPoints,
                   100.0 * st.replacedFraction(), st.segments ? double(st.replacedPoints) / st.segments : 0.0));
@@ -116,6 +135,7 @@ RegisterCommand reg(31, [](CLI::App& app) {
   sub->add_option("-o,--output", a->output, "Output hybrid model (.ply)")->type_name("FILE")->required();
   const TableBinder b = bindOptions(sub, o);
   b.option("epsilon")->excludes(b.option("epsilonRelative"));
+  b.option("epsilon")->excludes(b.option("epsilonNoise"));
   bindGeometryOptions(sub, a->geometry);
   sub->add_flag("--ascii", a->ascii, "Write ASCII PLY");
   bindOutOfCoreFlags(sub, a->ooc);

@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "command.h"
+#include "linesurf/geometry/noise.h"
 #include "linesurf/io/model_stats.h"
 #include "linesurf/lod/lod.h"
 
@@ -75,8 +76,12 @@ void runLodInfo(const InfoArgs& a) {
 void runInfo(const InfoArgs& a) {
   if (lod::isLodFile(a.file)) return runLodInfo(a);
   checkFiles({a.file}, {});  // reading it fits the budget
-  const ModelSummary s = summarizeFile(a.file);
+  std::vector<Vec3f> positions;
+  const ModelSummary s = summarizeFile(a.file, &positions);
   const bool emptyBounds = s.bounds.empty();
+  // A scan's noise along its normals, against which the extractions' epsilon means something.
+  const NoiseEstimate noise = s.kind == "points" ? estimateNoise(positions) : NoiseEstimate{};
+  const double noiseRelative = s.averageSpacing > 0 ? noise.sigma / s.averageSpacing : 0.0;
   if (a.json) {
     nlohmann::json j;
     j["path"] = a.file;
@@ -100,6 +105,10 @@ void runInfo(const InfoArgs& a) {
     if (s.radiusMax > 0)
       j["radii"] = {{"min", s.radiusMin}, {"median", s.radiusMedian}, {"max", s.radiusMax}, {"above10xMedian", s.radiiAbove10xMedian}};
     else j["radii"] = nullptr;
+    if (noise.fitted > 0)
+      j["noise"] = {{"sigma", noise.sigma}, {"relativeToSpacing", noiseRelative},
+                    {"quartiles", {noise.lowerQuartile, noise.upperQuartile}}, {"samples", noise.fitted}};
+    else j["noise"] = nullptr;
     if (s.textureWidth > 0) j["texture"] = {{"width", s.textureWidth}, {"height", s.textureHeight}};
     else j["texture"] = nullptr;
     j["comments"] = s.comments;
@@ -123,6 +132,9 @@ void runInfo(const InfoArgs& a) {
   if (s.radiusMax > 0)
     out += fmt::format("  radii:      min {:.6g}  median {:.6g}  max {:.6g} ({:.1f} x the median); {} above 10 x the median\n",
                        s.radiusMin, s.radiusMedian, s.radiusMax, s.radiusMax / s.radiusMedian, s.radiiAbove10xMedian);
+  if (noise.fitted > 0)
+    out += fmt::format("  noise:      sigma {:.6g} ({:.3f} x the spacing) along the normals; quartiles {:.3g} .. {:.3g} over {} samples\n",
+                       noise.sigma, noiseRelative, noise.lowerQuartile, noise.upperQuartile, noise.fitted);
   if (s.textureWidth > 0) out += fmt::format("  texture:    {}x{}\n", s.textureWidth, s.textureHeight);
   else out += "  texture:    none\n";
   for (const auto& c : s.comments) out += fmt::format("  comment:    {}\n", c);

@@ -21,6 +21,7 @@ from ._linesurf import (  # noqa: F401
     Model,
     compare,
     difference_heatmap,
+    estimate_noise,
     geometry,
     normals,
     read,

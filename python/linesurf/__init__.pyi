@@ -77,6 +77,8 @@ def geometry(model: PointsLike, *, k: int = 12, recompute_normals: bool = False,
 def normals(points: PointsLike, *, k: int = 12, recompute_normals: bool = False, orient_normals: bool = True,
             orientation_penalty: float = 0.5, orient: str = "auto",
             viewpoint: Sequence[float] = (0, 0, 0)) -> npt.NDArray[np.float32]: ...
+def estimate_noise(model: PointsLike, *, samples: int = 2048, max_neighbours: int = 768,
+                   footprint: float = 4.0) -> SimpleNamespace: ...
 def mls_project(model: Union[Model, ArrayLike], points: ArrayLike, *, support_scale: float = 3.0,
                 curvature: bool = False) -> SimpleNamespace: ...
 def mesh(model: Union[Model, ArrayLike], *, cell_scale: float = ..., support_scale: float = ...,
@@ -97,6 +99,7 @@ def extract_eps_delta(
     *,
     epsilon: float = ...,
     epsilon_relative: float = ...,
+    epsilon_noise: float = ...,
     delta: float = ...,
     min_replaced: int = ...,
     max_replaced: int = ...,

@@ -19,6 +19,7 @@
 #include "linesurf/io/atomic_file.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/lod/lod.h"
+#include "linesurf/geometry/noise.h"
 #include "linesurf/pipeline/render_job.h"
 #include "linesurf/pipeline/verify_job.h"
 #include "linesurf/render/drawing.h"
@@ -196,6 +197,32 @@ normals (N, 3) unit, MST-oriented (kept from the model unless recompute_normals)
 (N, 3), surface_variation (N,), spacing (N,) and average_spacing, flags (N,) uint8; with
 delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: k_min, k_max
 (N,), min_curvature_dir, max_curvature_dir (N, 3). Returned as a SimpleNamespace.)doc");
+  m.def(
+      "estimate_noise",
+      [](py::object model, int samples, int max_neighbours, float footprint) {
+        ModelArg a = modelArg(model);
+        NoiseOptions o;
+        o.samples = samples, o.maxNeighbours = max_neighbours, o.footprint = footprint;
+        validate(o);
+        NoiseEstimate e;
+        {
+          py::gil_scoped_release release;
+          std::vector<Vec3f> pos(a.model->points.size());
+          for (size_t i = 0; i < pos.size(); ++i) pos[i] = a.model->points[i].position;
+          e = estimateNoise(pos, o);
+        }
+        py::dict d;
+        d["sigma"] = e.sigma, d["lower_quartile"] = e.lowerQuartile, d["upper_quartile"] = e.upperQuartile;
+        d["samples"] = e.samples, d["fitted"] = e.fitted, d["unresolved"] = e.unresolved;
+        d["median_neighbours"] = e.medianNeighbours;
+        return namespaceOf(d);
+      },
+      py::arg("model"), py::kw_only(), py::arg("samples") = NoiseOptions{}.samples,
+      py::arg("max_neighbours") = NoiseOptions{}.maxNeighbours, py::arg("footprint") = NoiseOptions{}.footprint,
+      R"doc(The noise of a scan along its normals (a Model or an (N, 3) array) = `linesurf info`'s noise line:
+the median over `samples` points of the residual of a quadric height fit over neighbourhoods grown
+until they are `footprint` times wider than the residual. Returns a namespace: sigma (object
+units), lower_quartile, upper_quartile, samples, fitted, unresolved, median_neighbours.)doc");
   // --- the MLS surface (§9.1) ----------------------------------------------------------------
   m.def(
       "mls_project",
@@ -347,7 +374,7 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
         stats["input_points"] = st.inputPoints, stats["kept_points"] = st.keptPoints, stats["segments"] = st.segments;
         stats["replaced_points"] = st.replacedPoints, stats["epsilon"] = st.epsilon, stats["delta"] = st.delta;
         stats["data_reduction"] = st.dataReduction(), stats["seed_directions"] = st.seedDirections;
-        stats["candidate_directions"] = st.candidateDirections;
+        stats["candidate_directions"] = st.candidateDirections, stats["noise_sigma"] = st.noiseSigma;
         py::dict r;
         r["model"] = out;
         r["stats"] = stats;

@@ -15,6 +15,7 @@
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
+#include "linesurf/geometry/noise.h"
 #include "detail/endpoint_normals.h"
 #include "detail/segment_width.h"
 
@@ -206,6 +207,8 @@ void validate(const EpsDeltaOptions& o) {
     throwBadOption("epsilon", "must be a finite distance in [0, 1e30] (0 = use `epsilonRelative`), got " + numberText(o.epsilon));
   if (o.epsilon == 0 && !(o.epsilonRelative > 0 && o.epsilonRelative <= 1e6))
     throwBadOption("epsilonRelative", "must be a fraction of the average spacing in (0, 1e6], got " + numberText(o.epsilonRelative));
+  if (!(o.epsilonNoise >= 0 && o.epsilonNoise <= 100))
+    throwBadOption("epsilonNoise", "must be a multiple of the noise in [0, 100] (0 = off), got " + numberText(o.epsilonNoise));
   if (!(o.delta >= 0 && o.delta <= 2))
     throwBadOption("delta", "must lie in [0, 2] (it bounds 1 - n_i.n_j), got " + numberText(o.delta));
   if (o.minReplaced < 2) throwBadOption("minReplaced", "must be >= 2, got " + std::to_string(o.minReplaced));
@@ -214,9 +217,18 @@ void validate(const EpsDeltaOptions& o) {
                                           "), got " + std::to_string(o.maxReplaced));
 }
 
-double resolveEpsilon(const EpsDeltaOptions& options, const PointGeometry& geometry) {
+double resolveEpsilon(const EpsDeltaOptions& options, const PointGeometry& geometry, const HybridModel& cloud,
+                      double* noiseSigma) {
   validate(options);
-  return options.epsilon > 0 ? options.epsilon : options.epsilonRelative * double(geometry.averageSpacing);
+  if (noiseSigma) *noiseSigma = 0;
+  if (options.epsilon > 0) return options.epsilon;
+  const double relative = options.epsilonRelative * double(geometry.averageSpacing);
+  if (options.epsilonNoise <= 0) return relative;
+  std::vector<Vec3f> pos(cloud.points.size());
+  for (size_t i = 0; i < pos.size(); ++i) pos[i] = cloud.points[i].position;
+  const double sigma = estimateNoise(pos).sigma;
+  if (noiseSigma) *noiseSigma = sigma;
+  return std::max(relative, options.epsilonNoise * sigma);
 }
 
 HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geometry, const EpsDeltaOptions& options,
@@ -229,8 +241,8 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
                                       std::to_string(n));
   if (n > 0 && geometry.delaunayOffsets.size() != n + 1)
     throwBadParameter("geometry", "has no local Delaunay neighbours (GeometryOptions::delaunayNeighbours)");
-  const double eps = resolveEpsilon(options, geometry);
   EpsDeltaStats stats;
+  const double eps = resolveEpsilon(options, geometry, cloud, &stats.noiseSigma);
   stats.inputPoints = n;
   stats.epsilon = eps;
   stats.delta = options.delta;

@@ -82,7 +82,7 @@ size_t estimateSegmentRadii(HybridModel& m) {
   return missing;
 }
 
-ModelSummary summarizeFile(const std::filesystem::path& path) {
+ModelSummary summarizeFile(const std::filesystem::path& path, std::vector<Vec3f>* positions) {
   ModelSummary s;
   if (fileHoldsMesh(path)) {
     TriangleMesh m = readMesh(path);
@@ -96,6 +96,7 @@ ModelSummary summarizeFile(const std::filesystem::path& path) {
     s.averageSpacing = averageSpacing(m.positions);
     if (m.texture) s.textureWidth = m.texture->width, s.textureHeight = m.texture->height;
     s.comments = m.comments;
+    if (positions) *positions = std::move(m.positions);
     return s;
   }
   HybridModel m = readModel(path);
@@ -125,6 +126,7 @@ ModelSummary summarizeFile(const std::filesystem::path& path) {
   }
   if (m.texture) s.textureWidth = m.texture->width, s.textureHeight = m.texture->height;
   s.comments = m.comments;
+  if (positions) *positions = std::move(pos);
   return s;
 }
 

@@ -3,6 +3,8 @@
 #include <cstdio>
 
 #include "linesurf/ooc/ooc_extract.h"
+
+#include "linesurf/core/error.h"
 #include "ooc/pipeline.h"
 #include "ooc/tile_extract.h"
 
@@ -50,6 +52,9 @@ class EpsDeltaTiles final : public detail::TileExtraction {
 OocEpsDeltaReport extractEpsDeltaOutOfCore(const std::filesystem::path& in, const std::filesystem::path& out,
                                            const OocNormalsOptions& o, const EpsDeltaOptions& extract) {
   validate(extract);
+  // The noise is a median over samples of the whole cloud; tiles would each see their own.
+  if (extract.epsilonNoise > 0)
+    throwBadParameter("epsilonNoise", "needs the whole cloud in memory; out of core, give epsilon in object units");
   OocEpsDeltaReport er;
   detail::ExtractTotals et;
   const EpsDeltaTiles method(extract);

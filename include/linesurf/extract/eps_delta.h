@@ -37,6 +37,12 @@ struct EpsDeltaOptions {
   double epsilon = 0;
   /// Used when epsilon <= 0: epsilon = epsilonRelative * PointGeometry::averageSpacing. > 0.
   double epsilonRelative = 0.05;
+  /// Used when epsilon <= 0 and this is > 0 (beyond the thesis, for real scans): epsilon =
+  /// max(epsilonRelative x spacing, epsilonNoise x the scan's noise sigma along its normals,
+  /// estimateNoise of geometry/noise.h), so that a scan noisier than 0.05 x spacing still has
+  /// points within epsilon of a segment; the thesis's epsilon where the noise is below it.
+  /// [0, 100]; 0 = off (the thesis).
+  double epsilonNoise = 0;
   /// Normal tolerance delta on 1 - n_i . n_j, in [0, 2]; 0.004 ~ 5.13 degrees (§7.2).
   double delta = 0.004;
   /// Segments replacing fewer points are rejected ("3 or less" in §3.1.4 -> 4). >= 2.
@@ -66,6 +72,7 @@ struct EpsDeltaStats {
   size_t degenerateNeighbours = 0; ///< neighbours whose projection coincides with the anchor
   size_t heapPops = 0, heapReinserts = 0;  ///< lazy greedy phase work
   double epsilon = 0, delta = 0;   ///< the tolerances actually used
+  double noiseSigma = 0;           ///< the noise estimate epsilonNoise used (0 when off)
   double growSeconds = 0, selectSeconds = 0, outputSeconds = 0;
   /// §7.2.2 data reduction: 1 - (6 floats per point + 9 per segment) / (6 per input point).
   double dataReduction() const {
@@ -95,7 +102,9 @@ void validate(const EpsDeltaOptions& options);
 HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geometry,
                             const EpsDeltaOptions& options = {}, EpsDeltaStats* stats = nullptr);
 
-/// The epsilon extractEpsDelta uses for these options and geometry.
-double resolveEpsilon(const EpsDeltaOptions& options, const PointGeometry& geometry);
+/// The epsilon extractEpsDelta uses for these options, geometry and cloud (whose noise
+/// epsilonNoise reads; `noiseSigma` receives the estimate, 0 when not asked for).
+double resolveEpsilon(const EpsDeltaOptions& options, const PointGeometry& geometry, const HybridModel& cloud,
+                      double* noiseSigma = nullptr);
 
 }  // namespace linesurf

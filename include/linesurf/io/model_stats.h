@@ -28,8 +28,9 @@ struct ModelSummary {
   std::vector<std::string> comments;
 };
 
-/// Reads `path` (a mesh when fileHoldsMesh, else points/segments) and summarises it.
+/// Reads `path` (a mesh when fileHoldsMesh, else points/segments) and summarises it; the point
+/// positions (or mesh vertices) into `positions` when given, for figures a higher module computes.
 /// Throws like readModel/readMesh on bad input.
-ModelSummary summarizeFile(const std::filesystem::path& path);
+ModelSummary summarizeFile(const std::filesystem::path& path, std::vector<Vec3f>* positions = nullptr);
 
 }  // namespace linesurf

@@ -204,6 +204,10 @@ void describeOptions(EpsDeltaOptions& o, V&& v) {
                 closedRange(0, 1e30)});
   v(o.epsilonRelative, {"epsilonRelative", "Distance tolerance as a fraction of the average neighbour spacing (§7.2)",
                         OptionRange{0, 1e6, true, false}, kUseCliPython, "--epsilon-rel"});
+  v(o.epsilonNoise, {"epsilonNoise",
+                     "Noisy scans: epsilon = the larger of --epsilon-rel x spacing and this many times the scan's "
+                     "estimated noise (0 = off, the thesis)",
+                     closedRange(0, 100)});
   v(o.delta, {"delta", "Normal tolerance on 1 - n_i.n_j (0.004 ~ 5.13 deg, §7.2)", closedRange(0, 2)});
   v(o.minReplaced, {"minReplaced", "Smallest number of points a segment may replace", closedRange(2, 2147483647)});
   v(o.maxReplaced, {"maxReplaced",
