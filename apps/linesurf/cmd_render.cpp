@@ -57,6 +57,7 @@ void run(RenderArgs& a) {
   o.alphaBuffer = !a.alphaOut.empty();
   o.normalBuffer = !a.normalOut.empty();
   o.progress = progressBar();
+  o.facingCheck = true;  // say so when the normals face away and the picture comes out nearly empty
   a.prepare.progress = progressBar();
   // Every parameter is checked before the (long) geometry stage.
   validate(o);
@@ -240,6 +241,7 @@ void run(RenderArgs& a) {
   say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); total {:.2f} s",
                   w, h, 1000 * sum.totalSeconds, 1000 * sum.prepareSeconds, 1000 * sum.binSeconds,
                   1000 * sum.rasterSeconds, total.seconds()));
+  if (const std::string w = backFacingWarning(sum, a.model); !w.empty()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (views > 0)
     say(fmt::format("wrote {} .. {}", viewPath(a.output, 0).string(), viewPath(a.output, int(cams.size()) - 1).string()));
   else

@@ -576,6 +576,7 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         applyOptions(kw, dr);
         rejectUnknown(kw);
         o.depthBuffer = depth, o.alphaBuffer = alpha, o.normalBuffer = normal;
+        o.facingCheck = true;  // warns below, as the CLI does, when the normals face away
         validate(o);
         validate(v);
         validate(p);
@@ -648,6 +649,8 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
           }
         }
         }
+        if (const std::string w = backFacingWarning(r.stats, isPath ? std::string(py::str(py::module_::import("os").attr("fspath")(model))) : "the model"); !w.empty())
+          if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
         py::array_t<uint8_t> color = rgba8(r.color);
         if (!depth && !alpha && !normal) return color;
         py::dict d;

@@ -153,6 +153,16 @@ PrepareReport prepareForRendering(HybridModel& model, const PrepareOptions& o) {
   return r;
 }
 
+std::string backFacingWarning(const RenderStats& stats, const std::string& what) {
+  const double share = stats.backFacingShare();
+  if (!(share > kBackFacingWarnShare)) return {};
+  return fmt::format(
+      "{}: {:.0f}% of the pixels it covers show the back of its surface ({:.0f}% nothing at all): its normals face away "
+      "from the viewer; re-orient them (linesurf normals IN -o OUT --recompute --orient up for terrain, --orient towards "
+      "X Y Z for a room seen from inside) or draw both sides with --no-cull",
+      what, 100 * share, 100 * double(stats.facingEmptyPixels) / double(stats.facingPixels));
+}
+
 Image depthAsGrey(const Image& depth) {
   float lo = INFINITY, hi = -INFINITY;
   for (const Color& c : depth.pixels)

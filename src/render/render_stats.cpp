@@ -15,6 +15,8 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
   totalSeconds += o.totalSeconds;
   fragmentThreadSeconds += o.fragmentThreadSeconds, resolveThreadSeconds += o.resolveThreadSeconds;
   prepareThreadSeconds += o.prepareThreadSeconds, binThreadSeconds += o.binThreadSeconds;
+  facingPixels += o.facingPixels, facingBackPixels += o.facingBackPixels, facingEmptyPixels += o.facingEmptyPixels;
+  facingSeconds += o.facingSeconds;
   return *this;
 }
 

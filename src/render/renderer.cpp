@@ -4,6 +4,7 @@
 #include "linesurf/render/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <mutex>
 
@@ -54,10 +55,46 @@ RenderResult renderImage(const HybridModel& model, const Camera& camera, const R
 }
 
 RenderResult Renderer::render(const Camera& cam) const {
+  RenderResult res = renderFrame(cam, options_);
+  if (options_.facingCheck && options_.backfaceCulling) measureFacing(cam, res.stats);
+  return res;
+}
+
+// Which side of the surface the pixels show (render_stats.h, facing*): the view drawn again at a
+// reduced resolution with back faces culled and two-sided, depths compared per pixel. A pixel the
+// two-sided render covers shows a back face when the culled render leaves it empty or finds its
+// nearest surface more than kFacingDepthTolerance x the bounding radius deeper (the front surface
+// was culled and a farther one shows through, as inside an object whose normals point in).
+void Renderer::measureFacing(const Camera& cam, RenderStats& st) const {
+  Timer t;
+  const int longest = std::max(cam.width(), cam.height());
+  const double scale = std::min(1.0, double(kFacingCheckSide) / double(longest));
+  const int w = std::max(1, int(std::lround(cam.width() * scale))), h = std::max(1, int(std::lround(cam.height() * scale)));
+  const Camera small = cam.withViewport(w, h);
+  RenderOptions o = options_;
+  o.facingCheck = false;
+  o.depthBuffer = true;
+  o.alphaBuffer = o.normalBuffer = false;
+  o.progress = nullptr;
+  const RenderResult culled = renderFrame(small, o);
+  o.backfaceCulling = false;
+  const RenderResult twoSided = renderFrame(small, o);
+  const float tol = kFacingDepthTolerance * sphere_.radius;
+  for (size_t i = 0; i < twoSided.depth->pixels.size(); ++i) {
+    const Color& d2 = twoSided.depth->pixels[i];
+    if (!(d2.w() > 0)) continue;
+    ++st.facingPixels;
+    const Color& d1 = culled.depth->pixels[i];
+    if (!(d1.w() > 0)) ++st.facingEmptyPixels, ++st.facingBackPixels;
+    else if (d1.x() > d2.x() + tol) ++st.facingBackPixels;
+  }
+  st.facingSeconds += t.seconds();
+}
+
+RenderResult Renderer::renderFrame(const Camera& cam, const RenderOptions& opt) const {
   Timer total;
   RenderResult res;
   RenderStats& st = res.stats;
-  const RenderOptions& opt = options_;
   FrameContext frame =
       FrameContext::make(cam, opt, sphere_, model_.attributes.colors,
                          model_.attributes.texcoords ? model_.texture.get() : nullptr);

@@ -76,3 +76,27 @@ def test_mls_projection_lands_on_a_sphere():
     assert np.abs(np.median(r.k_max) - 1) < 0.05 and np.abs(np.median(r.k_min) - 1) < 0.05
     with pytest.raises(ValueError):
         linesurf.mls_project(model, q, support_scale=0.5)
+
+
+def test_estimate_noise_reads_the_noise_along_the_normals():
+    n = 20000
+    pts = fibonacci_sphere(n)
+    spacing = np.sqrt(4 * np.pi / n)
+    rng = np.random.default_rng(4)
+    noisy = pts + pts * (0.5 * spacing * rng.standard_normal(n))[:, None].astype(np.float32)
+    e = linesurf.estimate_noise(noisy)
+    assert abs(e.sigma / (0.5 * spacing) - 1) < 0.2, e.sigma / spacing
+    assert e.lower_quartile <= e.sigma <= e.upper_quartile and e.fitted > 0.9 * e.samples
+    assert linesurf.estimate_noise(pts).sigma < 0.02 * spacing  # curvature is not noise
+    with pytest.raises(ValueError):
+        linesurf.estimate_noise(pts, samples=3)
+
+
+def test_render_warns_when_the_normals_face_away():
+    pts = fibonacci_sphere(6000)
+    with pytest.warns(UserWarning, match="back of its surface"):
+        linesurf.render(linesurf.Model(points=pts, normals=-pts), size=(96, 96))
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        linesurf.render(linesurf.Model(points=pts, normals=pts), size=(96, 96))

@@ -17,6 +17,7 @@
 #include "linesurf/render/camera.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/render_options.h"
+#include "linesurf/render/render_stats.h"
 
 namespace linesurf {
 
@@ -80,6 +81,15 @@ void estimateMissingPointGeometry(HybridModel& model, int k, PrepareReport& repo
 /// estimateMissingPointGeometry, then every radius times radiusScale. Validates first. Call it
 /// after moving the model into its normalising frame (io/model_frame.h).
 PrepareReport prepareForRendering(HybridModel& model, const PrepareOptions& options = {});
+
+/// A picture is called mostly back faces when more than this share of the pixels a two-sided
+/// render covers show the back of the surface or nothing (RenderStats::backFacingShare). A closed,
+/// outward-oriented scan shows 0-3% at its silhouette, vegetation a few more.
+inline constexpr double kBackFacingWarnShare = 0.25;
+
+/// One line saying that the picture of `what` shows mostly the back of its surface, and what to
+/// do, when stats (summed over the views, RenderOptions::facingCheck on) say so; else "".
+std::string backFacingWarning(const RenderStats& stats, const std::string& what);
 
 /// Depth buffer as grey: near = white, far = dark, empty = transparent (the CLI's --depth-out).
 Image depthAsGrey(const Image& depth);

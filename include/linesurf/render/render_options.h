@@ -146,6 +146,11 @@ struct RenderOptions {
   /// Drop primitives whose normal faces away from the viewer (§6.2.2 back-face culling). When
   /// off, back faces are lit with the flipped normal (two-sided lighting).
   bool backfaceCulling = true;
+  /// With culling on, also measure on pixels which side of the surface the view shows
+  /// (RenderStats::facing*): two more renders at a reduced resolution (Renderer::kFacingCheckSide),
+  /// so that a front end can say when normals facing away leave the picture nearly empty. Off by
+  /// default in the library (it costs two prepare passes); the CLI and Python turn it on.
+  bool facingCheck = false;
 
   // --- line segments (§5) -------------------------------------------------------------------
   SegmentMethod segmentMethod = SegmentMethod::ScreenSpace;

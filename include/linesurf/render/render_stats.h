@@ -23,6 +23,14 @@ struct RenderStats {
   /// CPU time of the prepare and binning stages, summed over the worker threads (per-point
   /// set-up costs, robust against other processes as above).
   double prepareThreadSeconds = 0, binThreadSeconds = 0;
+  /// Which side of the surface the picture shows (RenderOptions::facingCheck; else 0): pixels of
+  /// a reduced-resolution copy of the view that a two-sided render covers, those of them whose
+  /// nearest surface faces away from the viewer (culled, so the picture shows nothing there or a
+  /// farther surface), and those the culled render leaves empty. A closed, outward-oriented model
+  /// shows a few back faces at its silhouette; normals pointing away show most.
+  uint64_t facingPixels = 0, facingBackPixels = 0, facingEmptyPixels = 0;
+  double facingSeconds = 0;
+  double backFacingShare() const { return facingPixels ? double(facingBackPixels) / double(facingPixels) : 0.0; }
   /// Adds every counter and time of `o` (several views, or the parts of one frame).
   RenderStats& operator+=(const RenderStats& o);
 };

@@ -37,7 +37,15 @@ class Renderer {
   const BoundingSphere& sphere() const { return sphere_; }
   const RenderOptions& options() const { return options_; }
 
+  /// RenderOptions::facingCheck renders at most this many pixels along the longer side.
+  static constexpr int kFacingCheckSide = 160;
+  /// ... and takes a culled pixel this much of the bounding radius deeper than the two-sided one
+  /// for a back face.
+  static constexpr float kFacingDepthTolerance = 0.02f;
+
  private:
+  RenderResult renderFrame(const Camera& camera, const RenderOptions& options) const;
+  void measureFacing(const Camera& camera, RenderStats& stats) const;
   const HybridModel& model_;
   RenderOptions options_;
   BoundingSphere sphere_;
