@@ -210,7 +210,7 @@ void run(RenderArgs& a) {
         svgWritten = true;
       }
     } else {
-      r = renderer->render(cams[i]);
+      r = renderer->render(cams[i], o.facingCheck && i == 0);  // the first view answers for the series
     }
     if (!svgWritten) writePng(out, r.color, drawing ? a.drawing.paper.w() < 1 : o.background.w() < 1);
     if (r.depth) writePng(bufferPath(a.depthOut, vi, views), depthAsGrey(*r.depth));
@@ -238,9 +238,9 @@ void run(RenderArgs& a) {
   else
     say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
-  say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); total {:.2f} s",
+  say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); facing check {:.1f} ms ({:.1f}% back); total {:.2f} s",
                   w, h, 1000 * sum.totalSeconds, 1000 * sum.prepareSeconds, 1000 * sum.binSeconds,
-                  1000 * sum.rasterSeconds, total.seconds()));
+                  1000 * sum.rasterSeconds, 1000 * sum.facingSeconds, 100 * sum.backFacingShare(), total.seconds()));
   if (const std::string w = backFacingWarning(sum, a.model); !w.empty()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (views > 0)
     say(fmt::format("wrote {} .. {}", viewPath(a.output, 0).string(), viewPath(a.output, int(cams.size()) - 1).string()));

@@ -13,9 +13,11 @@
 #include "drawable_model.h"
 #include "linesurf/core/error.h"
 #include "linesurf/core/timer.h"
+#include "linesurf/io/las_io.h"
 #include "linesurf/io/model_io.h"
 #include "linesurf/lod/lod.h"
 #include "linesurf/pipeline/render_job.h"
+#include "linesurf/render/renderer.h"
 #include "linesurf/view/viewer_page.h"
 #include "lod_server.h"
 #include "options_bind.h"
@@ -36,6 +38,7 @@ struct ViewArgs {
   uint64_t budget = 1'000'000;
   CLI::Option *portOption = nullptr, *hostOption = nullptr, *budgetOption = nullptr, *outputOption = nullptr,
               *allowRemoteOption = nullptr, *headerTimeoutOption = nullptr;
+  const CLI::Option* upAxisFlag = nullptr;  ///< --up-axis: a file's recorded axis applies when not given
 };
 
 // A hierarchy: check its header and node table, then serve the page and the file until stopped.
@@ -104,6 +107,24 @@ void run(const ViewArgs& a) {
             fmt::format("a page of {} points and {} segments", model.points.size(), model.segments.size()));
   checkGeometry(a.model, model.points.size(), a.prepare.k);
   completePointGeometry(model, a.prepare.k);
+  // LAS is z-up, and a file made from one says so: the page orbits about its axis unless told otherwise.
+  if (const std::string up = recordedUpAxis(model);
+      !up.empty() && a.upAxisFlag && a.upAxisFlag->count() == 0 && !o.view.eye && !o.view.target) {
+    o.view.upAxis = parseUpAxis(up);
+    say(fmt::format("{}: up axis {} (recorded in the file; --up-axis overrides)", a.model, up));
+  }
+  // The page culls back faces as render does: its first view checked as render checks it, so that
+  // normals facing away are said here and not found in an almost empty page.
+  {
+    RenderOptions ro = o.render;
+    ro.facingCheck = true;
+    const Renderer r(model, ro);
+    ViewOptions v = o.view;
+    v.width = v.height = Renderer::kFacingCheckSide;
+    v.views = 0;
+    const RenderResult first = r.render(viewCameras(r.sphere(), v).front());
+    if (const std::string w = backFacingWarning(first.stats, a.model); !w.empty()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  }
 
   ViewerPageStats st;
   try {
@@ -131,7 +152,7 @@ RegisterCommand reg(45, [](CLI::App& app) {
       ->required();  // a missing file is reported after the options are checked, as render does
   a->outputOption = sub->add_option("-o,--output", a->output, "Output HTML page (default: MODEL's name with .html, here)")->type_name("FILE");
   // The page's defaults: the option tables' viewer fields (pipeline/option_tables.h).
-  bindOptions(sub, a->page.view, {}, kUseViewer);
+  a->upAxisFlag = bindOptions(sub, a->page.view, {}, kUseViewer).option("upAxis");
   bindOptions(sub, a->page.render, {}, kUseViewer);
   bindOptions(sub, a->prepare, {"k"});
   sub->add_option("--max-primitives", a->maxPrimitives, "Refuse models with more points + segments than this")

@@ -54,9 +54,11 @@ RenderResult renderImage(const HybridModel& model, const Camera& camera, const R
   return Renderer(model, options).render(camera);
 }
 
-RenderResult Renderer::render(const Camera& cam) const {
+RenderResult Renderer::render(const Camera& cam) const { return render(cam, options_.facingCheck); }
+
+RenderResult Renderer::render(const Camera& cam, bool facingCheck) const {
   RenderResult res = renderFrame(cam, options_);
-  if (options_.facingCheck && options_.backfaceCulling) measureFacing(cam, res.stats);
+  if (facingCheck && options_.backfaceCulling) measureFacing(cam, res.stats);
   return res;
 }
 

@@ -89,5 +89,19 @@ TEST(Facing, CliWarnsInOneLine) {
   EXPECT_EQ(twoSided.out.find("warning"), std::string::npos) << twoSided.out;
 }
 
+TEST(Facing, ViewWarnsAtThePagesFirstView) {
+  auto dir = test::scratchDir("view_facing");
+  writeModel(dir / "inside_out.ply", flipped(shapes::sphere(1, 5000)));
+  writeModel(dir / "sphere.ply", shapes::sphere(1, 5000));
+  auto bad = test::runCli("-q view '" + (dir / "inside_out.ply").string() + "' -o '" + (dir / "a.html").string() + "'");
+  EXPECT_EQ(bad.exitCode, 0) << bad.out;  // the page is written as asked, with the warning
+  EXPECT_TRUE(std::filesystem::exists(dir / "a.html"));
+  EXPECT_NE(bad.out.find("warning: " + (dir / "inside_out.ply").string() + ": "), std::string::npos) << bad.out;
+  EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << bad.out;
+  auto good = test::runCli("-q view '" + (dir / "sphere.ply").string() + "' -o '" + (dir / "b.html").string() + "'");
+  EXPECT_EQ(good.exitCode, 0) << good.out;
+  EXPECT_EQ(good.out.find("warning"), std::string::npos) << good.out;
+}
+
 }  // namespace
 }  // namespace linesurf

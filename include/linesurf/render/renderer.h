@@ -34,6 +34,9 @@ class Renderer {
   /// invalid options (validate()).
   Renderer(const HybridModel& model, const RenderOptions& options = {});
   RenderResult render(const Camera& camera) const;
+  /// The same with RenderOptions::facingCheck given for this view: the check costs about two
+  /// prepare passes (more than a 512² frame of the model), so a series of views may check one.
+  RenderResult render(const Camera& camera, bool facingCheck) const;
   const BoundingSphere& sphere() const { return sphere_; }
   const RenderOptions& options() const { return options_; }
 
