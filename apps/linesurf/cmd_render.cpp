@@ -22,6 +22,7 @@
 #include "linesurf/render/drawing.h"
 #include "linesurf/render/mesh_render.h"
 #include "linesurf/render/renderer.h"
+#include "linesurf/surface/mesh_extract.h"
 #include "options_bind.h"
 
 namespace linesurf::cli {
@@ -81,8 +82,10 @@ void run(RenderArgs& a) {
     checkSize(a.view.views > 0 ? "--views" : "--size", double(views) * images * pngFileBytes(w, h),
               fmt::format("writing {} image{} of {}x{}", views * images, views * images > 1 ? "s" : "", w, h));
   }
-  if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points")
-    throwBadOption("primitive", "expected mesh, points or auto, got '" + a.primitive + "'");
+  if (a.primitive != "auto" && a.primitive != "mesh" && a.primitive != "points" && a.primitive != "surface")
+    throwBadOption("primitive", "expected mesh, points, surface or auto, got '" + a.primitive + "'");
+  const bool surface = a.primitive == "surface";
+  if (surface && drawing) throwBadOption("style", "draws a model's own segments; it does not apply to --primitive surface");
   // A level-of-detail hierarchy (.lod) is already in its frame and prepared: each view draws the
   // nodes chosen for it within --budget.
   std::optional<lod::LodFile> lodFile;
@@ -102,6 +105,9 @@ void run(RenderArgs& a) {
   const bool isMesh = !lodFile && fileHoldsMesh(a.model);
   if (a.primitive == "mesh" && !isMesh)
     throwBadOption("primitive", "mesh needs a file with faces; " + a.model + " holds none");
+  if (surface && isMesh)
+    throwBadOption("primitive", "surface draws the MLS surface of points and segments; " + a.model +
+                                    " is a mesh: draw it as it is (--primitive mesh)");
   std::optional<TriangleMesh> triMesh;
   HybridModel model;
   if (isMesh && a.primitive != "points") {
@@ -149,6 +155,27 @@ void run(RenderArgs& a) {
                     prep.computedNormals ? "normals + radii" : "radii", model.points.size(), a.prepare.k,
                     prep.geometrySeconds));
 
+  // The model's MLS surface (§9.1) as a mesh, drawn by the mesh renderer under the splats' camera:
+  // the reference without holes that the splat pictures are compared with.
+  std::optional<BoundingSphere> surfaceSphere;
+  if (surface) {
+    MeshStats ms;
+    Timer meshing;
+    try {
+      triMesh = extractMesh(model, MeshOptions{}, &ms, budget());
+    } catch (const OptionError&) {
+      throw;
+    } catch (const Error& e) {
+      if (e.path() == "model") throw Error(Error::Kind::BadInput, a.model, e.where(), e.reason());
+      throw;
+    }
+    if (triMesh->faces.empty())
+      throw Error(Error::Kind::BadInput, a.model, "", fmt::format("its surface gives no triangles ({} cells visited)", ms.cells));
+    surfaceSphere = boundingSphere(model);  // the camera the splat render of the same model gets
+    say(fmt::format("{}: MLS surface (§9.1), {} triangles, {} boundary edges, meshed in {:.2f} s (linesurf mesh for its options)",
+                    a.model, ms.triangles, ms.boundaryEdges, meshing.seconds()));
+  }
+
   std::optional<Renderer> renderer;
   std::optional<MeshRenderer> meshRenderer;
   std::optional<lod::LodRenderer> lodRenderer;
@@ -162,8 +189,11 @@ void run(RenderArgs& a) {
   else if (triMesh) meshRenderer.emplace(*triMesh, o, a.mesh);
   else if (lodFile) lodRenderer.emplace(*lodFile, o, a.budget > 0 ? a.budget : UINT64_MAX, a.prepare.radiusScale);
   else renderer.emplace(model, o);
-  const BoundingSphere sphere =
-      drawer ? drawer->sphere() : triMesh ? meshRenderer->sphere() : lodRenderer ? lodRenderer->sphere() : renderer->sphere();
+  const BoundingSphere sphere = surfaceSphere ? *surfaceSphere
+                               : drawer     ? drawer->sphere()
+                               : triMesh    ? meshRenderer->sphere()
+                               : lodRenderer ? lodRenderer->sphere()
+                                             : renderer->sphere();
   const std::vector<Camera> cams = viewCameras(sphere, a.view, frame);
   const int views = a.view.views;
 
@@ -238,9 +268,13 @@ void run(RenderArgs& a) {
   else
     say(fmt::format("Z3 ({} layers): {} fragments, {} merged, {} occluded, {} compressions", o.layers, sum.fragments,
                   sum.merged, sum.occluded, sum.compressed));
-  say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}); facing check {:.1f} ms ({:.1f}% back); total {:.2f} s",
+  say(fmt::format("render {}x{}: {:.1f} ms (prepare {:.1f}, bin {:.1f}, raster+resolve {:.1f}){}; total {:.2f} s",
                   w, h, 1000 * sum.totalSeconds, 1000 * sum.prepareSeconds, 1000 * sum.binSeconds,
-                  1000 * sum.rasterSeconds, 1000 * sum.facingSeconds, 100 * sum.backFacingShare(), total.seconds()));
+                  1000 * sum.rasterSeconds,
+                  sum.facingPixels ? fmt::format("; facing check {:.1f} ms ({:.1f}% back)", 1000 * sum.facingSeconds,
+                                                 100 * sum.backFacingShare())
+                                   : std::string(),
+                  total.seconds()));
   if (const std::string w = backFacingWarning(sum, a.model); !w.empty()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (views > 0)
     say(fmt::format("wrote {} .. {}", viewPath(a.output, 0).string(), viewPath(a.output, int(cams.size()) - 1).string()));
@@ -277,7 +311,8 @@ RegisterCommand reg(40, [](CLI::App& app) {
   sub->add_option("--normal-out", a->normalOut, "Also write camera-space normals as (n+1)/2 RGB")->type_name("FILE");
   sub->add_option("--primitive", a->primitive,
                   "What a mesh file is drawn as: mesh (anti-aliased triangles, the ground truth), points (its "
-                  "vertices as splats) or auto (mesh when the file has faces)")->capture_default_str();
+                  "vertices as splats) or auto (mesh when the file has faces); surface: a cloud's or hybrid's MLS "
+                  "surface meshed (§9.1, linesurf mesh) and drawn as a mesh, the reference without holes")->capture_default_str();
   sub->callback([a] { run(*a); });
 });
 

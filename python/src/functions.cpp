@@ -726,20 +726,25 @@ model's segments as ink strokes (§9.4, §9.5) instead of splatting them. The GI
           throwBadOption("b", "size " + std::to_string(ib.width) + "x" + std::to_string(ib.height) + " differs from a (" +
                                   std::to_string(ia.width) + "x" + std::to_string(ia.height) + ")");
         ImageMetrics mt;
+        HoleMap holes;
         {
           py::gil_scoped_release release;
           mt = compareImages(ia, ib);
+          holes = holeMap(ia, ib);
         }
         py::dict d;
         d["mse"] = mt.mse, d["psnr"] = mt.psnr, d["nccm"] = mt.nccm, d["ssim"] = mt.ssim;
         d["mean_abs_diff"] = mt.meanAbsDiff, d["std_abs_diff"] = mt.stdAbsDiff, d["max_abs_diff"] = mt.maxAbsDiff;
         d["differing_pixels"] = mt.differingPixels;
+        d["holes"] = holes.holes, d["hole_share"] = holes.holeShare(), d["extra_pixels"] = holes.extra;
         return d;
       },
       py::arg("a"), py::arg("b"),
       "Image metrics of thesis §7 (= `linesurf compare`): mse, psnr (inf when identical), nccm, ssim,\n"
-      "mean/std/max absolute difference in grey levels, fraction of differing pixels. a and b are\n"
-      "(H, W, 3|4) uint8 or float [0, 1] arrays, or image paths; alpha is ignored.");
+      "mean/std/max absolute difference in grey levels, fraction of differing pixels; holes (pixels a\n"
+      "covers and b does not: by alpha when both carry it, else against white), hole_share of a's\n"
+      "covered pixels, extra_pixels (b only). a and b are (H, W, 3|4) uint8 or float [0, 1] arrays, or\n"
+      "image paths; the metrics ignore alpha.");
   m.def(
       "difference_heatmap",
       [](py::object a, py::object b, double saturate) {

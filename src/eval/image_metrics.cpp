@@ -146,4 +146,27 @@ std::vector<uint8_t> silhouetteBand(const Image& alpha, const Image& depth, int 
   return band;
 }
 
+HoleMap holeMap(const Image& reference, const Image& test, const Color& background) {
+  checkSizes(reference, test);
+  auto hasAlpha = [](const Image& im) {
+    return std::any_of(im.pixels.begin(), im.pixels.end(), [](const Color& c) { return q8(c[3]) < 255; });
+  };
+  HoleMap h;
+  h.byAlpha = hasAlpha(reference) && hasAlpha(test);
+  const double bg[3] = {q8(background[0]), q8(background[1]), q8(background[2])};
+  auto covered = [&](const Color& c) {
+    if (h.byAlpha) return c[3] > 0.5f;
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(q8(c[k]) - bg[k]) > 1) return true;
+    return false;
+  };
+  h.map = Image(reference.width, reference.height, Color(1, 1, 1, 1));
+  for (size_t i = 0; i < reference.pixels.size(); ++i) {
+    const bool r = covered(reference.pixels[i]), t = covered(test.pixels[i]);
+    h.referencePixels += r, h.holes += r && !t, h.extra += t && !r;
+    if (r) h.map.pixels[i] = t ? Color(0.75f, 0.75f, 0.75f, 1) : Color(0.9f, 0.05f, 0.05f, 1);
+  }
+  return h;
+}
+
 }  // namespace linesurf

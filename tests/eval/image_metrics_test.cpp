@@ -87,3 +87,30 @@ TEST(ImageMetrics, SilhouetteBandHoldsOutlinesDepthStepsAndPartialPixels) {
   EXPECT_THROW(silhouetteBand(alpha, depth, 1, 0.0), Error);
   EXPECT_THROW(silhouetteBand(alpha, Image(10, 10), 1, 0.5), Error);
 }
+
+TEST(ImageMetrics, HoleMapCountsWhatTheReferenceCoversAndTheTestDoesNot) {
+  // A 40x40 disc of radius 15; the test misses a 4x5 block inside it and adds 3 pixels outside.
+  for (bool alpha : {false, true}) {
+    const Color bg = alpha ? Color(0, 0, 0, 0) : Color(1, 1, 1, 1), ink(0.4f, 0.5f, 0.6f, 1);
+    Image ref(40, 40, bg), test(40, 40, bg);
+    size_t disc = 0;
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 40; ++x)
+        if ((x - 20) * (x - 20) + (y - 20) * (y - 20) <= 15 * 15) {
+          ref.at(x, y) = ink, ++disc;
+          if (!(x >= 10 && x < 14 && y >= 18 && y < 23)) test.at(x, y) = ink;
+        }
+    test.at(0, 0) = test.at(1, 0) = test.at(39, 39) = ink;
+    const HoleMap h = holeMap(ref, test);
+    EXPECT_EQ(h.byAlpha, alpha);
+    EXPECT_EQ(h.referencePixels, disc);
+    EXPECT_EQ(h.holes, 20u);
+    EXPECT_EQ(h.extra, 3u);
+    EXPECT_DOUBLE_EQ(h.holeShare(), 20.0 / double(disc));
+    EXPECT_GT(h.map.at(11, 20).x(), 0.8f);  // a hole: red
+    EXPECT_LT(h.map.at(11, 20).y(), 0.2f);
+    EXPECT_EQ(h.map.at(20, 20).x(), h.map.at(20, 20).y());  // covered by both: grey
+    EXPECT_EQ(holeMap(ref, ref).holes, 0u);
+  }
+  EXPECT_THROW(holeMap(Image(4, 4), Image(4, 5)), Error);
+}

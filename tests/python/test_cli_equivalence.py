@@ -150,5 +150,6 @@ def test_compare_equals_cli(cli, tmp_path, santa):
                 linesurf.compare(linesurf.render(santa, size=(100, 100)), linesurf.render(santa, size=(100, 100), azimuth=33))):
         for key in ("mse", "psnr", "nccm", "ssim", "mean_abs_diff", "std_abs_diff", "max_abs_diff", "differing_pixels"):
             assert got[key] == ref[key], key
+        assert got["holes"] == ref["holes"]["pixels"] and got["extra_pixels"] == ref["holes"]["extra_pixels"]
     same = linesurf.compare(str(a), str(a))
     assert math.isinf(same["psnr"]) and same["mse"] == 0

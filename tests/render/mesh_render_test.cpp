@@ -8,6 +8,9 @@
 
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
+#include "linesurf/eval/image_metrics.h"
+#include "linesurf/io/image_io.h"
+#include "linesurf/io/model_io.h"
 #include "shapes.h"
 #include "linesurf/core/mesh_normals.h"
 #include "test_util.h"
@@ -174,6 +177,47 @@ TEST(MeshRenderCli, PrimitiveMeshPointsAndErrors) {
   const std::string cloud = (test::bundledData() / "igea_points.ply").string();
   r = test::runCli("render " + cloud + " --primitive mesh -o " + (dir / "y.png").string());
   EXPECT_EQ(r.exitCode, 1) << r.out;
+}
+
+// --primitive surface: a cloud's MLS surface meshed and drawn under the splats' own camera, so that
+// the splat picture and its hole map line up with it pixel for pixel.
+TEST(MeshRenderCli, PrimitiveSurfaceIsTheSplatsReferenceWithoutHoles) {
+  const auto dir = test::scratchDir("surface_render_cli");
+  writeModel(dir / "sphere.ply", shapes::sphere(1, 6000));
+  const std::string in = "'" + (dir / "sphere.ply").string() + "'";
+  auto r = test::runCli("render " + in + " --primitive surface --size 128x128 --background transparent -o '" +
+                        (dir / "s.png").string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("MLS surface"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("0 boundary edges"), std::string::npos) << r.out;
+  r = test::runCli("-q render " + in + " --size 128x128 --background transparent -o '" + (dir / "p.png").string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const Image surface = readImage(dir / "s.png"), points = readImage(dir / "p.png");
+  // A sphere's disc: the same pixels within a one-pixel rim, no holes inside, similar shading.
+  const HoleMap h = holeMap(surface, points);
+  ASSERT_TRUE(h.byAlpha);
+  EXPECT_GT(h.referencePixels, 128u * 128u / 2);  // the orbit frames the sphere: a disc of ~70% of the view
+  EXPECT_LT(h.referencePixels, 128u * 128u * 4 / 5);
+  EXPECT_LT(h.holeShare(), 0.01) << h.holes;
+  EXPECT_LT(double(h.extra), 0.03 * double(h.referencePixels)) << h.extra;
+  EXPECT_GT(compareImages(surface, points).ssim, 0.9);
+  // A hole punched into the cloud shows in the map: a cap of the sphere removed.
+  HybridModel capless = shapes::sphere(1, 6000);
+  std::erase_if(capless.points, [](const Point& p) { return p.position.z() > 0.9f; });
+  writeModel(dir / "capless.ply", capless);
+  r = test::runCli("-q render '" + (dir / "capless.ply").string() + "' --size 128x128 --background transparent -o '" +
+                   (dir / "c.png").string() + "' --eye 0 0 4 --target 0 0 0");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  r = test::runCli("-q render " + in + " --primitive surface --size 128x128 --background transparent -o '" +
+                   (dir / "s0.png").string() + "' --eye 0 0 4 --target 0 0 0");
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_GT(holeMap(readImage(dir / "s0.png"), readImage(dir / "c.png")).holeShare(), 0.05);
+  // Refused in one line: a mesh file, a drawing style.
+  r = test::runCli("render " + (test::bundledData() / "al_mesh.ply").string() + " --primitive surface -o '" +
+                   (dir / "x.png").string() + "'");
+  EXPECT_NE(r.exitCode, 0) << r.out;
+  EXPECT_NE(r.out.find("is a mesh"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
 }
 
 }  // namespace

@@ -37,4 +37,20 @@ Image differenceHeatmap(const Image& a, const Image& b, double saturate = 32);
 /// reach < 0, jump <= 0.
 std::vector<uint8_t> silhouetteBand(const Image& alpha, const Image& depth, int reach = 2, double jump = 0.02);
 
+/// Beyond the thesis (§9.1's question, docs/decisions.md "Hole maps"): the pixels a reference
+/// picture covers and a test picture does not. A pixel is covered where its alpha exceeds 0.5
+/// when both images carry alpha (some pixel below 1), else where any channel differs from
+/// `background` by more than 1 grey level. The map shows the reference's covered pixels in grey
+/// and the holes in red, on the background.
+struct HoleMap {
+  Image map;
+  size_t referencePixels = 0;  ///< covered in the reference
+  size_t holes = 0;            ///< of those, not covered in the test
+  size_t extra = 0;            ///< covered in the test, not in the reference
+  bool byAlpha = false;        ///< coverage read from alpha (else from the background colour)
+  double holeShare() const { return referencePixels ? double(holes) / double(referencePixels) : 0.0; }
+};
+/// Throws linesurf::Error BadParameter on sizes that differ.
+HoleMap holeMap(const Image& reference, const Image& test, const Color& background = Color(1, 1, 1, 1));
+
 }  // namespace linesurf
