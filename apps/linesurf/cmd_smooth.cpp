@@ -80,7 +80,8 @@ void run(const SmoothArgs& a) {
     }
   }
   writeModel(a.out, model);
-  say(fmt::format("{}: {} points, support {} x spacing, {} threads", a.in, n, a.mls.supportScale, currentThreadCount()));
+  say(fmt::format("{}: {} points, support {} x spacing{}, {} threads", a.in, n, a.mls.supportScale,
+                  a.mls.robust ? ", robust (RIMLS)" : "", currentThreadCount()));
   say(fmt::format("projected      {} converged, {} kept where they were; largest move {:.6g}", converged, n - converged, shift));
   say(fmt::format("time (s)       geometry {:.3f}  projection {:.3f}  total {:.3f}", geometryTime, total.seconds() - geometryTime,
                   total.seconds()));
@@ -94,6 +95,7 @@ RegisterCommand reg(24, [](CLI::App& app) {
   sub->add_option("-o,--output", a->out, "The projected cloud (.ply, .xyz)")->type_name("FILE")->required();
   bindOptions(sub, a->geometry, {"k", "recomputeNormals", "orient", "viewpoint"});
   sub->add_option("--support", a->mls.supportScale, "MLS support radius, in spacings, [1.5, 10]")->capture_default_str()->type_name("FLOAT");
+  sub->add_flag("--robust", a->mls.robust, "RIMLS: refit with robust weights, so that creases stay sharp (beyond the thesis)");
   sub->add_flag("--curvature", a->curvature, "Also write the surface's principal curvatures (k_min k_max dmin_x dmin_y dmin_z)");
   sub->callback([a] { run(*a); });
 });

@@ -226,10 +226,11 @@ units), lower_quartile, upper_quartile, samples, fitted, unresolved, median_neig
   // --- the MLS surface (§9.1) ----------------------------------------------------------------
   m.def(
       "mls_project",
-      [](py::object model, py::object points, float support_scale, bool curvature) {
+      [](py::object model, py::object points, float support_scale, bool curvature, bool robust) {
         ModelArg a = modelArg(model);
         MlsOptions o;
         o.supportScale = support_scale;
+        o.robust = robust;
         validate(o);
         const FloatArray q = floatArray(points, "points", {3});
         const size_t n = size_t(q.n);
@@ -261,9 +262,9 @@ units), lower_quartile, upper_quartile, samples, fitted, unresolved, median_neig
         return namespaceOf(d);
       },
       py::arg("model"), py::arg("points"), py::kw_only(), py::arg("support_scale") = MlsOptions{}.supportScale,
-      py::arg("curvature") = false,
+      py::arg("curvature") = false, py::arg("robust") = false,
       "Projects points (N, 3) onto the MLS surface of a model's oriented points and segments (thesis §9.1,\n"
-      "Kolluri's IMLS; segments integrated along their length): points, normals (N, 3) float32 and\n"
+      "Kolluri's IMLS; segments integrated along their length; robust: RIMLS, creases kept): points, normals (N, 3) float32 and\n"
       "converged (N,) bool (a failed projection: the last iterate); with curvature, k_min, k_max (N,) and\n"
       "min_curvature_dir, max_curvature_dir (N, 3) of the surface there. A SimpleNamespace.");
   m.def("_mesh_options", [] {

@@ -57,6 +57,9 @@ void validate(const MlsOptions& o) {
   requireRange("supportScale", o.supportScale, 1.5, 10);
   requireRange("maxIterations", o.maxIterations, 1, 1000);
   if (!(o.tolerance > 0 && o.tolerance <= 0.1f)) throwBadOption("tolerance", "must be in (0, 0.1]");
+  requireRange("robustIterations", o.robustIterations, 1, 10);
+  if (!(o.sigmaNormal > 0 && o.sigmaNormal <= 4)) throwBadOption("sigmaNormal", "must be in (0, 4]");
+  if (!(o.sigmaResidual > 0 && o.sigmaResidual <= 10)) throwBadOption("sigmaResidual", "must be in (0, 10]");
 }
 
 struct MlsSurface::Impl {
@@ -215,7 +218,31 @@ size_t MlsSurface::sources() const { return impl_->cloud.pts.size() + impl_->seg
 double MlsSurface::medianSpacing() const { return impl_->medianSpacing; }
 
 MlsSample MlsSurface::evaluate(const Vec3d& x, bool second) const {
+  if (!impl_->options.robust) return accumulate(x, second, nullptr);
+  // RIMLS: each refit weighs the sources by their agreement with the previous fit.
+  MlsSample fit = accumulate(x, false, nullptr);
+  for (int k = 0; k < impl_->options.robustIterations && fit.valid(); ++k) {
+    const bool last = k + 1 == impl_->options.robustIterations;
+    MlsSample next = accumulate(x, second && last, &fit);
+    if (!next.valid()) break;  // every source disagrees: keep the previous fit
+    fit = next;
+  }
+  return fit;
+}
+
+MlsSample MlsSurface::accumulate(const Vec3d& x, bool second, const MlsSample* fit) const {
   const Impl& m = *impl_;
+  // The robust weight of a source with signed distance d and normal n against the fit.
+  const double fitValue = fit ? fit->value : 0.0;
+  const double gnorm = fit ? fit->gradient.norm() : 0.0;
+  const Vec3d fitNormal = gnorm > 0 ? Vec3d(fit->gradient / gnorm) : Vec3d::Zero();
+  const double invSn2 = 1.0 / (double(m.options.sigmaNormal) * double(m.options.sigmaNormal));
+  const double sr = double(m.options.sigmaResidual);
+  auto robustWeight = [&](double d, const Vec3d& n, double h2) {
+    if (!fit || !(gnorm > 0)) return 1.0;
+    const double e = (d - fitValue);
+    return std::exp(-(e * e) / (sr * sr * h2)) * std::exp(-(n - fitNormal).squaredNorm() * invSn2);
+  };
   thread_local std::vector<std::pair<uint32_t, float>> found;
   m.inReach(x, found);
   // N = sum w_i d_i, D = sum w_i with w_i = a_i phi(t_i), t_i = |x - p_i|^2 / h_i^2, d_i = n_i.(x - p_i).
@@ -227,11 +254,11 @@ MlsSample MlsSurface::evaluate(const Vec3d& x, bool second) const {
     const Vec3d r = x - m.cloud.pts[i].cast<double>();
     const double t = r.squaredNorm() / m.h2[i];
     if (t >= 1) continue;
-    const double u = 1 - t, a = m.area[i];
-    const double phi = a * u * u * u * u, dphi = -4 * a * u * u * u, ddphi = 12 * a * u * u;  // d/dt
-    const Vec3d gphi = (2 * dphi / m.h2[i]) * r;
     const Vec3d& nrm = m.normal[i];
     const double di = nrm.dot(r);
+    const double u = 1 - t, a = m.area[i] * robustWeight(di, nrm, m.h2[i]);
+    const double phi = a * u * u * u * u, dphi = -4 * a * u * u * u, ddphi = 12 * a * u * u;  // d/dt
+    const Vec3d gphi = (2 * dphi / m.h2[i]) * r;
     N += phi * di, D += phi;
     gN += gphi * di + phi * nrm, gD += gphi;
     s.normalField += phi * nrm;
@@ -281,7 +308,14 @@ MlsSample MlsSurface::evaluate(const Vec3d& x, bool second) const {
       // d(s) = n(s) . (x - p(s)) = n(s) . (r0 - s d).
       Poly dist;
       for (int i = 0; i < 3; ++i) dist = dist + nn[size_t(i)] * linear(r0[i], -sg.d[i]);
-      const double w = sg.weight;
+      double w = sg.weight;
+      if (fit) {
+        // One robust weight for the segment, at its point nearest x within the support (the
+        // exponentials have no closed-form integral against the kernel).
+        const double sc = std::clamp(C > 0 ? B / C : 0.0, lo, hi);
+        const Vec3d ns = (sg.n0 + sc * (sg.n1 - sg.n0)).normalized();
+        w *= robustWeight(ns.dot(r0 - sc * sg.d), ns, sg.h2);
+      }
       auto I = [&](const Poly& p) { return w * integral(p, lo, hi); };
       const Poly phiD = u4 * dist;
       N += I(phiD), D += I(u4);

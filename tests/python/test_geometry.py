@@ -100,3 +100,25 @@ def test_render_warns_when_the_normals_face_away():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         linesurf.render(linesurf.Model(points=pts, normals=pts), size=(96, 96))
+
+
+def test_robust_projection_keeps_a_cube_edge():
+    n = 30
+    g = -1 + 2 * (np.arange(n) + 0.5) / n
+    u, v = [a.ravel() for a in np.meshgrid(g, g)]
+    faces = []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            p = np.zeros((n * n, 3)); p[:, axis] = side
+            p[:, (axis + 1) % 3], p[:, (axis + 2) % 3] = u, v
+            nrm = np.zeros_like(p); nrm[:, axis] = side
+            faces.append((p, nrm))
+    pts = np.concatenate([f[0] for f in faces]).astype(np.float32)
+    nrm = np.concatenate([f[1] for f in faces]).astype(np.float32)
+    cube = linesurf.Model(points=pts, normals=nrm)
+    q = np.stack([1 - np.linspace(0.01, 0.15, 20), np.zeros(20), np.ones(20)], axis=1)  # near the edge x = z = 1
+    plain = linesurf.mls_project(cube, q)
+    robust = linesurf.mls_project(cube, q, robust=True)
+    assert plain.converged.all() and robust.converged.all()
+    err = lambda r: np.degrees(np.arccos(np.clip(r.normals[:, 2], -1, 1)))  # off the face z = 1's normal
+    assert err(robust).mean() < 0.3 * err(plain).mean(), (err(plain).mean(), err(robust).mean())

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <random>
 
 #include "linesurf/core/error.h"
@@ -192,6 +193,87 @@ TEST(MlsSurface, ALineModelImpliesItsSurface) {
       EXPECT_NEAR(c.kMin, 0, 0.03);
       EXPECT_GT(std::abs(c.dirMin.z()), 0.999);
     }
+}
+
+/// The surface of the cube [-1, 1]^3 sampled on an n x n grid per face, exact face normals.
+HybridModel cube(int n) {
+  HybridModel m;
+  m.attributes.normals = true;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side : {-1, 1})
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          Vec3f p, nrm = Vec3f::Zero();
+          p[axis] = float(side), nrm[axis] = float(side);
+          p[(axis + 1) % 3] = -1 + 2 * (i + 0.5f) / n, p[(axis + 2) % 3] = -1 + 2 * (j + 0.5f) / n;
+          m.points.push_back({p, nrm});
+        }
+  return m;
+}
+
+// RIMLS keeps the cube's edges: near them the plain IMLS rounds the surface off (its normal
+// turns across a band of a support's width), the robust fit keeps each face's normal.
+TEST(MlsSurface, RobustVariantKeepsCreases) {
+  const int n = 40;
+  const HybridModel m = cube(n);
+  const double spacing = 2.0 / n, h = 3 * spacing;
+  MlsOptions robust;
+  robust.robust = true;
+  const MlsSurface plain(m), rimls(m, robust);
+  // Points on the face z = 1 within 3h of its edge x = 1, moved off the surface a little.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> along(-0.5, 0.5), across(0.0, 3 * h), off(-0.3 * spacing, 0.3 * spacing);
+  std::vector<double> errPlain, errRobust;
+  int failed = 0;
+  for (int q = 0; q < 400; ++q) {
+    const Vec3d x(1 - across(rng), along(rng), 1 + off(rng));
+    const MlsProjection a = plain.project(x), b = rimls.project(x);
+    if (!a.converged || !b.converged) {
+      ++failed;
+      continue;
+    }
+    // The true normal of the face the projection lands on: the one whose coordinate is largest.
+    auto truth = [](const Vec3d& p) { return p.x() > p.z() ? Vec3d(1, 0, 0) : Vec3d(0, 0, 1); };
+    errPlain.push_back(std::acos(std::clamp(a.normal.dot(truth(a.point)), -1.0, 1.0)));
+    errRobust.push_back(std::acos(std::clamp(b.normal.dot(truth(b.point)), -1.0, 1.0)));
+  }
+  EXPECT_LE(failed, 4);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  // Beyond h from the edge only one face is in reach and both fits are exact: compare the mean
+  // over the band and the median over the part of it within h, where the faces meet.
+  auto mean = [](const std::vector<double>& v) {
+    double t = 0;
+    for (double e : v) t += e;
+    return t / double(v.size());
+  };
+  std::vector<double> nearPlain, nearRobust;
+  for (size_t i = 0; i < errPlain.size(); ++i)
+    if (errPlain[i] > 1e-6 || errRobust[i] > 1e-6) nearPlain.push_back(errPlain[i]), nearRobust.push_back(errRobust[i]);
+  const double mp = mean(errPlain), mr = mean(errRobust);
+  const double np = median(nearPlain), nr = median(nearRobust);
+  EXPECT_LT(mr, 0.7 * mp) << "mean normal error within 3h, degrees: plain " << mp * 57.3 << ", robust " << mr * 57.3;
+  EXPECT_LT(nr, 0.7 * np) << "median where the faces meet, degrees: plain " << np * 57.3 << ", robust " << nr * 57.3;
+  std::printf("cube edge, 3h band: mean normal error plain %.2f deg, robust %.2f deg; where the faces meet "
+              "(%zu of %zu): median %.2f / %.2f deg\n", mp * 57.2958, mr * 57.2958, nearPlain.size(), errPlain.size(),
+              np * 57.2958, nr * 57.2958);
+  // Away from creases the robust fit is the plain one's surface: a sphere within the same bias.
+  const HybridModel ball = noRadii(shapes::sphere(2, 20000));
+  const MlsSurface smooth(ball, robust);
+  double worst = 0;
+  for (int i = 0; i < 20000; i += 97) {
+    const MlsProjection p = smooth.project(ball.points[size_t(i)].position.cast<double>() * 1.01);
+    ASSERT_TRUE(p.converged);
+    worst = std::max(worst, std::abs(p.point.norm() - 2));
+  }
+  EXPECT_LT(worst, 0.15 * std::sqrt(4 * 3.14159265 * 4 / 20000));
+  MlsOptions bad = robust;
+  bad.sigmaNormal = 0;
+  EXPECT_THROW(MlsSurface(m, bad), Error);
+  bad = robust, bad.robustIterations = 11;
+  EXPECT_THROW(MlsSurface(m, bad), Error);
 }
 
 TEST(MlsSurface, BadModelsAndOptionsAreRefused) {

@@ -319,6 +319,7 @@ void describeOptions(MeshOptions& o, V&& v) {
   v(o.cellScale, {"cellScale", "Grid cell edge, median spacings (at most 0.4 x --support-scale)", closedRange(0.25, 4),
                   kUseCliPython, "--cell"});
   v(o.mls.supportScale, {"supportScale", "MLS kernel support h, spacings", closedRange(1.5, 10)});
+  v(o.mls.robust, {"robust", "RIMLS (beyond the thesis): refit the surface with robust weights, keeping creases sharp"});
   v(o.minWeight, {"minWeight", "Grid corners whose sources' weights sum below this x spacing^2 are out of reach",
                   closedRange(0, 1)});
   v(o.project, {"project", "One Newton step from each interpolated vertex onto the surface"});

@@ -30,6 +30,20 @@ struct MlsOptions {
   /// Projection has converged when |f| and the last step are below tolerance x the local
   /// support radius, (0, 0.1].
   float tolerance = 1e-5f;
+  /// Beyond IMLS: RIMLS (Öztireli, Guennebaud & Gross 2009), which keeps creases. f is refitted
+  /// `robustIterations` times with each source's weight multiplied by
+  /// exp(-((d_i - f) / (sigmaResidual h_i))^2) exp(-|n_i - grad f / |grad f||^2 / sigmaNormal^2)
+  /// from the previous fit, so that sources across a crease (whose normals disagree with the
+  /// fit's) stop pulling the surface round. The gradient is the paper's (the refit weights held
+  /// constant), the Hessian and the normal field's Jacobian those of the last fit's sum.
+  bool robust = false;
+  /// Refits, [1, 10].
+  int robustIterations = 3;
+  /// Normal term's scale on |n_i - n|, (0, 4]: 0.75 lets sources within about 40 degrees of the
+  /// fit's normal keep most of their weight.
+  float sigmaNormal = 0.75f;
+  /// Residual term's scale, x h_i, (0, 10].
+  float sigmaResidual = 0.5f;
 };
 
 /// Throws Error(BadParameter) naming the field.
@@ -94,6 +108,8 @@ class MlsSurface {
 
  private:
   struct Impl;
+  /// One fit's sums at x; with `fit` (the previous fit's f and unit normal) the robust weights.
+  MlsSample accumulate(const Vec3d& x, bool second, const MlsSample* fit) const;
   std::unique_ptr<Impl> impl_;
 };
 
