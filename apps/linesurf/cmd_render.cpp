@@ -67,6 +67,8 @@ void run(RenderArgs& a) {
   validate(a.mesh);
   validate(a.drawing);
   const bool drawing = a.drawing.style != DrawStyle::Splat;
+  // A drawing strokes segments over a depth pass: which side its splats show is not its picture.
+  if (drawing) o.facingCheck = false;
 
   const int w = a.view.width, h = a.view.height;
   // A hierarchy is read a view's nodes at a time: its budget is checked once its size is known.

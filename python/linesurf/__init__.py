@@ -75,6 +75,7 @@ prepare = _keyword_function("prepare", ["model"])
 extract_eps_delta = _keyword_function("extract_eps_delta", ["cloud"])
 extract_shape_approx = _keyword_function("extract_shape_approx", ["cloud"])
 extract_curvature_lines = _keyword_function("extract_curvature_lines", ["cloud"])
+extract_features = _keyword_function("extract_features", ["cloud"])
 extract_contour = _keyword_function("extract_contour", ["mesh"])
 mesh = _keyword_function("mesh", ["model"], [("max_mb", 4096.0)])
 

@@ -154,6 +154,21 @@ def extract_curvature_lines(
     orient: str = ...,
     viewpoint: Sequence[float] = ...,
 ) -> SimpleNamespace: ...
+def extract_features(
+    cloud: PointsLike,
+    *,
+    angle: float = ...,
+    link_radius: float = ...,
+    min_length: float = ...,
+    tolerance: float = ...,
+    robust_normals: bool = ...,
+    support_scale: float = ...,
+    k: int = ...,
+    recompute_normals: bool = ...,
+    orientation_penalty: float = ...,
+    orient: str = ...,
+    viewpoint: Sequence[float] = ...,
+) -> SimpleNamespace: ...
 def extract_contour(
     mesh: Mesh,
     *,

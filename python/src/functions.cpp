@@ -11,6 +11,7 @@
 #include "linesurf/eval/image_metrics.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
+#include "linesurf/extract/feature_lines.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/extract/verify.h"
@@ -484,6 +485,55 @@ family: "min" (the straightest lines), "max" or "both"; separation: the largest 
 average spacings (narrower where the strip would leave epsilon of the surface). Returns a
 namespace with model (chains of segments with shared endpoints, plus the points no strip covers)
 and stats (dict: lines, segments, kept_points, mean_chain_length, data_reduction, ...).)doc");
+  m.def("_extract_features_options", [] {
+    py::list l;
+    optionSpecs(l, FeatureLineOptions{});
+    optionSpecs(l, GeometryOptions{}, kExtractGeometry);
+    return l;
+  });
+  m.def(
+      "_extract_features",
+      [](py::object model, py::dict options) {
+        py::dict kw(options);
+        FeatureLineOptions o;
+        GeometryOptions go;
+        applyOptions(kw, o);
+        applyOptions(kw, go, kExtractGeometry);
+        rejectUnknown(kw);
+        go.curvature = false, go.delaunayNeighbours = false;
+        validate(o);
+        validate(go);
+        ModelArg a = modelArg(model, "cloud");
+        if (!a.model->segments.empty()) throwBadOption("model", "already holds segments; feature lines need a point cloud");
+        if (a.model->points.empty()) throwBadOption("model", "holds no points");
+        FeatureLineStats st;
+        HybridModel out;
+        {
+          py::gil_scoped_release release;
+          HybridModel cloud = *a.model;
+          if (!cloud.attributes.normals || go.recomputeNormals) {  // the §6.1 normals, as the CLI
+            const PointGeometry geo = computePointGeometry(cloud, go);
+            for (size_t i = 0; i < cloud.points.size(); ++i) cloud.points[i].normal = geo.normals[i];
+            cloud.attributes.normals = true;
+          }
+          out = extractFeatureLines(cloud, o, &st);
+        }
+        py::dict stats;
+        stats["points"] = st.points, stats["crease_pairs"] = st.creasePairs, stats["samples"] = st.samples;
+        stats["polylines"] = st.polylines, stats["segments"] = st.segments, stats["length"] = st.length;
+        stats["spacing"] = st.spacing;
+        py::dict r;
+        r["model"] = out;
+        r["stats"] = stats;
+        return namespaceOf(r);
+      },
+      py::arg("cloud"), py::arg("options") = py::dict(),
+      R"doc(Feature lines: a cloud's creases as a line model, thesis §9.5 (= `linesurf extract features`).
+
+Pairs of neighbours whose (robust MLS) normals differ by more than `angle` degrees give samples
+on the line where their tangent planes meet; chained and simplified into segments. Returns a
+namespace with model (segments only; empty when the cloud has no crease) and stats (dict:
+crease_pairs, samples, polylines, segments, length, spacing).)doc");
   m.def("_extract_contour_options", [] {
     py::list l;
     optionSpecs(l, ContourOptions{});

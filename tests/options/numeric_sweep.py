@@ -38,6 +38,7 @@ def commands(tmp):
         (["extract", "eps-delta"], [missing + ".ply", "-o", out + ".ply"]),
         (["extract", "shape-approx"], [missing + ".ply", "-o", out + ".ply"]),
         (["extract", "contour"], [missing + ".ply", "-o", out + ".ply"]),
+        (["extract", "features"], [missing + ".ply", "-o", out + ".ply"]),
         (["mesh"], [missing + ".ply", "-o", out + ".ply"]),
         (["verify-extraction"], [missing + ".ply", missing + "_hybrid.ply"]),
         (["render"], [missing + ".ply", "-o", out + ".png"]),

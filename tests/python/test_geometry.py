@@ -122,3 +122,27 @@ def test_robust_projection_keeps_a_cube_edge():
     assert plain.converged.all() and robust.converged.all()
     err = lambda r: np.degrees(np.arccos(np.clip(r.normals[:, 2], -1, 1)))  # off the face z = 1's normal
     assert err(robust).mean() < 0.3 * err(plain).mean(), (err(plain).mean(), err(robust).mean())
+
+
+def test_extract_features_finds_a_cube_edges():
+    n = 30
+    g = -1 + 2 * (np.arange(n) + 0.5) / n
+    u, v = [a.ravel() for a in np.meshgrid(g, g)]
+    pts, nrm = [], []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            p = np.zeros((n * n, 3)); p[:, axis] = side
+            p[:, (axis + 1) % 3], p[:, (axis + 2) % 3] = u, v
+            q = np.zeros_like(p); q[:, axis] = side
+            pts.append(p), nrm.append(q)
+    cube = linesurf.Model(points=np.concatenate(pts).astype(np.float32), normals=np.concatenate(nrm).astype(np.float32))
+    r = linesurf.extract_features(cube)
+    seg = r.model.segments
+    assert r.stats["segments"] == len(seg) > 0
+    mid = (seg[:, 0] + seg[:, 1]) / 2  # (S, 2, 3) endpoints
+    # On an edge two coordinates are +-1: the midpoints lie within 2 spacings of one.
+    near_edge = np.sort(np.abs(np.abs(mid) - 1), axis=1)[:, 1] < 2 * (2 / n)
+    assert near_edge.all()
+    assert 0.8 * 24 < r.stats["length"] < 1.1 * 24  # twelve edges of length 2
+    with pytest.raises(ValueError):
+        linesurf.extract_features(cube, angle=1)

@@ -14,6 +14,7 @@
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
+#include "linesurf/extract/feature_lines.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/pipeline/render_job.h"
@@ -267,6 +268,18 @@ void describeOptions(CurvatureLineOptions& o, V&& v) {
                         closedRange(0, 1e6)});
   v(o.supportScale, {"supportScale", "MLS kernel support, spacings", closedRange(1.5, 10)});
   v(o.provenance, {"provenance", "Record the input points each segment replaced (for verify-extraction)"});
+}
+
+/// Feature lines (creases) of a cloud, thesis §9.5.
+template <typename V>
+void describeOptions(FeatureLineOptions& o, V&& v) {
+  v.group("features", "Feature lines (§9.5)");
+  v(o.angle, {"angle", "Smallest angle between the normals on the two sides of a crease, degrees", closedRange(5, 170)});
+  v(o.linkRadius, {"linkRadius", "Neighbours and links within this many median spacings", closedRange(1, 8)});
+  v(o.minLength, {"minLength", "Drop polylines shorter than this many spacings", closedRange(0, 1e6)});
+  v(o.tolerance, {"tolerance", "Simplification tolerance (Douglas-Peucker), spacings", closedRange(0, 10)});
+  v(o.robustNormals, {"robustNormals", "Normals from the robust MLS surface, sharp at creases (else the cloud's own)"});
+  v(o.supportScale, {"supportScale", "MLS kernel support, spacings", closedRange(1.5, 10)});
 }
 
 /// Contour-plane extraction from a mesh, thesis §3.3.
