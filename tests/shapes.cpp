@@ -168,4 +168,27 @@ TriangleMesh gridMesh(int nx, int ny) {
   return m;
 }
 
+HybridModel fold(double theta, double spacing, double noise, bool ridge, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  std::normal_distribution<double> g(0, 1);
+  const double beta = (180 - theta) * std::numbers::pi / 180, W = 0.5;
+  const Vec3d dirA(-1, 0, 0), dirB(std::cos(beta), 0, std::sin(beta));
+  Vec3d nA(0, 0, 1), nB(-std::sin(beta), 0, std::cos(beta));
+  if (ridge) nA = -nA, nB = -nB;
+  HybridModel m;
+  m.attributes.normals = true;
+  const int nu = int(W / spacing), nv = int(1 / spacing);
+  for (int sheet = 0; sheet < 2; ++sheet)
+    for (int i = 0; i < nu; ++i)
+      for (int j = 0; j < nv; ++j) {
+        const double u = (i + 0.5 + jitter(rng)) * spacing, v = -0.5 + (j + 0.5 + jitter(rng)) * spacing;
+        const Vec3d& d = sheet ? dirB : dirA;
+        const Vec3d& nrm = sheet ? nB : nA;
+        const Vec3d p = u * d + Vec3d(0, v, 0) + noise * spacing * g(rng) * nrm;
+        m.points.push_back({p.cast<float>(), nrm.cast<float>()});
+      }
+  return m;
+}
+
 }  // namespace linesurf::shapes

@@ -23,6 +23,11 @@ HybridModel cylinder(float r, float h, int nAround, int nAlong, const SampleOpti
 /// Torus about z with major radius R and minor radius r; nMajor x nMinor grid samples.
 HybridModel torus(float R, float r, int nMajor, int nMinor, const SampleOptions& o = {});
 
+/// Two sheets W = 0.5 wide and 1 long meeting along the y axis (|y| <= 0.5, the crease) at the
+/// interior dihedral angle `theta` (degrees), on jittered grids of `spacing`, with Gaussian
+/// noise of `noise` x spacing along the exact normals; `ridge` points the normals out of the
+/// wedge (a convex crease), else into it (a valley).
+HybridModel fold(double theta, double spacing, double noise, bool ridge, uint64_t seed);
 /// Triangulated sphere (icosphere with `subdivisions` levels), outward normals per vertex.
 TriangleMesh sphereMesh(float r, int subdivisions);
 /// Planar grid mesh in z = 0 over [0,1]^2 with per-corner uv = (x, y); nx x ny quads.

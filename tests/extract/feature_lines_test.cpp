@@ -20,33 +20,6 @@
 namespace linesurf {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-/// Two sheets W wide and 1 long meeting along the y axis at the interior dihedral angle `theta`
-/// (degrees), jittered grids of `spacing`, noise sigma (x spacing) along the normals; `ridge`
-/// turns the normals outward of the wedge (a convex crease), else into it (a valley).
-HybridModel fold(double theta, double spacing, double noise, bool ridge, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
-  std::normal_distribution<double> g(0, 1);
-  const double beta = (180 - theta) * kPi / 180, W = 0.5;
-  const Vec3d dirA(-1, 0, 0), dirB(std::cos(beta), 0, std::sin(beta));
-  Vec3d nA(0, 0, 1), nB(-std::sin(beta), 0, std::cos(beta));
-  if (ridge) nA = -nA, nB = -nB;
-  HybridModel m;
-  m.attributes.normals = true;
-  const int nu = int(W / spacing), nv = int(1 / spacing);
-  for (int sheet = 0; sheet < 2; ++sheet)
-    for (int i = 0; i < nu; ++i)
-      for (int j = 0; j < nv; ++j) {
-        const double u = (i + 0.5 + jitter(rng)) * spacing, v = -0.5 + (j + 0.5 + jitter(rng)) * spacing;
-        const Vec3d& d = sheet ? dirB : dirA;
-        const Vec3d& nrm = sheet ? nB : nA;
-        const Vec3d p = u * d + Vec3d(0, v, 0) + noise * spacing * g(rng) * nrm;
-        m.points.push_back({p.cast<float>(), nrm.cast<float>()});
-      }
-  return m;
-}
 
 struct Score {
   double precision = 0, recall = 0;
@@ -90,7 +63,7 @@ TEST(FeatureLines, FoldsFromThirtyToOneHundredFiftyDegrees) {
   const double spacing = 1.0 / 60;
   for (double theta : {30.0, 60.0, 90.0, 120.0, 150.0})
     for (bool ridge : {true, false}) {
-      const HybridModel m = fold(theta, spacing, 0.1, ridge, uint64_t(theta) + ridge);
+      const HybridModel m = shapes::fold(theta, spacing, 0.1, ridge, uint64_t(theta) + ridge);
       FeatureLineStats st;
       const HybridModel lines = extractFeatureLines(m, {}, &st);
       const Score sc = score(lines, 2 * spacing);
@@ -112,11 +85,11 @@ TEST(FeatureLines, SmoothShapesHaveNone) {
   // sheet (160 degrees, below the default 25-degree threshold) give no feature lines.
   FeatureLineStats st;
   EXPECT_TRUE(extractFeatureLines(shapes::sphere(1, 20000), {}, &st).segments.empty()) << st.segments;
-  EXPECT_TRUE(extractFeatureLines(fold(160, 1.0 / 60, 0.1, true, 3)).segments.empty());
+  EXPECT_TRUE(extractFeatureLines(shapes::fold(160, 1.0 / 60, 0.1, true, 3)).segments.empty());
 }
 
 TEST(FeatureLines, SameBytesForAnyThreadCount) {
-  const HybridModel m = fold(90, 1.0 / 50, 0.2, true, 9);
+  const HybridModel m = shapes::fold(90, 1.0 / 50, 0.2, true, 9);
   HybridModel one, two;
   {
     ThreadLimit t(1);
@@ -136,7 +109,7 @@ TEST(FeatureLines, SameBytesForAnyThreadCount) {
 }
 
 TEST(FeatureLines, BadInputIsRefused) {
-  HybridModel m = fold(90, 1.0 / 20, 0, true, 1);
+  HybridModel m = shapes::fold(90, 1.0 / 20, 0, true, 1);
   EXPECT_THROW(extractFeatureLines(m, {.angle = 1}), Error);
   EXPECT_THROW(extractFeatureLines(m, {.linkRadius = 0}), Error);
   EXPECT_THROW(extractFeatureLines(m, {.tolerance = std::nan("")}), Error);
@@ -154,7 +127,7 @@ TEST(FeatureLines, BadInputIsRefused) {
 
 TEST(FeatureLines, CliWritesTheCreasesAndRefusesASmoothCloud) {
   const auto dir = test::scratchDir("features_cli");
-  writeModel(dir / "fold.ply", fold(90, 1.0 / 40, 0.1, true, 4));
+  writeModel(dir / "fold.ply", shapes::fold(90, 1.0 / 40, 0.1, true, 4));
   writeModel(dir / "ball.ply", shapes::sphere(1, 4000));
   auto r = test::runCli("extract features '" + (dir / "fold.ply").string() + "' -o '" + (dir / "f.ply").string() + "'");
   ASSERT_EQ(r.exitCode, 0) << r.out;
