@@ -1,6 +1,6 @@
 // linesurf verify-extraction INPUT HYBRID [--epsilon X] [--delta D]: proves the (epsilon, delta)
 // bound of an extracted hybrid model (thesis §3.1.2.1). Exit 0 when it holds, 3 when violated.
-// Also prints the surface error of the hybrid against the input (eval/surface_error.h; beyond
+// Also prints the surface error of the hybrid against the input (surface/surface_error.h; beyond
 // the thesis), unless --no-surface-error.
 #include <fmt/format.h>
 
@@ -26,6 +26,7 @@ struct VerifyArgs {
 
 void run(VerifyArgs& a) {
   Timer t;
+  if (a.verify.surfaceError) validate(a.verify.surface);  // before any file is read
   checkFiles({a.input, a.hybrid}, {});  // reading both fits the budget
   HybridModel input = readModel(a.input);
   HybridModel hybrid = readModel(a.hybrid);

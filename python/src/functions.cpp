@@ -9,7 +9,7 @@
 #include "arrays.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/eval/image_metrics.h"
-#include "linesurf/eval/surface_error.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"

@@ -152,7 +152,7 @@ const char* kSurfaceNote =
     "Surface error (beyond the thesis): the hybrid's MLS surface against the input cloud's (a contour model's against "
     "its mesh), each sample projected onto both and the distance between the projections taken, sampled both ways "
     "(input points and the model's primitives); RMS / 99th percentile / max in ε_ref = 0.05 × the input's average "
-    "spacing (a mesh's mean edge length); failed projections in brackets (eval/surface_error.h).\n\n";
+    "spacing (a mesh's mean edge length); failed projections in brackets (surface/surface_error.h).\n\n";
 
 double thesisDataReduction(const ThesisFigures& f) {
   return f.inputPoints > 0 ? 1.0 - (6 * f.points + 9 * f.segments) / (6 * f.inputPoints) : NAN;

@@ -23,7 +23,7 @@
 
 #include "linesurf/core/progress.h"
 #include "linesurf/eval/image_metrics.h"
-#include "linesurf/eval/surface_error.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
@@ -78,7 +78,7 @@ struct ExperimentOptions {
   /// docs/decisions.md "Mesh ground truth and the silhouette band").
   bool groundTruth = true;
   int groundTruthSupersampling = 4;  ///< samples per pixel side of the mesh image, [1, 16]
-  /// The surface error of every extraction (eval/surface_error.h, beyond the thesis): each
+  /// The surface error of every extraction (surface/surface_error.h, beyond the thesis): each
   /// hybrid's MLS surface against the cloud's, each contour model's against its mesh.
   bool surfaceError = true;
   SurfaceErrorOptions surface;

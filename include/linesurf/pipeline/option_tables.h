@@ -11,7 +11,7 @@
 #include <string>
 
 #include "linesurf/core/option_table.h"
-#include "linesurf/eval/surface_error.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
@@ -325,7 +325,7 @@ void describeOptions(MeshOptions& o, V&& v) {
   v(o.project, {"project", "One Newton step from each interpolated vertex onto the surface"});
 }
 
-/// The surface error of an extraction (eval/surface_error.h; beyond the thesis, §9.1's question).
+/// The surface error of an extraction (surface/surface_error.h; beyond the thesis, §9.1's question).
 template <typename V>
 void describeOptions(SurfaceErrorOptions& o, V&& v) {
   v.group("surface error", "Surface error: the model's MLS surface against the input's (§9.1)");

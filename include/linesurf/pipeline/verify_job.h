@@ -7,7 +7,7 @@
 
 #include "linesurf/core/model.h"
 #include "linesurf/core/progress.h"
-#include "linesurf/eval/surface_error.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/verify.h"
 
 namespace linesurf {
@@ -15,7 +15,7 @@ namespace linesurf {
 struct RecordedVerifyOptions {
   std::optional<double> epsilon, delta;  ///< default: as recorded ("eps-delta: epsilon=E delta=D k=K")
   std::optional<int> k;                  ///< neighbours for computed normals, [3, 256]; default: recorded or 12
-  /// Also measure the surface error (eval/surface_error.h) of the hybrid against the input: the
+  /// Also measure the surface error (surface/surface_error.h) of the hybrid against the input: the
   /// two MLS surfaces sampled both ways (a second or two for 100 k points on 2 threads).
   bool surfaceError = true;
   SurfaceErrorOptions surface;

@@ -1,4 +1,4 @@
-// The surface error of an extraction (eval/surface_error.h): shapes with known answers (an
+// The surface error of an extraction (surface/surface_error.h): shapes with known answers (an
 // extraction lying on its surface, a known offset, a cut-off cap), meshes, bad input, threads.
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
-#include "linesurf/eval/surface_error.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/geometry/point_geometry.h"

@@ -1,6 +1,6 @@
-// The surface error of an extraction (beyond the thesis; see eval/surface_error.h): two MLS
+// The surface error of an extraction (beyond the thesis; see surface/surface_error.h): two MLS
 // surfaces (thesis §9.1), or a mesh and one, sampled both ways.
-#include "linesurf/eval/surface_error.h"
+#include "linesurf/surface/surface_error.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,7 @@
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/geometry/point_geometry.h"
-#include "surface/detail/point_tree.h"
+#include "detail/point_tree.h"
 
 namespace linesurf {
 namespace {
@@ -136,15 +136,11 @@ SurfaceErrorReference::SurfaceErrorReference(const HybridModel& cloud, const Sur
   m.options = o;
   if (cloud.points.empty()) throwBadParameter("cloud", "has no points");
   if (!cloud.attributes.normals) throwBadParameter("cloud", "has no normals (its MLS surface needs oriented points)");
-  // Positions and normals only: areas from the spacing, whatever radii a front end gave the cloud.
+  // The points as the cloud has them (radii included: the points an extraction keeps carry the
+  // same, so a model that keeps every point has no error); its segments are not the input's.
   HybridModel points;
-  points.points.reserve(cloud.points.size());
-  for (const Point& p : cloud.points) {
-    Point q;
-    q.position = p.position, q.normal = p.normal;
-    points.points.push_back(q);
-  }
-  points.attributes.normals = true;
+  points.points = cloud.points;
+  points.attributes = cloud.attributes;
   m.surface.emplace(surfaceOf(points, o.mls, "cloud"));
   if (averageSpacing > 0 && std::isfinite(averageSpacing)) {
     m.spacing = averageSpacing;
