@@ -198,12 +198,18 @@ SurfaceError SurfaceErrorReference::measure(const HybridModel& model) const {
   const MlsSurface surface = surfaceOf(model, m.options.mls, "model");
   // The model's samples: its points, and points along each segment at the middles of
   // ceil(length / spacing) equal pieces (one spacing apart, as the points it replaced).
+  // (Segment coordinates are finite: the model's surface above refused any other.)
+  // A model of segments far longer than the spacing gets a coarser step, so that the list stays
+  // within 16 M samples (about 300 MB with its tree); the stride thins it to `samples` anyway.
+  double step = m.spacing, total = 0;
+  for (const Segment& s : model.segments) total += std::ceil(double((s.p1 - s.p0).norm()) / step);
+  if (total > 16e6) step *= total / 16e6;
   std::vector<Vec3f> all;
   all.reserve(model.points.size() + model.segments.size());
   for (const Point& p : model.points) all.push_back(p.position);
   for (const Segment& s : model.segments) {
     const double len = double((s.p1 - s.p0).norm());
-    const size_t pieces = std::max<size_t>(1, size_t(std::ceil(std::min(len / m.spacing, 1e6))));
+    const size_t pieces = std::max<size_t>(1, size_t(std::ceil(std::min(len / step, 16e6))));
     for (size_t k = 0; k < pieces; ++k) all.push_back(s.p0 + float((double(k) + 0.5) / double(pieces)) * (s.p1 - s.p0));
   }
   const Nearest modelNearest(all);
