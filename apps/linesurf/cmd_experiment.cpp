@@ -39,6 +39,8 @@ struct ExperimentArgs {
   float reconstructionScale = RenderOptions{}.reconstructionScale;
   bool tailLayers = RenderOptions{}.tailLayers;
   int coverageReach = RenderOptions{}.coverageReach;
+  bool surfaceError = ExperimentOptions{}.surfaceError;
+  SurfaceErrorOptions surface;
 };
 
 std::vector<std::string> splitCommas(const std::vector<std::string>& in) {
@@ -114,6 +116,8 @@ void run(const ExperimentArgs& a) {
   o.render.reconstructionScale = a.reconstructionScale;
   o.render.tailLayers = a.tailLayers;
   o.render.coverageReach = a.coverageReach;
+  o.surfaceError = a.surfaceError;
+  o.surface = a.surface;
 
   // Every parameter, the budget and the output folder are checked before any model is read.
   try {
@@ -162,7 +166,11 @@ void run(const ExperimentArgs& a) {
                       experimentMethodName(r.method), r.points, r.segments,
                       r.clusters ? fmt::format(" {:>6} clusters", r.clusters) : "", pct(r.dataReduction), r.mse,
                       r.nccm, r.meanAbsDiff.mean, r.stdAbsDiff.mean, 1000 * r.referenceRenderMedian,
-                      1000 * r.candidateRenderMedian, pct(r.speedup), r.extractSeconds));
+                      1000 * r.candidateRenderMedian, pct(r.speedup), r.extractSeconds) +
+          (r.surface ? fmt::format("  surface RMS {:.3g} / 99% {:.3g} / max {:.3g} eps_ref{}", r.surface->both.rms / r.surface->epsilonRef,
+                                   r.surface->both.p99 / r.surface->epsilonRef, r.surface->both.max / r.surface->epsilonRef,
+                                   r.surface->failures() ? fmt::format(" ({} failed)", r.surface->failures()) : "")
+                     : std::string()));
   }
   say(fmt::format("{} models ({} failed) in {:.1f} s on {} threads; wrote {}, {}, {}", res.models.size(), failed,
                   res.totalSeconds, res.threads, (out / "results.json").string(), (out / "results.md").string(),
@@ -235,6 +243,10 @@ RegisterCommand reg(70, [](CLI::App& app) {
                   "Coverage alpha within this many pixels of a silhouette, [0, 16] (0 = everywhere; render "
                   "--coverage-reach)")
       ->capture_default_str();
+  sub->add_flag("--surface-error,!--no-surface-error", a->surfaceError,
+                "The surface error of every extraction: its MLS surface against the cloud's (contour: against the mesh), "
+                "sampled both ways (beyond the thesis; default on)");
+  bindOptions(sub, a->surface);
   sub->callback([a] { run(*a); });
 });
 

@@ -1,5 +1,7 @@
 // linesurf verify-extraction INPUT HYBRID [--epsilon X] [--delta D]: proves the (epsilon, delta)
 // bound of an extracted hybrid model (thesis §3.1.2.1). Exit 0 when it holds, 3 when violated.
+// Also prints the surface error of the hybrid against the input (surface/surface_error.h; beyond
+// the thesis), unless --no-surface-error.
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -12,6 +14,7 @@
 #include "linesurf/pipeline/verify_job.h"
 #include "linesurf/geometry/point_geometry.h"
 #include "linesurf/io/model_io.h"
+#include "options_bind.h"
 
 namespace linesurf::cli {
 namespace {
@@ -23,11 +26,22 @@ struct VerifyArgs {
 
 void run(VerifyArgs& a) {
   Timer t;
+  if (a.verify.surfaceError) validate(a.verify.surface);  // before any file is read
   checkFiles({a.input, a.hybrid}, {});  // reading both fits the budget
   HybridModel input = readModel(a.input);
   HybridModel hybrid = readModel(a.hybrid);
   a.verify.progress = progressBar();
-  const RecordedVerifyResult rv = verifyAsRecorded(input, hybrid, a.hybrid, a.verify);
+  RecordedVerifyResult rv;
+  try {
+    rv = verifyAsRecorded(input, hybrid, a.hybrid, a.verify);
+  } catch (const OptionError&) {
+    throw;
+  } catch (const Error& e) {
+    // What the surfaces refuse in the models (a non-finite point, no normals) is the file's fault.
+    if (e.path() == "cloud") throw Error(Error::Kind::BadInput, a.input, e.where(), e.reason());
+    if (e.path() == "model") throw Error(Error::Kind::BadInput, a.hybrid, e.where(), e.reason());
+    throw;
+  }
   const VerifyReport& r = rv.report;
   const double epsilon = rv.epsilon, delta = rv.delta;
   const int k = rv.k;
@@ -40,6 +54,16 @@ void run(VerifyArgs& a) {
   say(fmt::format("normal       max 1-n.n {:.6g} of delta {:.6g}", r.maxNormalDeviation, delta));
   say(fmt::format("normals      {} (k = {}), {:.3f} s", computedNormals ? "computed as extract did" : "from the input file",
                   k, t.seconds()));
+  if (rv.surface) {
+    const SurfaceError& s = *rv.surface;
+    const SurfaceErrorFigures& f = s.both;
+    say(fmt::format("surface      error RMS {:.4g}, 99% {:.4g}, max {:.4g} = {:.3g} / {:.3g} / {:.3g} x eps_ref {:.4g} "
+                    "(0.05 x spacing) = {:.3g} / {:.3g} / {:.3g} x the diagonal; {} samples both ways, {} projections "
+                    "failed (onto the input's surface {}, the hybrid's {})",
+                    f.rms, f.p99, f.max, f.rms / s.epsilonRef, f.p99 / s.epsilonRef, f.max / s.epsilonRef, s.epsilonRef,
+                    f.rms / s.diagonal, f.p99 / s.diagonal, f.max / s.diagonal, f.samples, s.failures(),
+                    f.failedReference, f.failedModel));
+  }
   for (const std::string& m : r.messages) std::fprintf(stderr, "%s: %s\n", a.hybrid.c_str(), m.c_str());
   if (!r.ok())
     throw std::runtime_error(fmt::format(
@@ -63,6 +87,9 @@ RegisterCommand reg(35, [](CLI::App& app) {
                                    "Normal tolerance in [0, 2] (default: as recorded in HYBRID)");
   sub->add_option_function<int>("-k,--k,--neighbours", [&v](int k) { v.k = k; },
                                 "Neighbours for computed normals, [3, 256] (default: as recorded)");
+  sub->add_flag("--surface-error,!--no-surface-error", v.surfaceError,
+                "Measure the hybrid's MLS surface against the input's, sampled both ways (default on)");
+  bindOptions(sub, v.surface);
   sub->callback([args] { run(*args); });
 });
 

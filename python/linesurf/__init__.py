@@ -78,6 +78,7 @@ extract_curvature_lines = _keyword_function("extract_curvature_lines", ["cloud"]
 extract_features = _keyword_function("extract_features", ["cloud"])
 extract_contour = _keyword_function("extract_contour", ["mesh"])
 mesh = _keyword_function("mesh", ["model"], [("max_mb", 4096.0)])
+surface_error = _keyword_function("surface_error", ["reference", "model"])
 
 __version__ = "0.1.0"
 

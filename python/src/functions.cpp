@@ -9,6 +9,7 @@
 #include "arrays.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/eval/image_metrics.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/feature_lines.h"
@@ -33,6 +34,25 @@
 namespace linesurf::python {
 
 namespace {
+
+/// A SurfaceError as a dict: figures in object units and relative to eps_ref and the diagonal.
+py::dict surfaceErrorDict(const SurfaceError& e) {
+  auto figures = [&](const SurfaceErrorFigures& f) {
+    py::dict d;
+    d["samples"] = f.samples, d["failed_reference"] = f.failedReference, d["failed_model"] = f.failedModel;
+    d["rms"] = f.rms, d["p99"] = f.p99, d["max"] = f.max, d["mean"] = f.mean;
+    d["rms_eps_ref"] = f.rms / e.epsilonRef, d["p99_eps_ref"] = f.p99 / e.epsilonRef, d["max_eps_ref"] = f.max / e.epsilonRef;
+    d["rms_diagonal"] = f.rms / e.diagonal, d["p99_diagonal"] = f.p99 / e.diagonal, d["max_diagonal"] = f.max / e.diagonal;
+    return d;
+  };
+  py::dict d = figures(e.both);
+  d["from_reference"] = figures(e.fromReference);
+  d["from_model"] = figures(e.fromModel);
+  d["reference"] = e.meshReference ? "mesh" : "cloud";
+  d["reference_spacing"] = e.referenceSpacing, d["eps_ref"] = e.epsilonRef, d["diagonal"] = e.diagonal;
+  d["failures"] = e.failures();
+  return d;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Options from keywords (names: keywordName of the fields).
@@ -578,10 +598,11 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
   m.def(
       "verify",
       [](py::object cloud, const HybridModel& hybrid, std::optional<double> epsilon, std::optional<double> delta,
-         std::optional<int> k) {
+         std::optional<int> k, bool surface_error) {
         ModelArg a = modelArg(cloud, "cloud");
         RecordedVerifyOptions o;
         o.epsilon = epsilon, o.delta = delta, o.k = k;
+        o.surfaceError = surface_error;
         RecordedVerifyResult r;
         {
           py::gil_scoped_release release;
@@ -595,13 +616,50 @@ Returns a namespace with model and stats (dict: triangles, segments, points, spa
         d["replaced_twice"] = v.replacedTwice, d["missing"] = v.missing, d["unmatched_points"] = v.unmatchedPoints;
         d["max_distance"] = v.maxDistance, d["max_normal_deviation"] = v.maxNormalDeviation;
         d["epsilon"] = r.epsilon, d["delta"] = r.delta, d["k"] = r.k, d["messages"] = v.messages;
+        d["surface_error"] = r.surface ? py::object(surfaceErrorDict(*r.surface)) : py::object(py::none());
         return d;
       },
       py::arg("cloud"), py::arg("hybrid"), py::kw_only(), py::arg("epsilon") = py::none(), py::arg("delta") = py::none(),
-      py::arg("k") = py::none(),
+      py::arg("k") = py::none(), py::arg("surface_error") = true,
       "The certificate check of an (epsilon, delta) extraction (= `linesurf verify-extraction`): every\n"
       "replaced point within epsilon of its segment and delta of its anchor normal, every input point\n"
-      "kept or replaced once. Tolerances default to those the hybrid records. Returns a dict with 'ok'.");
+      "kept or replaced once. Tolerances default to those the hybrid records. Returns a dict with 'ok',\n"
+      "and 'surface_error' (surface_error()'s dict with its defaults; None with surface_error=False).");
+  m.def("_surface_error_options", [] {
+    py::list l;
+    optionSpecs(l, SurfaceErrorOptions{});
+    return l;
+  });
+  m.def(
+      "_surface_error",
+      [](py::object reference, py::object model, py::dict options) {
+        py::dict kw(options);
+        SurfaceErrorOptions o;
+        applyOptions(kw, o);
+        rejectUnknown(kw);
+        validate(o);
+        ModelArg b = modelArg(model, "model");
+        SurfaceError e;
+        if (py::isinstance<TriangleMesh>(reference)) {
+          const TriangleMesh& mesh = reference.cast<const TriangleMesh&>();
+          py::gil_scoped_release release;
+          e = surfaceError(mesh, *b.model, o);
+        } else {
+          ModelArg a = modelArg(reference, "reference");
+          py::gil_scoped_release release;
+          e = surfaceError(*a.model, *b.model, o);
+        }
+        return surfaceErrorDict(e);
+      },
+      py::arg("reference"), py::arg("model"), py::arg("options") = py::dict(),
+      R"doc(The surface error of an extracted model (beyond the thesis; = the surface line of
+`linesurf verify-extraction` and the column of `linesurf experiment`): each sample projected onto
+the reference's MLS surface (a cloud with normals) or its closest point (a Mesh) and onto the
+model's MLS surface, the distance between the two projections; sampled both ways (the reference's
+points or vertices, the model's points and points along its segments). Returns a dict: rms, p99,
+max, mean (object units), the same over eps_ref (0.05 x the reference's average spacing, a mesh's
+mean edge length) and over the model's diagonal, samples, failed_reference, failed_model,
+from_reference and from_model (the same per way), eps_ref, reference_spacing, diagonal.)doc");
 
   // --- rendering (§4-§6.2) --------------------------------------------------------------------
   m.def("_render_options", [] {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -92,6 +93,7 @@ void ExperimentOptions::validate() const {
   linesurf::validate(shapeApprox);
   linesurf::validate(contour);
   linesurf::validate(curvatureLines);
+  if (surfaceError) linesurf::validate(surface);
 }
 
 double ExperimentOptions::workingBytes() const {
@@ -432,6 +434,32 @@ void renderAndCompare(const ExperimentOptions& o, ModelResult& model, const Hybr
 
 bool isPointMethod(ExperimentMethod m) { return m != ExperimentMethod::Contour; }
 
+/// The surface error of each candidate against the reference `makeReference` builds; a cloud,
+/// mesh or model the surface refuses gets a note, not a failed model (the refusals are
+/// BadParameter errors, which would stop the whole run).
+void measureSurfaces(const std::function<SurfaceErrorReference()>& makeReference, std::vector<Candidate>& candidates) {
+  std::optional<SurfaceErrorReference> reference;
+  try {
+    reference.emplace(makeReference());
+  } catch (const OptionError&) {
+    throw;
+  } catch (const Error& e) {
+    for (Candidate& c : candidates) c.result->notes.push_back(std::string("no surface error: ") + e.what());
+    return;
+  }
+  for (Candidate& c : candidates) {
+    Timer t;
+    try {
+      c.result->surface = reference->measure(*c.model);
+    } catch (const OptionError&) {
+      throw;
+    } catch (const Error& e) {
+      c.result->notes.push_back(std::string("no surface error: ") + e.what());
+    }
+    c.result->surfaceSeconds = t.seconds();
+  }
+}
+
 void runPointCloud(const ExperimentOptions& o, const fs::path& file, ModelResult& model, const ModelProgress& progress) {
   progress("reading", 0);
   Timer t;
@@ -506,6 +534,10 @@ void runPointCloud(const ExperimentOptions& o, const fs::path& file, ModelResult
     candidates.push_back({&r, std::move(hybrid), nullptr});
   }
 
+  if (o.surfaceError) {
+    progress("surface error", 0.4);
+    measureSurfaces([&] { return SurfaceErrorReference(cloud, o.surface, geo.averageSpacing); }, candidates);
+  }
   renderAndCompare(o, model, cloud, candidates, o.views, progress, 0.4, 0.98);
 
   // Clusters pictures (thesis Figure 22) from the first view, same camera as the comparisons.
@@ -557,6 +589,10 @@ void runMesh(const ExperimentOptions& o, const fs::path& file, ModelResult& mode
                                 pointMasses(points) ? "weigh the contour length they stand for (masses)" : "are unit splats"));
   std::vector<Candidate> candidates;
   candidates.push_back({&r, std::move(lines), nullptr});
+  if (o.surfaceError) {
+    progress("surface error", 0.3);
+    measureSurfaces([&] { return SurfaceErrorReference(mesh, o.surface); }, candidates);
+  }
   renderAndCompare(o, model, points, candidates, o.meshViews, progress, 0.3, 0.98, o.groundTruth ? &mesh : nullptr);
 }
 

@@ -90,6 +90,32 @@ json methodJson(const MethodResult& r) {
     j["clusters_image"] = r.clustersImage;
   }
   j["structure_image"] = r.structureImage;
+  if (r.surface) {
+    const SurfaceError& e = *r.surface;
+    auto figures = [&](const SurfaceErrorFigures& f) {
+      return json{{"samples", f.samples},
+                  {"failed_reference", f.failedReference},
+                  {"failed_model", f.failedModel},
+                  {"rms", num(f.rms)},
+                  {"p99", num(f.p99)},
+                  {"max", num(f.max)},
+                  {"mean", num(f.mean)},
+                  {"rms_eps_ref", num(f.rms / e.epsilonRef)},
+                  {"p99_eps_ref", num(f.p99 / e.epsilonRef)},
+                  {"max_eps_ref", num(f.max / e.epsilonRef)},
+                  {"rms_diagonal", num(f.rms / e.diagonal)},
+                  {"p99_diagonal", num(f.p99 / e.diagonal)},
+                  {"max_diagonal", num(f.max / e.diagonal)}};
+    };
+    j["surface_error"] = {{"reference", e.meshReference ? "mesh" : "cloud"},
+                          {"reference_spacing", num(e.referenceSpacing)},
+                          {"eps_ref", num(e.epsilonRef)},
+                          {"diagonal", num(e.diagonal)},
+                          {"seconds", num(r.surfaceSeconds)},
+                          {"both", figures(e.both)},
+                          {"from_reference", figures(e.fromReference)},
+                          {"from_model", figures(e.fromModel)}};
+  }
   if (r.hasTruth) {
     auto truth = [](const TruthSummary& t) {
       return json{{"psnr", num(t.psnr)}, {"ssim", num(t.ssim)}, {"min_ssim", num(t.minSsim)},
@@ -111,6 +137,22 @@ std::string pct(double x) { return std::isfinite(x) ? fmt::format("{:.2f}%", 100
 std::string fixed(double x, int digits) { return std::isfinite(x) && x >= -1e300 ? fmt::format("{:.{}f}", x, digits) : "—"; }
 /// "ours / thesis" cell; the thesis half is "—" when it has no figure.
 std::string pair(const std::string& ours, const std::string& thesis) { return ours + " / " + thesis; }
+
+/// The surface error cell: RMS / 99th percentile / max in epsilon_ref, and failed projections.
+std::string surfaceCell(const MethodResult& r) {
+  if (!r.surface) return "—";
+  const SurfaceError& e = *r.surface;
+  const SurfaceErrorFigures& f = e.both;
+  std::string c = fmt::format("{:.3g} / {:.3g} / {:.3g}", f.rms / e.epsilonRef, f.p99 / e.epsilonRef, f.max / e.epsilonRef);
+  if (e.failures()) c += fmt::format(" ({} failed)", e.failures());
+  return c;
+}
+
+const char* kSurfaceNote =
+    "Surface error (beyond the thesis): the hybrid's MLS surface against the input cloud's (a contour model's against "
+    "its mesh), each sample projected onto both and the distance between the projections taken, sampled both ways "
+    "(input points and the model's primitives); RMS / 99th percentile / max in ε_ref = 0.05 × the input's average "
+    "spacing (a mesh's mean edge length); failed projections in brackets (surface/surface_error.h).\n\n";
 
 double thesisDataReduction(const ThesisFigures& f) {
   return f.inputPoints > 0 ? 1.0 - (6 * f.points + 9 * f.segments) / (6 * f.inputPoints) : NAN;
@@ -163,9 +205,12 @@ void pointTable(std::string& md, const ExperimentResults& results, ExperimentMet
   md += fmt::format("### {}\n\n", tableCaption(table));
   md += "Each cell: ours / thesis. Our models are often reduced versions of the thesis's (see the data README), so "
         "compare ratios and quality, not counts.\n\n";
+  const bool surface = std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.method->surface.has_value(); });
+  if (surface) md += kSurfaceNote;
   md += "| Model | Thesis model | # Points | Hybrid # points | # Line segments | mse | nccm | Speedup | Data reduction | "
-        "Extraction (s) |\n";
-  md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "Extraction (s) |";
+  md += surface ? " Surface error (× ε_ref) |\n" : "\n";
+  md += surface ? "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n" : "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   double sMse = 0, sNccm = 0, sSpeed = 0, sRed = 0, tMse = 0, tNccm = 0, tSpeed = 0, tRed = 0;
   int nThesis = 0;
   for (const Row& row : rows) {
@@ -180,6 +225,7 @@ void pointTable(std::string& md, const ExperimentResults& results, ExperimentMet
                       pair(fixed(r.nccm, 4), f ? fixed(f->nccm, 4) : "—"),
                       pair(pct(r.speedup), f ? pct(f->speedup) : "—"),
                       pair(pct(r.dataReduction), f ? pct(thesisDataReduction(*f)) : "—"), r.extractSeconds);
+    if (surface) md.insert(md.size() - 1, " " + surfaceCell(r) + " |");
     sMse += r.mse;
     sNccm += r.nccm;
     sSpeed += r.speedup;
@@ -194,9 +240,9 @@ void pointTable(std::string& md, const ExperimentResults& results, ExperimentMet
   }
   const double n = double(rows.size());
   auto tAvg = [&](double s) { return nThesis ? s / nThesis : NAN; };
-  md += fmt::format("| **Average** | (thesis: same models) | | | | {} | {} | {} | {} | |\n",
+  md += fmt::format("| **Average** | (thesis: same models) | | | | {} | {} | {} | {} | |{}\n",
                     pair(fixed(sMse / n, 6), fixed(tAvg(tMse), 4)), pair(fixed(sNccm / n, 4), fixed(tAvg(tNccm), 4)),
-                    pair(pct(sSpeed / n), pct(tAvg(tSpeed))), pair(pct(sRed / n), pct(tAvg(tRed))));
+                    pair(pct(sSpeed / n), pct(tAvg(tSpeed))), pair(pct(sRed / n), pct(tAvg(tRed))), surface ? " |" : "");
   const PublishedAverages p = published(table);
   if (std::isnan(p.reduction))
     md += "\n";
@@ -238,8 +284,12 @@ void meshTable(std::string& md, const ExperimentResults& results) {
   md += fmt::format("### {}\n\n", tableCaption(5));
   md += "Each cell: ours / thesis. Image differences: mean and standard deviation of |A - B| over the R, G, B composite "
         "in grey levels (0-255), averaged over the views.\n\n";
+  const bool surface = std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.method->surface.has_value(); });
+  if (surface) md += kSurfaceNote;
   md += "| Model | Thesis model | # Points | # Line segments | Mean | Standard deviation | Max abs diff | nccm | Speedup | "
-        "Extraction (s) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "Extraction (s) |";
+  md += surface ? " Surface error (× ε_ref) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+                : "\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   double sMean = 0, sStd = 0, mMean = 0, mStd = 0, tMean = 0, tStd = 0, tmMean = 0, tmStd = 0;
   int nThesis = 0;
   for (const Row& row : rows) {
@@ -252,6 +302,7 @@ void meshTable(std::string& md, const ExperimentResults& results) {
                       pair(fixed(r.meanAbsDiff.mean, 2), f ? fixed(f->meanAbsDiff, 2) : "—"),
                       pair(fixed(r.stdAbsDiff.mean, 2), f ? fixed(f->stdAbsDiff, 2) : "—"), r.maxAbsDiff,
                       fixed(r.nccm, 4), pct(r.speedup), r.extractSeconds);
+    if (surface) md.insert(md.size() - 1, " " + surfaceCell(r) + " |");
     sMean += r.meanAbsDiff.mean;
     sStd += r.stdAbsDiff.mean;
     mMean = std::max(mMean, r.meanAbsDiff.mean);
@@ -266,11 +317,12 @@ void meshTable(std::string& md, const ExperimentResults& results) {
   }
   const double n = double(rows.size());
   auto tAvg = [&](double s) { return nThesis ? s / nThesis : NAN; };
-  md += fmt::format("| **Average** | (thesis: same models) | | | {} | {} | | | | |\n",
-                    pair(fixed(sMean / n, 2), fixed(tAvg(tMean), 2)), pair(fixed(sStd / n, 2), fixed(tAvg(tStd), 2)));
-  md += fmt::format("| **Maximum** | (thesis: same models) | | | {} | {} | | | | |\n",
+  md += fmt::format("| **Average** | (thesis: same models) | | | {} | {} | | | | |{}\n",
+                    pair(fixed(sMean / n, 2), fixed(tAvg(tMean), 2)), pair(fixed(sStd / n, 2), fixed(tAvg(tStd), 2)),
+                    surface ? " |" : "");
+  md += fmt::format("| **Maximum** | (thesis: same models) | | | {} | {} | | | | |{}\n",
                     pair(fixed(mMean, 2), nThesis ? fixed(tmMean, 2) : "—"),
-                    pair(fixed(mStd, 2), nThesis ? fixed(tmStd, 2) : "—"));
+                    pair(fixed(mStd, 2), nThesis ? fixed(tmStd, 2) : "—"), surface ? " |" : "");
   md += "\nThesis over all its nine meshes: average mean 0.13, average standard deviation 2.78; maximum mean 0.31, "
         "maximum standard deviation 4.45.\n\n";
 }
@@ -404,7 +456,10 @@ void writeExperimentJson(const ExperimentResults& results, const std::filesystem
                  {"delta_n", o.shapeApprox.clustering.deltaN},
                  {"contour_spacing_scale", o.contour.spacingScale},
                  {"contour_diagonal_divisions", o.contour.diagonalDivisions},
-                 {"contour_seed", o.contour.seed}}},
+                 {"contour_seed", o.contour.seed},
+                 {"surface_error", o.surfaceError},
+                 {"surface_samples", o.surface.samples},
+                 {"surface_support_scale", o.surface.mls.supportScale}}},
                {"threads", results.threads},
                {"total_seconds", num(results.totalSeconds)},
                {"failed", results.failedCount()},
@@ -445,13 +500,13 @@ void writeExperimentHtml(const ExperimentResults& results, const std::filesystem
     };
     h += "<table><tr><th>method</th><th>reference points</th><th>points</th><th>segments</th><th>clusters</th>"
          "<th>data reduction</th><th>mse</th><th>nccm</th><th>SSIM</th><th>mean |A-B|</th><th>std |A-B|</th>"
-         "<th>speedup</th><th>3D viewer</th></tr>\n";
+         "<th>speedup</th><th>surface error RMS / 99% / max (&times; &epsilon;<sub>ref</sub>)</th><th>3D viewer</th></tr>\n";
     for (const MethodResult& r : m.methods)
       h += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.6f}</td><td>{:.4f}"
-                       "</td><td>{:.4f}</td><td>{:.2f}</td><td>{:.2f}</td><td>{}</td><td>{}{}{}</td></tr>\n",
+                       "</td><td>{:.4f}</td><td>{:.2f}</td><td>{:.2f}</td><td>{}</td><td>{}</td><td>{}{}{}</td></tr>\n",
                        experimentMethodName(r.method), r.referencePoints, r.points, r.segments,
                        r.clusters ? std::to_string(r.clusters) : "", pct(r.dataReduction), r.mse, r.nccm, r.ssim,
-                       r.meanAbsDiff.mean, r.stdAbsDiff.mean, pct(r.speedup), viewerLink(r.viewerPage, m.isMesh ? "lines" : "hybrid"),
+                       r.meanAbsDiff.mean, r.stdAbsDiff.mean, pct(r.speedup), esc(surfaceCell(r)), viewerLink(r.viewerPage, m.isMesh ? "lines" : "hybrid"),
                        r.viewerPage.empty() || m.referenceViewer.empty() ? "" : " &middot; ",
                        viewerLink(m.referenceViewer, "points"));
     h += "</table>\n";

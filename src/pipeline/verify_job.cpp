@@ -13,6 +13,7 @@ RecordedVerifyResult verifyAsRecorded(const HybridModel& input, const HybridMode
   if (o.epsilon) requireRange("epsilon", *o.epsilon, 0, 1e30);
   if (o.delta) requireRange("delta", *o.delta, 0, 2);
   if (o.k) requireRange("k", *o.k, 3, 256);
+  if (o.surfaceError) validate(o.surface);
   RecordedVerifyResult r;
   double epsilon = -1, delta = -1;
   r.computedNormals = !input.attributes.normals;
@@ -40,6 +41,15 @@ RecordedVerifyResult verifyAsRecorded(const HybridModel& input, const HybridMode
   go.progress = o.progress;
   PointGeometry geo = computePointGeometry(input, go);
   r.report = verifyExtraction(input, &geo, hybrid, epsilon, delta);
+  if (o.surfaceError) {
+    // The input's surface with the normals the bound was checked against.
+    HybridModel oriented = input;
+    oriented.segments.clear();
+    for (size_t i = 0; i < oriented.points.size(); ++i) oriented.points[i].normal = geo.normals[i];
+    oriented.attributes.normals = true;
+    if (o.progress) o.progress("surface error", 0.99);
+    r.surface = SurfaceErrorReference(oriented, o.surface, geo.averageSpacing).measure(hybrid);
+  }
   return r;
 }
 

@@ -120,6 +120,15 @@ TEST(Experiment, SmokeRunOnBundledModels) {
       // meshes: both models against the mesh rendered itself (ground truth); the line and the
       // point model of Al look like the mesh (SSIM 0.71 / 0.70 at 128x128 over 2 views, 0.86 /
       // 0.84 at 512x512 over 20) but far from a pixel match; a broken camera or framing < 0.5
+      // The surface error column: every extraction's surface within a few epsilon_ref of the
+      // input's (a contour model's of its mesh) at the RMS, and no projection failing wholesale.
+      ASSERT_TRUE(mr.surface.has_value());
+      EXPECT_EQ(mr.surface->meshReference, m.isMesh);
+      EXPECT_GT(mr.surface->both.samples, 1000u);
+      EXPECT_LT(double(mr.surface->failures()), 0.01 * double(mr.surface->both.samples));
+      EXPECT_GT(mr.surface->both.rms, 0.0);
+      EXPECT_LT(mr.surface->both.rms, 3 * mr.surface->epsilonRef);
+      EXPECT_LE(mr.surface->both.p99, mr.surface->both.max);
       EXPECT_EQ(mr.hasTruth, m.isMesh);
       if (m.isMesh) {
         ASSERT_EQ(m.truthImages.size(), 1u);
@@ -156,6 +165,9 @@ TEST(Experiment, SmokeRunOnBundledModels) {
   EXPECT_NE(html.find("al_mesh/view_000_mesh.png"), std::string::npos);
   EXPECT_NE(md.find("Against the mesh"), std::string::npos);
   EXPECT_TRUE(j["models"][0]["methods"][0].contains("candidate_vs_mesh"));
+  EXPECT_EQ(j["models"][0]["methods"][0]["surface_error"]["reference"], "mesh");
+  EXPECT_TRUE(j["models"][1]["methods"][0]["surface_error"]["both"].contains("p99_eps_ref"));
+  EXPECT_NE(md.find("Surface error (× ε_ref)"), std::string::npos);
   EXPECT_TRUE(j["models"][0]["methods"][0]["views"][0].contains("reference_vs_mesh"));
   EXPECT_TRUE(j["models"][0]["methods"][0]["candidate_vs_mesh"].contains("fraction_over_64_off_silhouettes"));
   EXPECT_NE(html.find("href=\"rockerarm_points/points.html\""), std::string::npos);
@@ -194,6 +206,9 @@ TEST(Experiment, SameInputsGiveSameResultsExceptTimings) {
     EXPECT_EQ(x.mse, y.mse);
     EXPECT_EQ(x.nccm, y.nccm);
     EXPECT_EQ(x.meanAbsDiff.mean, y.meanAbsDiff.mean);
+    ASSERT_TRUE(x.surface && y.surface);
+    EXPECT_EQ(x.surface->both.rms, y.surface->both.rms);
+    EXPECT_EQ(x.surface->both.max, y.surface->both.max);
   }
 }
 

@@ -92,6 +92,13 @@ def test_certificate_check_agrees_with_cli(cli, tmp_path, santa):
     assert cli("-q", "verify-extraction", DATA / "santa_points.ply", out).returncode == 0
     report = linesurf.verify(santa, linesurf.read(str(out)))
     assert report["ok"] and report["segments"] > 0 and report["missing"] == 0
+    # The surface error line: the same figures as surface_error() on the oriented cloud.
+    text = cli("verify-extraction", DATA / "santa_points.ply", out).stdout
+    line = next(l for l in text.splitlines() if l.startswith("surface"))
+    surface = report["surface_error"]
+    assert f"= {surface['rms_eps_ref']:.3g} / {surface['p99_eps_ref']:.3g} / {surface['max_eps_ref']:.3g} x eps_ref" in line
+    assert surface["failures"] == 0 and surface["rms_eps_ref"] < 1.0
+    assert linesurf.verify(santa, linesurf.read(str(out)), surface_error=False)["surface_error"] is None
     # A tampered model fails in both.
     bad = linesurf.read(str(out))
     seg = bad.segments

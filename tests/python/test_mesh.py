@@ -31,3 +31,29 @@ def test_mesh_refuses_bad_input_and_budget():
         linesurf.mesh(linesurf.Model(points=pts))
     with pytest.raises(TypeError):
         linesurf.mesh(model, no_such_option=1)
+
+
+def test_surface_error_reads_an_offset_and_a_mesh():
+    """linesurf.surface_error: a sphere against itself moved out by d reads d, both ways."""
+    pts = fibonacci_sphere(8000).astype(np.float32)
+    cloud = linesurf.Model(points=pts, normals=pts)
+    spacing = np.sqrt(4 * np.pi / 8000)
+    d = 0.25 * spacing
+    moved = linesurf.Model(points=pts * np.float32(1 + d), normals=pts)
+    e = linesurf.surface_error(cloud, moved, samples=2000)
+    assert e["reference"] == "cloud" and e["failures"] == 0
+    assert e["from_reference"]["samples"] == 2000 and e["from_model"]["samples"] == 2000
+    assert e["rms"] == pytest.approx(d, rel=0.03)
+    assert e["rms_eps_ref"] == pytest.approx(e["rms"] / e["eps_ref"])
+    assert e["eps_ref"] == pytest.approx(0.05 * e["reference_spacing"])
+    # Against a mesh: the sphere's own mesh from its MLS surface, and its vertices as the model.
+    vertices, faces = linesurf.mesh(cloud)
+    mesh = linesurf.Mesh(vertices, faces)
+    m = linesurf.surface_error(mesh, cloud)
+    assert m["reference"] == "mesh" and m["failures"] == 0 and m["rms_eps_ref"] < 1.0
+    with pytest.raises(ValueError, match="normals"):
+        linesurf.surface_error(linesurf.Model(points=pts), moved)
+    with pytest.raises(ValueError, match="samples"):
+        linesurf.surface_error(cloud, moved, samples=10)
+    with pytest.raises(TypeError):
+        linesurf.surface_error(cloud, moved, no_such_option=1)

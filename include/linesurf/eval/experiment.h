@@ -23,6 +23,7 @@
 
 #include "linesurf/core/progress.h"
 #include "linesurf/eval/image_metrics.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
@@ -77,6 +78,10 @@ struct ExperimentOptions {
   /// docs/decisions.md "Mesh ground truth and the silhouette band").
   bool groundTruth = true;
   int groundTruthSupersampling = 4;  ///< samples per pixel side of the mesh image, [1, 16]
+  /// The surface error of every extraction (surface/surface_error.h, beyond the thesis): each
+  /// hybrid's MLS surface against the cloud's, each contour model's against its mesh.
+  bool surfaceError = true;
+  SurfaceErrorOptions surface;
 
   std::vector<ExperimentMethod> effectiveMethods() const;
   /// Throws OptionError (core/options.h) naming the first absurd field, of this struct or of
@@ -176,6 +181,10 @@ struct MethodResult {
   /// Interactive WebGL viewer page of the candidate (linesurf view), relative to outDir.
   std::string viewerPage;
   std::vector<std::string> notes;       ///< extraction diagnostics worth reading
+  /// With ExperimentOptions::surfaceError (empty when off, or when the surface refused the model:
+  /// a note says why), and its wall time.
+  std::optional<SurfaceError> surface;
+  double surfaceSeconds = 0;
 };
 
 /// One model of the folder.

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "linesurf/core/option_table.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/contour.h"
 #include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
@@ -336,6 +337,15 @@ void describeOptions(MeshOptions& o, V&& v) {
   v(o.minWeight, {"minWeight", "Grid corners whose sources' weights sum below this x spacing^2 are out of reach",
                   closedRange(0, 1)});
   v(o.project, {"project", "One Newton step from each interpolated vertex onto the surface"});
+}
+
+/// The surface error of an extraction (surface/surface_error.h; beyond the thesis, §9.1's question).
+template <typename V>
+void describeOptions(SurfaceErrorOptions& o, V&& v) {
+  v.group("surface error", "Surface error: the model's MLS surface against the input's (§9.1)");
+  v(o.samples, {"samples", "Surface error: samples each way (input points, model primitives), at most; more are strided",
+                closedRange(100, 1e8)});
+  v(o.mls.supportScale, {"supportScale", "Surface error: MLS kernel support h, spacings", closedRange(1.5, 10)});
 }
 
 }  // namespace linesurf

@@ -7,6 +7,7 @@
 
 #include "linesurf/core/model.h"
 #include "linesurf/core/progress.h"
+#include "linesurf/surface/surface_error.h"
 #include "linesurf/extract/verify.h"
 
 namespace linesurf {
@@ -14,6 +15,10 @@ namespace linesurf {
 struct RecordedVerifyOptions {
   std::optional<double> epsilon, delta;  ///< default: as recorded ("eps-delta: epsilon=E delta=D k=K")
   std::optional<int> k;                  ///< neighbours for computed normals, [3, 256]; default: recorded or 12
+  /// Also measure the surface error (surface/surface_error.h) of the hybrid against the input: the
+  /// two MLS surfaces sampled both ways (a second or two for 100 k points on 2 threads).
+  bool surfaceError = true;
+  SurfaceErrorOptions surface;
   ProgressFn progress;
 };
 
@@ -22,9 +27,11 @@ struct RecordedVerifyResult {
   double epsilon = 0, delta = 0;  ///< the bounds checked
   int k = 12;
   bool computedNormals = false;   ///< normals recomputed as extraction did (else the input's)
+  /// With RecordedVerifyOptions::surfaceError; the input's normals are those checked.
+  std::optional<SurfaceError> surface;
 };
 
-/// Throws OptionError for bad epsilon/delta/k and when neither the options nor the hybrid (named
+/// Throws OptionError for bad epsilon/delta/k or surface options and when neither the options nor the hybrid (named
 /// `hybridName` in messages) give the tolerances; BadInput as verifyExtraction does.
 RecordedVerifyResult verifyAsRecorded(const HybridModel& input, const HybridModel& hybrid, const std::string& hybridName,
                                       const RecordedVerifyOptions& options = {});
