@@ -76,17 +76,8 @@ void requireGroup(const Element& e, std::initializer_list<const char*> names, co
   group(e, names, path);
 }
 
-/// Colour channel divisor: integer channels are 0..max of their type, float channels 0..1.
-/// (Dividing, not multiplying by 1/255, makes k/255 exactly the float the writer rounds back to k.)
-float channelScale(const Element& e, const char* name) {
-  int i = e.find(name);
-  switch (e.properties[size_t(i)].type) {
-    case Type::UInt8: case Type::Int8: return 255.0f;
-    case Type::UInt16: case Type::Int16: return 65535.0f;
-    case Type::UInt32: case Type::Int32: return 4294967295.0f;
-    default: return 1.0f;
-  }
-}
+/// Colour channel divisor of property `name` (ply::channelScale).
+float channelScale(const Element& e, const char* name) { return ply::channelScale(e.properties[size_t(e.find(name))].type); }
 
 /// The texture named by `comment TextureFile NAME` (MeshLab convention), or null.
 std::shared_ptr<const Image> loadTexture(const Header& h, const std::string& path, const std::filesystem::path* dir) {
@@ -481,10 +472,7 @@ class Body {
   }
 };
 
-uint8_t toByte(float c) {
-  if (!(c >= 0)) c = 0;  // NaN too
-  return uint8_t(std::lround(std::min(c, 1.0f) * 255.0f));
-}
+uint8_t toByte(float c) { return ply::colorByte(c); }
 
 std::string headerStart(const WriteOptions& o, const std::vector<std::string>& comments, const std::string& texture) {
   std::string h = "ply\nformat ";
