@@ -68,12 +68,15 @@ void extractTile(const Run& r, uint32_t tile, double epsilon, const std::vector<
   for (size_t j = 0; j < m; ++j)
     if (!replaced[j]) ++perBlock[size_t(og.idx[j] / kBlock)];
   for (uint32_t v : perBlock) putRaw(b, v);
-  std::vector<const std::vector<float>*> props;
+  // The properties, kept points' and segments', in the input's (sorted) order.
+  std::vector<const std::vector<float>*> props, segProps;
   for (const std::string& name : r.info.properties) {
     auto it = x.pointProperties.find(name);
-    if (it == x.pointProperties.end() || it->second.size() != x.points.size())
+    auto st = x.segmentProperties.find(name);
+    if (it == x.pointProperties.end() || it->second.size() != x.points.size() || st == x.segmentProperties.end() ||
+        st->second.size() != x.segments.size())
       throw std::logic_error("extractTile: the extraction dropped property '" + name + "'");
-    props.push_back(&it->second);
+    props.push_back(&it->second), segProps.push_back(&st->second);
   }
   size_t at = 0;
   for (size_t j = 0; j < m; ++j) {
@@ -89,6 +92,7 @@ void extractTile(const Run& r, uint32_t tile, double epsilon, const std::vector<
     const Segment& sgm = x.segments[sI];
     putRaw(b, sgm.p0), putRaw(b, sgm.p1), putRaw(b, sgm.normal), putRaw(b, sgm.normal0), putRaw(b, sgm.normal1), putRaw(b, sgm.radius);
     if (colorFloats) putRaw(b, sgm.color);
+    for (const auto* v : segProps) putRaw(b, (*v)[sI]);
     putRaw(b, uint32_t(x.provenance[sI].size()));
     for (uint32_t j : x.provenance[sI]) putRaw(b, uint32_t(og.idx[j]));
   }
@@ -145,6 +149,7 @@ void writeHybrid(const Run& r, ExtractTotals& et) {
     segHead += "property float radius\n";
     if (endpointNormals)
       segHead += "property float nx0\nproperty float ny0\nproperty float nz0\nproperty float nx1\nproperty float ny1\nproperty float nz1\n";
+    for (const std::string& name : r.info.properties) segHead += "property float " + name + "\n";
     if (provenance) segHead += "property list uint uint provenance\n";
   }
   PlyPointWriter w(r.out, et.kept, comments, true, true, segHead, r.info.properties, colors);
@@ -193,12 +198,15 @@ void writeHybrid(const Run& r, ExtractTotals& et) {
       const float radius = getRaw<float>(q);
       float colour[4];
       for (size_t a = 0; a < colorFloats; ++a) colour[a] = getRaw<float>(q);
+      const char* segProps = q;
+      q += 4 * np;
       const uint32_t cnt = getRaw<uint32_t>(q);
       for (int a = 0; a < 3; ++a) putRaw(rows, v[a]);
       if (colors)
         for (float c : colour) putRaw(rows, ply::colorByte(c));
       putRaw(rows, radius);
       if (endpointNormals) putRaw(rows, v[3]), putRaw(rows, v[4]);
+      rows.append(segProps, 4 * np);
       if (provenance) putRaw(rows, cnt);
       for (uint32_t i = 0; i < cnt; ++i) {
         const uint32_t idx = getRaw<uint32_t>(q);

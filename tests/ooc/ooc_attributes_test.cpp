@@ -9,6 +9,8 @@
 #include <iterator>
 #include <map>
 
+#include "extract/detail/segment_attributes.h"
+#include "extract/detail/segment_width.h"
 #include "linesurf/core/error.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/geometry/point_geometry.h"
@@ -155,8 +157,9 @@ TEST(OocAttributes, OneTileExtractionsWriteTheInMemoryBytes) {
   }
 }
 
-// In tiles: every kept point keeps its own colour and properties, and every segment's colour is
-// the mean of the colours of the points it replaced (to the byte it is written as).
+// In tiles: every kept point keeps its own colour and properties, every segment's colour is the
+// mean of the colours of the points it replaced (to the byte it is written as), its intensity
+// their mean and its class their mode.
 TEST(OocAttributes, TiledEpsDeltaKeepsEachPointsAttributesAndMeanSegmentColour) {
   const fs::path d = test::scratchDir("ooc_attr_tiles");
   const HybridModel in = writeAttributedScan(d / "scan.ply", 60000, 5);
@@ -184,6 +187,15 @@ TEST(OocAttributes, TiledEpsDeltaKeepsEachPointsAttributesAndMeanSegmentColour) 
     const Eigen::Vector4d got = out.segments[s].color.cast<double>();
     ASSERT_LE((got - mean).cwiseAbs().maxCoeff(), 0.5 / 255 + 1e-6) << s;
   }
+  // The segments' intensity (mean) and class (mode) are the in-memory rule over their members.
+  std::vector<uint32_t> owner(in.points.size(), detail::kKeptPoint);
+  for (size_t s = 0; s < out.provenance.size(); ++s)
+    for (uint32_t j : out.provenance[s]) owner[j] = uint32_t(s);
+  HybridModel rule;
+  rule.segments = out.segments;
+  detail::setSegmentProperties(rule, in, owner);
+  ASSERT_EQ(out.segmentProperties.size(), 2u);
+  EXPECT_EQ(out.segmentProperties, rule.segmentProperties);
 }
 
 // The chain a coloured scan larger than memory takes, every stage out of core: normals, (ε,δ) and
