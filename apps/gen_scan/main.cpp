@@ -1,6 +1,7 @@
-// linesurf_gen_scan [--scene terrain|room|facade [--truth TRUTH.ply]] OUT.ply N [SEED] [NOISE]:
+// linesurf_gen_scan [--scene terrain|room|facade [--truth TRUTH.ply]] [--color] OUT.ply N [SEED] [NOISE]:
 // writes a synthetic scan of N points as binary PLY, streamed in chunks (bounded memory for any
-// N), deterministic for a seed. Without --scene the closed surface of ooc/synthetic_scan.h;
+// N), deterministic for a seed. Without --scene the closed surface of ooc/synthetic_scan.h
+// (--color: with its deterministic 8-bit colour field);
 // with it an open scene of ooc/synthetic_scene.h (terrain from the air, a room from inside, a
 // street facade), and --truth writes the same points again with their true normals and class.
 #include <cstdio>
@@ -16,7 +17,7 @@ namespace {
 
 void usage(const char* argv0) {
   std::fprintf(stderr,
-               "usage: %s [--scene terrain|room|facade [--truth TRUTH.ply]] OUT.ply N [SEED=1] "
+               "usage: %s [--scene terrain|room|facade [--truth TRUTH.ply]] [--color] OUT.ply N [SEED=1] "
                "[NOISE=0.1 (fraction of the spacing)]\n",
                argv0);
 }
@@ -24,12 +25,15 @@ void usage(const char* argv0) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // --scene and --truth anywhere; everything else is positional, as it always was.
+  // --scene, --truth and --color anywhere; everything else is positional, as it always was.
   std::string scene, truth;
+  bool color = false;
   std::vector<std::string> pos;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--scene" || a == "--truth") {
+    if (a == "--color") {
+      color = true;
+    } else if (a == "--scene" || a == "--truth") {
       if (i + 1 == argc) {
         usage(argv[0]);
         return 1;
@@ -56,7 +60,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: --truth needs --scene (the closed scan has no truth file)\n", argv[0]);
     return 1;
   }
+  if (color && !scene.empty()) {
+    std::fprintf(stderr, "%s: --color is for the closed scan (the scenes carry a class, not a colour)\n", argv[0]);
+    return 1;
+  }
   linesurf::ooc::SyntheticScanOptions o;
+  o.color = color;
   try {
     const long long n = std::stoll(pos[1]);
     if (n < 1) throw std::invalid_argument("N");

@@ -55,6 +55,7 @@ void setSegments(HybridModel& m, py::handle obj) {
     m.segments.assign(size_t(a.n), Segment{});
     m.attributes.texcoords = m.attributes.endpointNormals = false;
     m.provenance.clear();
+    m.segmentProperties.clear();
   }
   for (py::ssize_t i = 0; i < a.n; ++i) m.segments[i].p0 = vec3At(a, i, 0), m.segments[i].p1 = vec3At(a, i, 1);
 }
@@ -275,6 +276,15 @@ drops the per-primitive attributes of that kind.)doc");
             return d;
           },
           "Extra per-point scalar properties read from or written to PLY (e.g. 'k_min'), name -> (N,) float32.")
+      .def_property_readonly(
+          "segment_properties",
+          [](const HybridModel& h) {
+            py::dict d;
+            for (const auto& [name, v] : h.segmentProperties) d[py::str(name)] = floatVector(v);
+            return d;
+          },
+          "Extra per-segment scalar properties (an extraction's segments take their points' 'intensity' as the "
+          "mean, a 'classification' as the mode), name -> (M,) float32.")
       .def_readwrite("comments", &HybridModel::comments, "PLY header comments kept through read/write.");
   for (const Column& c : kColumns)
     model.def_property(

@@ -466,6 +466,7 @@ void runPointCloud(const ExperimentOptions& o, const fs::path& file, ModelResult
   HybridModel cloud = readModel(file);
   model.loadSeconds = t.seconds();
   cloud.segments.clear();  // a hybrid file is taken as the point cloud of its points
+  cloud.segmentProperties.clear();
   cloud.provenance.clear();
   model.inputPoints = cloud.points.size();
   if (cloud.points.size() < 4)

@@ -9,6 +9,8 @@
 
 #include "detail/cross_field.h"
 #include "detail/endpoint_normals.h"
+#include "detail/segment_attributes.h"
+#include "detail/segment_width.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
@@ -473,6 +475,9 @@ HybridModel assemble(const HybridModel& cloud, const HybridModel& base, const st
     }
     out.segments.push_back(sg);
   }
+  std::vector<uint32_t> own(n);
+  for (size_t i = 0; i < n; ++i) own[i] = owner[i] < 0 ? detail::kKeptPoint : uint32_t(owner[i]);
+  detail::setSegmentProperties(out, base, own);
   return out;
 }
 

@@ -17,6 +17,7 @@
 #include "linesurf/core/timer.h"
 #include "linesurf/geometry/noise.h"
 #include "detail/endpoint_normals.h"
+#include "detail/segment_attributes.h"
 #include "detail/segment_width.h"
 
 namespace linesurf {
@@ -452,6 +453,7 @@ HybridModel extractEpsDelta(const HybridModel& cloud, const PointGeometry& geome
     for (size_t j = 0; j < n; ++j) radii[j] = radiusOf(j);
     detail::setSegmentWidths(out.segments, owner, radii, cloud, geometry);
   }
+  detail::setSegmentProperties(out, cloud, owner);
   for (auto& [name, values] : cloud.pointProperties) {
     if (values.size() != n) continue;
     auto& dst = out.pointProperties[name];

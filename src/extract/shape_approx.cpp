@@ -12,6 +12,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "detail/endpoint_normals.h"
+#include "detail/segment_attributes.h"
 #include "detail/segment_width.h"
 #include "linesurf/geometry/point_geometry.h"
 
@@ -392,6 +393,7 @@ HybridModel extractShapeApprox(const HybridModel& cloud, const PointGeometry& ge
     for (size_t j = 0; j < n; ++j) radii[j] = cloud.points[j].radius;
     detail::setSegmentWidths(out.segments, owner, radii, cloud, geometry);
   }
+  detail::setSegmentProperties(out, cloud, owner);
   st.inputPoints = n;
   st.clusters = nc;
   st.pointsKept = kept.size();

@@ -111,6 +111,8 @@ ModelSummary summarizeFile(const std::filesystem::path& path, std::vector<Vec3f>
   if (m.attributes.shadingNormals) s.properties.push_back("shading normals");
   if (!m.provenance.empty()) s.properties.push_back("provenance");
   for (const auto& kv : m.pointProperties) s.properties.push_back(kv.first);
+  for (const auto& kv : m.segmentProperties)
+    if (!m.pointProperties.count(kv.first)) s.properties.push_back("segment " + kv.first);
   std::vector<Vec3f> pos(m.points.size());
   for (size_t i = 0; i < pos.size(); ++i) pos[i] = m.points[i].position;
   s.averageSpacing = averageSpacing(pos);

@@ -105,6 +105,13 @@ void validateModel(const HybridModel& m, const std::string& name, Error::Kind ki
           c.fail(fmt::format("element vertex {}", i),
                  fmt::format("property '{}' is {:g} (a point's mass must be in (0, 1e6])", prop, values[i]));
   }
+  for (const auto& [prop, values] : m.segmentProperties) {
+    if (values.size() != m.segments.size())
+      c.fail("property " + prop, fmt::format("{} values for {} segments", values.size(), m.segments.size()));
+    for (size_t i = 0; i < values.size(); ++i)
+      if (!std::isfinite(values[i]))
+        c.fail(fmt::format("element segment {}", i), fmt::format("property '{}' is {} (not finite)", prop, values[i]));
+  }
   if (!m.provenance.empty() && m.provenance.size() != m.segments.size())
     c.fail("provenance", fmt::format("{} lists for {} segments", m.provenance.size(), m.segments.size()));
 }

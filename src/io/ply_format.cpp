@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -14,6 +15,20 @@
 #include "linesurf/core/error.h"
 
 namespace linesurf::ply {
+
+float channelScale(Type t) {
+  switch (t) {
+    case Type::UInt8: case Type::Int8: return 255.0f;
+    case Type::UInt16: case Type::Int16: return 65535.0f;
+    case Type::UInt32: case Type::Int32: return 4294967295.0f;
+    default: return 1.0f;
+  }
+}
+
+uint8_t colorByte(float c) {
+  if (!(c >= 0)) c = 0;  // NaN too
+  return uint8_t(std::lround(std::min(c, 1.0f) * 255.0f));
+}
 
 int typeSize(Type t) {
   switch (t) {

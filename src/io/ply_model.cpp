@@ -76,17 +76,8 @@ void requireGroup(const Element& e, std::initializer_list<const char*> names, co
   group(e, names, path);
 }
 
-/// Colour channel divisor: integer channels are 0..max of their type, float channels 0..1.
-/// (Dividing, not multiplying by 1/255, makes k/255 exactly the float the writer rounds back to k.)
-float channelScale(const Element& e, const char* name) {
-  int i = e.find(name);
-  switch (e.properties[size_t(i)].type) {
-    case Type::UInt8: case Type::Int8: return 255.0f;
-    case Type::UInt16: case Type::Int16: return 65535.0f;
-    case Type::UInt32: case Type::Int32: return 4294967295.0f;
-    default: return 1.0f;
-  }
-}
+/// Colour channel divisor of property `name` (ply::channelScale).
+float channelScale(const Element& e, const char* name) { return ply::channelScale(e.properties[size_t(e.find(name))].type); }
 
 /// The texture named by `comment TextureFile NAME` (MeshLab convention), or null.
 std::shared_ptr<const Image> loadTexture(const Header& h, const std::string& path, const std::filesystem::path* dir) {
@@ -200,16 +191,20 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
     if (ti >= 0 && !fe.properties[size_t(ti)].isList)
       throwBadInput(path, lineAt(fe.properties[size_t(ti)].line), "property 'texcoord' must be a list");
   }
-  // An extra vertex property is kept and written back: its name must be one the writer accepts.
-  if (vi >= 0)
-    for (const Property& p : h.elements[size_t(vi)].properties)
-      if (!p.isList && !kPointNames.count(p.name) && !validExtraPropertyName(p.name))
+  // An extra vertex or segment property is kept and written back: its name must be one the
+  // writer accepts.
+  for (int ei : {vi, si}) {
+    if (ei < 0) continue;
+    const std::set<std::string_view>& standard = ei == vi ? kPointNames : kSegmentNames;
+    for (const Property& p : h.elements[size_t(ei)].properties)
+      if (!p.isList && !standard.count(p.name) && !validExtraPropertyName(p.name))
         throwBadInput(path, lineAt(p.line), "property name " + printable(p.name) +
                                                 " may hold only letters, digits, '_', '-' and '.'");
+  }
   auto keep = [&](const Element& e, const Property& p) {
     if (fi >= 0 && &e == &h.elements[size_t(fi)]) return p.isList && (p.name == faceIndexName || p.name == "texcoord");
     if (e.name == "vertex") return !p.isList;  // every scalar: standard or extra property
-    if (e.name == "segment") return (p.isList && p.name == "provenance") || (!p.isList && kSegmentNames.count(p.name));
+    if (e.name == "segment") return (p.isList && p.name == "provenance") || !p.isList;  // standard or extra
     return false;
   };
   std::vector<ElementData> data = decodeBody(bytes, h, path, keep);
@@ -306,6 +301,11 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
         m.segments[i].normal1 = Vec3f(float(a1[i]), float(b1[i]), float(c1[i]));
       }
     }
+    for (const Property& p : e.properties) {
+      if (p.isList || kSegmentNames.count(p.name)) continue;
+      const std::vector<double>& c = *d->scalar(p.name);
+      m.segmentProperties[p.name].assign(c.begin(), c.end());
+    }
     if (const ListColumn* pc = d->list("provenance")) {
       m.provenance.resize(n);
       for (size_t i = 0; i < n; ++i) {
@@ -318,6 +318,9 @@ HybridModel plyToModel(std::string_view bytes, const std::string& path, const st
       }
     }
   }
+  if (si >= 0 && h.elements[size_t(si)].count == 0)
+    for (const Property& p : h.elements[size_t(si)].properties)
+      if (!p.isList && !kSegmentNames.count(p.name)) m.segmentProperties[p.name];
   m.attributes.normals = (vi < 0 || vNormals || h.elements[size_t(vi)].count == 0) &&
                          (si < 0 || sNormals || h.elements[size_t(si)].count == 0) && (vNormals || sNormals);
   m.attributes.colors = (vColors || vAlpha || sColors || sAlpha);
@@ -481,10 +484,7 @@ class Body {
   }
 };
 
-uint8_t toByte(float c) {
-  if (!(c >= 0)) c = 0;  // NaN too
-  return uint8_t(std::lround(std::min(c, 1.0f) * 255.0f));
-}
+uint8_t toByte(float c) { return ply::colorByte(c); }
 
 std::string headerStart(const WriteOptions& o, const std::vector<std::string>& comments, const std::string& texture) {
   std::string h = "ply\nformat ";
@@ -504,11 +504,11 @@ std::string headerStart(const WriteOptions& o, const std::vector<std::string>& c
   return h;
 }
 
-void checkPropertyName(const std::string& name) {
-  if (name.empty() || kPointNames.count(name))
-    throwBadParameter("pointProperties['" + name + "']", "name is empty or clashes with a standard vertex property");
-  if (!validExtraPropertyName(name))
-    throwBadParameter("pointProperties['" + name + "']", "name may hold only letters, digits, '_', '-' and '.'");
+void checkPropertyName(const std::string& name, bool segment = false) {
+  const std::string what = std::string(segment ? "segmentProperties['" : "pointProperties['") + name + "']";
+  if (name.empty() || (segment ? kSegmentNames : kPointNames).count(name) || (segment && name == "provenance"))
+    throwBadParameter(what, std::string("name is empty or clashes with a standard ") + (segment ? "segment" : "vertex") + " property");
+  if (!validExtraPropertyName(name)) throwBadParameter(what, "name may hold only letters, digits, '_', '-' and '.'");
 }
 
 }  // namespace
@@ -526,6 +526,12 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
     if (values.size() != m.points.size())
       throwBadParameter("pointProperties['" + name + "']", "has " + std::to_string(values.size()) + " values for " +
                                                                std::to_string(m.points.size()) + " points");
+  }
+  for (const auto& [name, values] : m.segmentProperties) {
+    checkPropertyName(name, true);
+    if (values.size() != m.segments.size())
+      throwBadParameter("segmentProperties['" + name + "']", "has " + std::to_string(values.size()) + " values for " +
+                                                                 std::to_string(m.segments.size()) + " segments");
   }
   if (!m.provenance.empty() && m.provenance.size() != m.segments.size())
     throwBadParameter("provenance", "has " + std::to_string(m.provenance.size()) + " lists for " +
@@ -552,6 +558,7 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
     if (a.texcoords) h += "property float u0\nproperty float v0\nproperty float u1\nproperty float v1\n";
     if (a.endpointNormals)
       h += "property float nx0\nproperty float ny0\nproperty float nz0\nproperty float nx1\nproperty float ny1\nproperty float nz1\n";
+    for (const auto& kv : m.segmentProperties) h += "property float " + kv.first + "\n";
     if (!m.provenance.empty()) h += "property list uint uint provenance\n";
   }
   h += "end_header\n";
@@ -574,6 +581,8 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
     for (const auto* e : extra) b.f((*e)[i]);
     b.endRow();
   }
+  std::vector<const std::vector<float>*> segExtra;
+  for (const auto& kv : m.segmentProperties) segExtra.push_back(&kv.second);
   for (size_t i = 0; i < m.segments.size(); ++i) {
     const Segment& s = m.segments[i];
     for (int c = 0; c < 3; ++c) b.f(s.p0[c]);
@@ -585,6 +594,7 @@ void writePlyModel(const std::filesystem::path& path, const HybridModel& m, cons
     if (a.texcoords) b.f(s.uv0.x()), b.f(s.uv0.y()), b.f(s.uv1.x()), b.f(s.uv1.y());
     if (a.endpointNormals)
       for (const Vec3f* v : {&s.normal0, &s.normal1}) b.f(v->x()), b.f(v->y()), b.f(v->z());
+    for (const auto* e : segExtra) b.f((*e)[i]);
     if (!m.provenance.empty()) {
       b.u32(uint32_t(m.provenance[i].size()));
       for (uint32_t v : m.provenance[i]) b.u32(v);

@@ -45,7 +45,7 @@ std::vector<uint8_t> orientTiles(const Run& r, OocNormalsReport& rep, std::vecto
     if (!any) continue;
     const size_t count = views[b].summary.interior;
     Points pts;
-    decodeRecords(readRange(r.cellPath(tile), 0, count * r.recordBytes()), r.normalsIn, r.radiusIn, pts);
+    r.decode(readRange(r.cellPath(tile), 0, count * r.recordBytes()), pts, false);
     const std::string res = readRange(r.resultPath(tile), views[b].interiorOffset, count * kResultRecord);
     for (size_t a = 0; a < T; ++a) {
       auto it = views[a].shared.find(tile);

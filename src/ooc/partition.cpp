@@ -133,8 +133,9 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
   };
   reader.rewind();
   uint64_t index = 0;
-  std::vector<float> rad;
-  while (reader.read(pos, nrm, chunk, &rad) > 0) {
+  std::vector<float> rad, att;
+  const size_t na = r.attrFloats();
+  while (reader.read(pos, nrm, chunk, &rad, &att) > 0) {
     for (size_t i = 0; i < pos.size(); ++i, ++index) {
       const size_t d = r.denseOf.at(g.tileOf(pos[i]));
       std::string& b = buf[d];
@@ -142,6 +143,7 @@ void scanAndPartition(Run& r, OocNormalsReport& rep) {
       b.append(reinterpret_cast<const char*>(pos[i].data()), 12);
       if (r.normalsIn) b.append(reinterpret_cast<const char*>(nrm[i].data()), 12);
       if (r.radiusIn) putRaw(b, rad[i]);
+      if (na) b.append(reinterpret_cast<const char*>(att.data() + i * na), 4 * na);
       ++r.blockCounts[d * r.blocks + size_t(index / kBlock)];
       buffered += r.recordBytes();
     }
@@ -162,6 +164,8 @@ json manifestJson(const Run& r, const FileIdentity& id) {
               {"points", r.info.count},
               {"normals", r.normalsIn},
               {"radius", r.radiusIn},
+              {"colors", r.info.colors},
+              {"properties", r.info.properties},
               {"comments", r.info.comments},
               {"bounds_bits", {floatBits(r.bounds.min.x()), floatBits(r.bounds.min.y()), floatBits(r.bounds.min.z()),
                                floatBits(r.bounds.max.x()), floatBits(r.bounds.max.y()), floatBits(r.bounds.max.z())}},
@@ -178,6 +182,8 @@ void loadManifest(Run& r, const json& m) {
   r.normalsIn = m.at("normals").get<bool>();
   r.radiusIn = m.value("radius", false);
   r.info.normals = r.normalsIn;
+  r.info.colors = m.value("colors", false);
+  r.info.properties = m.value("properties", std::vector<std::string>{});
   r.info.comments = m.at("comments").get<std::vector<std::string>>();
   const auto bb = m.at("bounds_bits").get<std::vector<uint32_t>>();
   r.bounds.min = Vec3f(bitsFloat(bb[0]), bitsFloat(bb[1]), bitsFloat(bb[2]));

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "io/detail/ply_format.h"
 #include "io/detail/readers.h"
@@ -134,27 +135,54 @@ PointReader::PointReader(const std::filesystem::path& path) : path_(path.string(
   size_t off = 0;
   int found[6] = {-1, -1, -1, -1, -1, -1};
   static const char* names[6] = {"x", "y", "z", "nx", "ny", "nz"};
-  std::vector<std::pair<size_t, int>> at;
+  static const char* channels[4] = {"red", "green", "blue", "alpha"};
+  Field colour[4] = {{0, -1, "red"}, {0, -1, "green"}, {0, -1, "blue"}, {0, -1, "alpha"}};
+  std::vector<std::pair<std::string, Field>> props;
   for (const ply::Property& p : v.properties) {
     if (p.isList) throwBadInput(path_, "line " + std::to_string(p.line), "the out-of-core path reads no list properties ('" + p.name + "')");
+    const Field here{off, int(p.type), nullptr};
+    off += size_t(ply::typeSize(p.type));
     int which = -1;
     for (int c = 0; c < 6; ++c)
       if (p.name == names[c]) which = c;
-    if (which < 0 && p.name == "radius") {
-      // The radius `normals` writes: `normals` sets every radius again, `extract eps-delta`
-      // keeps it (as in memory), so the output of `normals` goes on out of core.
-      radius_ = {off, int(p.type), "radius"};
-      info_.radius = true;
-      off += size_t(ply::typeSize(p.type));
+    if (which >= 0) {
+      found[which] = int(fields_.size());
+      fields_.push_back({here.offset, here.type, names[which]});
       continue;
     }
-    if (which < 0)
+    if (p.name == "radius") {
+      // The radius `normals` writes: `normals` sets every radius again, `extract eps-delta`
+      // keeps it (as in memory), so the output of `normals` goes on out of core.
+      radius_ = {here.offset, here.type, "radius"};
+      info_.radius = true;
+      continue;
+    }
+    bool channel = false;
+    for (int c = 0; c < 4; ++c)
+      if (p.name == channels[c]) colour[c] = {here.offset, here.type, channels[c]}, channel = true;
+    if (channel) continue;
+    if (p.name == "snx" || p.name == "sny" || p.name == "snz")
       throwBadInput(path_, "line " + std::to_string(p.line),
-                    "the out-of-core path carries x y z [nx ny nz] [radius] only, not property '" + p.name + "'");
-    found[which] = int(fields_.size());
-    fields_.push_back({off, int(p.type), names[which]});
-    off += size_t(ply::typeSize(p.type));
+                    "the out-of-core path does not carry shading normals (property '" + p.name + "')");
+    if (!linesurf::detail::isPlyExtraPropertyName(p.name))
+      throwBadInput(path_, "line " + std::to_string(p.line),
+                    "property name '" + p.name + "' may hold only letters, digits, '_', '-' and '.'");
+    props.emplace_back(p.name, here);
   }
+  // Colour as the whole-file reader takes it: red green blue together, alpha with or without them.
+  const int rgb = (colour[0].type >= 0) + (colour[1].type >= 0) + (colour[2].type >= 0);
+  if (rgb > 0 && rgb < 3)
+    for (int c = 0; c < 3; ++c)
+      if (colour[c].type < 0)
+        throwBadInput(path_, "line " + std::to_string(v.line),
+                      std::string("element vertex has some but not all of the properties 'red green blue' (no '") + channels[c] + "')");
+  info_.colors = rgb == 3 || colour[3].type >= 0;
+  if (info_.colors)
+    for (const Field& c : colour) attrs_.push_back({c, c.type >= 0 ? ply::channelScale(ply::Type(c.type)) : 1.0f});
+  std::sort(props.begin(), props.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& pr : props) info_.properties.push_back(pr.first);
+  for (size_t i = 0; i < props.size(); ++i)
+    attrs_.push_back({{props[i].second.offset, props[i].second.type, info_.properties[i].c_str()}, 1.0f});
   for (int c = 0; c < 3; ++c)
     if (found[c] < 0) throwBadInput(path_, "line " + std::to_string(v.line), std::string("vertex element has no '") + names[c] + "' property");
   const bool anyN = found[3] >= 0 || found[4] >= 0 || found[5] >= 0;
@@ -191,17 +219,22 @@ void PointReader::rewind() {
   if (std::fseek(f_, long(ply_ ? bodyOffset_ : 0), SEEK_SET) != 0) throwBadInput(path_, "", "cannot seek");
 }
 
-size_t PointReader::read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad) {
-  const size_t n = ply_ ? readPly(pos, nrm, max, rad) : readXyz(pos, nrm, max);
+size_t PointReader::read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad,
+                         std::vector<float>* attrs) {
+  const size_t n = ply_ ? readPly(pos, nrm, max, rad, attrs) : readXyz(pos, nrm, max);
   if (!ply_ && rad) rad->clear();
+  if (!ply_ && attrs) attrs->clear();
   return n;
 }
 
-size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad) {
+size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad,
+                            std::vector<float>* attrs) {
   const size_t n = size_t(std::min<uint64_t>(max, info_.count - next_));
   pos.resize(n);
   nrm.resize(info_.normals ? n : 0);
   if (rad) rad->resize(info_.radius ? n : 0);
+  const size_t na = attrs_.size();
+  if (attrs) attrs->resize(n * na);
   if (n == 0) return 0;
   buf_.resize(n * rowSize_);
   const size_t got = std::fread(buf_.data(), 1, buf_.size(), f_);
@@ -212,19 +245,24 @@ size_t PointReader::readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
                       (std::ferror(f_) ? " (read error)" : ""));
   }
   const size_t nf = fields_.size();
+  // A value as the whole-file decoder takes it: finite and within float range.
+  auto value = [&](const char* row, const Field& f, size_t r) {
+    const double d = decode(row + f.offset, ply::Type(f.type));
+    if (!std::isfinite(d))
+      throwBadInput(path_, "element vertex " + std::to_string(next_ + r),
+                    std::string(std::isnan(d) ? "NaN" : "infinite") + " value in property '" + f.name + "'");
+    if (std::fabs(d) > double(std::numeric_limits<float>::max()))
+      throwBadInput(path_, "element vertex " + std::to_string(next_ + r),
+                    "value " + fmt::format("{:g}", d) + " in property '" + f.name + "' is too large for a 32-bit float (|v| > 3.4e38)");
+    return float(d);
+  };
   for (size_t r = 0; r < n; ++r) {
     const char* row = buf_.data() + r * rowSize_;
     float v[6];
-    for (size_t c = 0; c < nf; ++c) {
-      const double d = decode(row + fields_[c].offset, ply::Type(fields_[c].type));
-      if (!std::isfinite(d))
-        throwBadInput(path_, "element vertex " + std::to_string(next_ + r),
-                      std::string(std::isnan(d) ? "NaN" : "infinite") + " value in property '" + fields_[c].name + "'");
-      if (std::fabs(d) > double(std::numeric_limits<float>::max()))
-        throwBadInput(path_, "element vertex " + std::to_string(next_ + r),
-                      "value " + fmt::format("{:g}", d) + " in property '" + fields_[c].name + "' is too large for a 32-bit float (|v| > 3.4e38)");
-      v[c] = float(d);
-    }
+    for (size_t c = 0; c < nf; ++c) v[c] = value(row, fields_[c], r);
+    if (attrs)
+      for (size_t a = 0; a < na; ++a)
+        (*attrs)[r * na + a] = attrs_[a].field.type < 0 ? 1.0f : value(row, attrs_[a].field, r) / attrs_[a].scale;
     pos[r] = Vec3f(v[0], v[1], v[2]);
     if (nf == 6) nrm[r] = Vec3f(v[3], v[4], v[5]);
     if (rad && info_.radius) {
@@ -283,9 +321,9 @@ size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
 // ---------------------------------------------------------------------------------------------
 PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
                                bool normals, bool radius, const std::string& moreElements,
-                               const std::vector<std::string>& extra)
+                               const std::vector<std::string>& extra, bool colors)
     : path_(path.string()), out_(std::make_unique<AtomicFileWriter>(path)), count_(count), normals_(normals),
-      radius_(radius), extra_(extra.size()) {
+      radius_(radius), colors_(colors), extra_(extra.size()) {
   // The header exactly as writePlyModel (io/ply_model.cpp) writes it.
   std::string h = "ply\nformat binary_little_endian 1.0\n";
   for (const std::string& c : comments) {
@@ -300,6 +338,7 @@ PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count
   h += "element vertex " + std::to_string(count) + "\n";
   h += "property float x\nproperty float y\nproperty float z\n";
   if (normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
   if (radius) h += "property float radius\n";
   for (const std::string& e : extra) h += "property float " + e + "\n";
   h += moreElements;
@@ -317,15 +356,19 @@ void PlyPointWriter::put(const char* data, size_t n) {
   }
 }
 
-void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra) {
+void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra,
+                           const float* colors) {
   static_assert(std::endian::native == std::endian::little, "the binary writer assumes a little-endian host");
   if (written_ + n > count_) throw std::logic_error("PlyPointWriter: more rows than declared");
+  if (colors_ && !colors) throw std::logic_error("PlyPointWriter: rows without the declared colours");
   const size_t rowFloats = 3 + (normals_ ? 3 : 0) + (radius_ ? 1 : 0) + extra_;
-  row_.resize(n * rowFloats * 4);
+  row_.resize(n * (rowFloats * 4 + (colors_ ? 4 : 0)));
   char* o = row_.data();
   for (size_t i = 0; i < n; ++i) {
     std::memcpy(o, pos[i].data(), 12), o += 12;
     if (normals_) std::memcpy(o, nrm[i].data(), 12), o += 12;
+    if (colors_)
+      for (int c = 0; c < 4; ++c) *o++ = char(ply::colorByte(colors[i * 4 + size_t(c)]));
     if (radius_) std::memcpy(o, &radius[i], 4), o += 4;
     if (extra_) std::memcpy(o, extra + i * extra_, 4 * extra_), o += 4 * extra_;
   }

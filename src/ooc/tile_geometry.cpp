@@ -18,6 +18,7 @@ struct TileGeometry {
   std::vector<uint32_t> owner;  ///< tile of each point of `all`
   std::vector<uint8_t> exact;   ///< per point of `all`: its queries stayed inside the halo
   HybridModel model;
+  std::vector<float> ownAttrs;  ///< the tile's own points' attributes, in input order
   PointGeometry geo;
   linesurf::detail::TileGeometryExtras extras;
   uint64_t inexact = 0;
@@ -28,7 +29,7 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   const Grid& g = r.grid;
   const size_t rs = r.recordBytes();
   Points interior;
-  decodeRecords(readRange(r.cellPath(tile), 0, r.tileCounts[r.denseOf.at(tile)] * rs), r.normalsIn, r.radiusIn, interior);
+  r.decode(readRange(r.cellPath(tile), 0, r.tileCounts[r.denseOf.at(tile)] * rs), interior);
   Vec3d bmin, bmax;
   g.box(tile, bmin, bmax);
   const auto c = g.coords(tile);
@@ -53,13 +54,17 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   go.progress = {};
   double h = g.width() * kHaloStart;
   TileGeometry tg;
+  // The attributes go to the extraction only (own points, in the cell's order, which is the
+  // input's); the geometry does not use them.
+  tg.ownAttrs = std::move(interior.att);
+  interior.att.clear();
   for (;;) {
     // Halo: the neighbours' points inside the box widened by h.
     Points all = interior;
     std::vector<uint32_t> owner(interior.size(), tile);
     for (uint32_t u : neighbours) {
       Points p;
-      decodeRecords(readRange(r.cellPath(u), 0, r.tileCounts[r.denseOf.at(u)] * rs), r.normalsIn, r.radiusIn, p);
+      r.decode(readRange(r.cellPath(u), 0, r.tileCounts[r.denseOf.at(u)] * rs), p, false);
       for (size_t i = 0; i < p.size(); ++i) {
         const Vec3d q = p.pos[i].cast<double>();
         if ((q.array() >= bmin.array() - h).all() && (q.array() <= bmax.array() + h).all()) {
@@ -123,6 +128,7 @@ OwnGeometry ownGeometry(const TileGeometry& tg, uint32_t tile, bool curvature) {
   std::vector<uint32_t> local(n, PointGeometry::kNoNeighbour);
   for (size_t i = 0; i < n; ++i)
     if (tg.owner[i] == tile) local[i] = uint32_t(og.idx.size()), og.idx.push_back(tg.all.idx[i]);
+  og.attrs = tg.ownAttrs;  // own points in input order, as og.idx
   og.starOffsets.push_back(0);
   for (size_t i = 0; i < n; ++i) {
     if (local[i] == PointGeometry::kNoNeighbour) continue;

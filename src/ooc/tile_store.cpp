@@ -53,9 +53,10 @@ std::string readRange(const fs::path& path, uint64_t offset, uint64_t n) {
   return out;
 }
 
-void decodeRecords(const std::string& bytes, bool normals, bool radius, Points& out) {
-  const size_t rs = recordSize(normals, radius), n = bytes.size() / rs;
+void decodeRecords(const std::string& bytes, bool normals, bool radius, size_t attrs, Points& out, bool keepAttrs) {
+  const size_t rs = recordSize(normals, radius, attrs), n = bytes.size() / rs;
   const char* p = bytes.data();
+  if (keepAttrs) out.att.reserve(out.att.size() + n * attrs);
   for (size_t i = 0; i < n; ++i) {
     out.idx.push_back(getRaw<uint64_t>(p));
     Vec3f v;
@@ -66,6 +67,12 @@ void decodeRecords(const std::string& bytes, bool normals, bool radius, Points& 
       out.nrm.push_back(v);
     }
     if (radius) out.rad.push_back(getRaw<float>(p));
+    if (keepAttrs) {
+      const size_t at = out.att.size();
+      out.att.resize(at + attrs);
+      if (attrs) std::memcpy(out.att.data() + at, p, 4 * attrs);
+    }
+    p += 4 * attrs;
   }
 }
 
@@ -166,11 +173,11 @@ std::string encodeOwnGeometry(const OwnGeometry& og) {
   putRaw(s, uint64_t(og.size())), putRaw(s, uint64_t(og.star.size())), putRaw(s, uint8_t(!og.minDir.empty()));
   putColumn(s, og.idx), putColumn(s, og.pos), putColumn(s, og.normal), putColumn(s, og.radius), putColumn(s, og.spacing);
   putColumn(s, og.variation), putColumn(s, og.component), putColumn(s, og.flags), putColumn(s, og.minDir);
-  putColumn(s, og.maxDir), putColumn(s, og.starOffsets), putColumn(s, og.star);
+  putColumn(s, og.maxDir), putColumn(s, og.starOffsets), putColumn(s, og.star), putColumn(s, og.attrs);
   return s;
 }
 
-OwnGeometry decodeOwnGeometry(const fs::path& path) {
+OwnGeometry decodeOwnGeometry(const fs::path& path, size_t attrFloats) {
   const std::string s = readRange(path, 0, fs::file_size(path));
   if (s.size() < 25 || s.compare(0, 8, "LSGEO001") != 0) throwIo(path.string(), "not a tile geometry file");
   const char* q = s.data() + 8;
@@ -184,6 +191,7 @@ OwnGeometry decodeOwnGeometry(const fs::path& path) {
   getColumn(s, at, m, og.component, path), getColumn(s, at, m, og.flags, path);
   getColumn(s, at, curvature ? m : 0, og.minDir, path), getColumn(s, at, curvature ? m : 0, og.maxDir, path);
   getColumn(s, at, m + 1, og.starOffsets, path), getColumn(s, at, stars, og.star, path);
+  getColumn(s, at, m * attrFloats, og.attrs, path);
   if (at != s.size() || og.starOffsets.back() != stars) throwIo(path.string(), "tile geometry file is damaged");
   for (size_t j = 0; j < m; ++j)
     if (og.starOffsets[j] > og.starOffsets[j + 1]) throwIo(path.string(), "tile geometry file is damaged");

@@ -89,16 +89,23 @@ struct Grid {
   }
 };
 
-// --- tile cell files: u64 index, float x y z [, float nx ny nz] [, float radius] ---------------
+// --- tile cell files: u64 index, float x y z [, float nx ny nz] [, float radius] [, attributes] --
+/// The attributes are PointFileInfo::attributeFloats() floats: the colour, then the further
+/// properties (a point's own, carried to the output and to the extraction's segments).
 struct Points {
   std::vector<uint64_t> idx;
   std::vector<Vec3f> pos, nrm;
   std::vector<float> rad;
+  std::vector<float> att;  ///< `attrs` floats a point (when decoded with them)
   size_t size() const { return idx.size(); }
 };
 
-inline size_t recordSize(bool normals, bool radius) { return 8 + 12 + (normals ? 12 : 0) + (radius ? 4 : 0); }
-void decodeRecords(const std::string& bytes, bool normals, bool radius, Points& out);
+inline size_t recordSize(bool normals, bool radius, size_t attrs) {
+  return 8 + 12 + (normals ? 12 : 0) + (radius ? 4 : 0) + 4 * attrs;
+}
+/// Appends the records of `bytes` to `out`; the attributes only with `keepAttrs` (the halo's
+/// points need none).
+void decodeRecords(const std::string& bytes, bool normals, bool radius, size_t attrs, Points& out, bool keepAttrs = true);
 
 class TileExtraction;
 
@@ -114,7 +121,13 @@ struct Run {
   /// The input's radii travel with the points for the extraction, which keeps them as the
   /// in-memory path does (`normals` sets every radius again and leaves them).
   bool radiusIn = false;
-  size_t recordBytes() const { return recordSize(normalsIn, radiusIn); }
+  /// Floats of a point's attributes in the cell records (info.colors, info.properties).
+  size_t attrFloats() const { return info.attributeFloats(); }
+  size_t recordBytes() const { return recordSize(normalsIn, radiusIn, attrFloats()); }
+  /// Decodes cell records of this run's layout.
+  void decode(const std::string& bytes, Points& out, bool keepAttrs = true) const {
+    decodeRecords(bytes, normalsIn, radiusIn, attrFloats(), out, keepAttrs);
+  }
   Grid grid;
   Bounds3f bounds;
   float dupTol = 0;
@@ -208,11 +221,13 @@ struct OwnGeometry {
   std::vector<uint8_t> flags;
   std::vector<Vec3f> minDir, maxDir;        ///< with curvature (shape approximation, §3.2.4.2)
   std::vector<uint32_t> starOffsets, star;  ///< CSR over local indices
+  std::vector<float> attrs;                 ///< the points' attributes (Run::attrFloats() a point)
   size_t size() const { return idx.size(); }
 };
 
 std::string encodeOwnGeometry(const OwnGeometry& og);
-OwnGeometry decodeOwnGeometry(const fs::path& path);
+/// `attrFloats`: the run's attribute floats a point (the file does not record it).
+OwnGeometry decodeOwnGeometry(const fs::path& path, size_t attrFloats);
 
 /// The join's outcome, for ranks other than 0 (which join nothing): the per-tile component
 /// offsets, one flip per (tile, component) node, and the average spacing.

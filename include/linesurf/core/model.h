@@ -69,6 +69,10 @@ struct HybridModel {
   /// Extra per-point scalar properties (e.g. curvature "k_min"), each of points.size().
   /// One is read by the renderer: kPointMassProperty ("mass", see pointMasses()).
   std::map<std::string, std::vector<float>> pointProperties;
+  /// Extra per-segment scalar properties, each of segments.size(): the extractions give a
+  /// segment its points' properties (the mean, the mode for a class: docs/decisions.md "Point
+  /// attributes on kept points and segments"); PLY `segment` element properties of those names.
+  std::map<std::string, std::vector<float>> segmentProperties;
   /// Optional per-segment list of the input point indices it replaced (--provenance).
   std::vector<std::vector<uint32_t>> provenance;
   /// Free-form header comments kept through read/write (e.g. "source: ...").

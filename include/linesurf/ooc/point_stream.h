@@ -2,8 +2,10 @@
 /// Streaming point I/O for clouds larger than memory: a reader that passes a binary PLY or XYZ
 /// file through in chunks, and a binary PLY writer that writes rows as they come and puts the
 /// file in place only when complete. The whole-file readers of io/model_io.h stay for models
-/// that fit; these handle only what the out-of-core pipeline needs: points with x y z and
-/// optionally nx ny nz. Errors are the whole-file readers' (linesurf::Error, `PATH: WHERE: WHAT`).
+/// that fit; these handle only what the out-of-core pipeline needs: points with x y z, optionally
+/// nx ny nz and radius, and the attributes the whole-file reader keeps (colour and further scalar
+/// properties such as intensity or class), as the same floats it makes of them. Errors are the
+/// whole-file readers' (linesurf::Error, `PATH: WHERE: WHAT`).
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +24,14 @@ struct PointFileInfo {
   uint64_t count = 0;                 ///< points
   bool normals = false;               ///< nx ny nz present
   bool radius = false;                ///< radius present (binary PLY)
+  /// red green blue and/or alpha present (binary PLY): a point's colour is 4 floats in [0, 1]
+  /// as readModel makes them (channel / the type's maximum; a missing channel 1).
+  bool colors = false;
+  /// The further scalar vertex properties (binary PLY), sorted by name as HybridModel's
+  /// pointProperties holds them: one float each.
+  std::vector<std::string> properties;
+  /// Floats of a point's attributes: the colour (4, when `colors`), then `properties`.
+  size_t attributeFloats() const { return (colors ? 4 : 0) + properties.size(); }
   std::vector<std::string> comments;  ///< kept like the whole-file reader keeps them
   std::string header;                 ///< the PLY header bytes (empty for XYZ), for identity hashes
 };
@@ -38,9 +48,10 @@ class PointReader {
 
   const PointFileInfo& info() const { return info_; }
   /// Reads up to `max` points from the current position (positions into `pos`, normals into
-  /// `nrm` and radii into `*rad` when the file has them; each resized to the number read, or
-  /// emptied). Returns 0 at the end.
-  size_t read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad = nullptr);
+  /// `nrm`, radii into `*rad` and attributes into `*attrs`, info().attributeFloats() a point,
+  /// when the file has them; each resized to the number read, or emptied). Returns 0 at the end.
+  size_t read(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad = nullptr,
+              std::vector<float>* attrs = nullptr);
   /// Back to the first point.
   void rewind();
   /// Index of the next point read().
@@ -48,7 +59,8 @@ class PointReader {
 
  private:
   void openBody();
-  size_t readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad);
+  size_t readPly(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max, std::vector<float>* rad,
+                 std::vector<float>* attrs);
   size_t readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, size_t max);
 
   std::string path_;
@@ -61,6 +73,10 @@ class PointReader {
   struct Field { size_t offset; int type; const char* name; };
   std::vector<Field> fields_;  ///< x y z [nx ny nz]
   Field radius_{0, 0, "radius"};
+  /// The attributes in PointFileInfo's order: colour channels (type -1: absent, 1) and properties;
+  /// `scale` divides the value (the colour channel rule of the whole-file reader).
+  struct AttrField { Field field; float scale; };
+  std::vector<AttrField> attrs_;
   std::vector<char> buf_;
   // XYZ state
   std::string pending_;
@@ -71,8 +87,9 @@ class PointReader {
   uint64_t next_ = 0;
 };
 
-/// Writes a binary little-endian PLY of points with x y z [nx ny nz] [radius] (floats), row by
-/// row, byte for byte as io/model_io.h's writeModel writes the same points. The rows go to a
+/// Writes a binary little-endian PLY of points with x y z [nx ny nz] [red green blue alpha]
+/// [radius] [further float properties], row by row, byte for byte as io/model_io.h's writeModel
+/// writes the same points. The rows go to a
 /// temporary file beside `path` (io/atomic_file.h: removed on signals too); finish() puts it in
 /// place, or stages it in the command's transaction, once every declared row is written;
 /// destroying an unfinished writer removes it, so no partial output is ever left.
@@ -81,15 +98,17 @@ class PlyPointWriter {
   /// `moreElements`: header lines of elements after the vertices (e.g. "element segment N\n
   /// property ..."), whose rows follow through writeRaw() once every vertex row is written.
   /// `extra`: names of further float vertex properties after radius (written through write()'s
-  /// `extra` rows).
+  /// `extra` rows), in the order writeModel writes them (sorted). `colors`: uchar red green blue
+  /// alpha after the normals, from write()'s `colors` rows (4 floats in [0, 1] a point).
   PlyPointWriter(const std::filesystem::path& path, uint64_t count, const std::vector<std::string>& comments,
                  bool normals, bool radius, const std::string& moreElements = "",
-                 const std::vector<std::string>& extra = {});
+                 const std::vector<std::string>& extra = {}, bool colors = false);
   ~PlyPointWriter();
   PlyPointWriter(const PlyPointWriter&) = delete;
   PlyPointWriter& operator=(const PlyPointWriter&) = delete;
   /// Appends n rows (nrm / radius ignored when the file has none).
-  void write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra = nullptr);
+  void write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra = nullptr,
+             const float* colors = nullptr);
   /// Rows of the further elements, already encoded.
   void writeRaw(const std::string& bytes);
   void finish();
@@ -100,7 +119,7 @@ class PlyPointWriter {
   std::unique_ptr<AtomicFileWriter> out_;
   std::string buf_;
   uint64_t count_ = 0, written_ = 0;
-  bool normals_ = false, radius_ = false;
+  bool normals_ = false, radius_ = false, colors_ = false;
   size_t extra_ = 0;
   std::string row_;
 };

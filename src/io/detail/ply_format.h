@@ -23,6 +23,12 @@ enum class Format : uint8_t { Ascii, BinaryLittleEndian, BinaryBigEndian };
 int typeSize(Type t);
 bool isIntegral(Type t);
 const char* typeName(Type t);  ///< canonical PLY name ("float", "uchar", ...)
+/// Divisor that maps a colour channel stored as `t` onto [0, 1]: integer channels are 0..max of
+/// their type, float channels 0..1. (Dividing, not multiplying by 1/255, makes k/255 exactly the
+/// float the writer rounds back to k.) Shared by the whole-file and the streaming readers.
+float channelScale(Type t);
+/// The byte the writers store for a colour channel in [0, 1] (clamped; NaN as 0).
+uint8_t colorByte(float c);
 
 struct Property {
   std::string name;
