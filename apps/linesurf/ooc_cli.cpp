@@ -44,11 +44,14 @@ void bindOutOfCoreFlags(CLI::App* sub, OutOfCoreFlags& f) {
 }
 
 ooc::OocNormalsOptions outOfCoreOptions(const GeometryOptions& geometry, const std::string& in, const std::string& out,
-                                        const OutOfCoreFlags& f, const MpiRun& mpi, const std::string& why) {
+                                        const OutOfCoreFlags& f, const MpiRun& mpi, const std::string& why, bool extraction) {
   ooc::OocNormalsOptions o;
   o.geometry = geometry;
   o.workDir = f.tileDir.empty() ? out + ".tiles" : f.tileDir;
-  o.memoryBytes = outOfCoreBudgetBytes();
+  o.memoryBytes = memoryBudgetBytes();
+  o.budgetName = "--max-mb";
+  // Before saying anything: a budget the run cannot keep is one line with the figure it needs.
+  ooc::requireOutOfCoreBudget(in, o, extraction);
   o.minTiles = f.tiles;
   o.keepWorkDir = f.keepTiles;
   o.progress = withTimeLeft(progressBar());
