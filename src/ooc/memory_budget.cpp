@@ -81,9 +81,10 @@ BudgetFloor budgetFloor(const std::filesystem::path& in, const OocNormalsOptions
   // The merge: a window of the output's rows (position, normal, radius, filled flag; curvature's
   // five floats), or the hybrid's kept points twice (read, then in index order) with their order;
   // beside it the writer's buffer, each tile's piece of the window and the join's votes before it
-  // (20 MiB: 3 M points in 313 tiles peaked 47 MiB over the process's 12 at the merge).
+  // (3 M points with one far outlier at the floor: `normals` peaked at 0.94 of it, `extract
+  // eps-delta` at 1.05 with 20 MiB beside its window, hence 30 for the hybrid).
   const bool curvatureOut = o.geometry.curvature && !extraction;
-  const double merge = window * (extraction ? 72.0 : 29.0 + (curvatureOut ? 20.0 : 0.0)) + 20 * kMiB;
+  const double merge = window * (extraction ? 72.0 : 29.0 + (curvatureOut ? 20.0 : 0.0)) + (extraction ? 30 : 20) * kMiB;
   const double perPoint = bytesPerTilePoint(o, extraction, extractionCurvature);
   f.tiles = double(kTilesInFlight) * kMinTilePoints * kHaloShare * perPoint;
   auto buffers = [&](const OocNormalsOptions& t) {

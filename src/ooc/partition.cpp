@@ -1,5 +1,6 @@
 // The partition stage of the out-of-core pipeline (see partition.h): the input's bounding box and
-// a 64^3 histogram size the tiles, then one pass bins the points into one cell file per tile; the
+// a 64^3 histogram size the tiles, then one pass bins the points into one cell file per tile, and
+// a tile over the budget is re-gridded over its own points (beyond the thesis) until each fits; the
 // manifest records what the folder was built from, so that a later run reuses it or clears it.
 #include "ooc/partition.h"
 

@@ -2,7 +2,7 @@
 // "Tile folder"; design in docs/decisions.md).
 //
 // Passes over the input: (1) bounding box, (2) a 64^3 histogram that sizes the tiles, (3) binning
-// into one file per tile (partition.cpp). Then every tile is processed with its halo by
+// into one file per tile, tiles over the budget cut again over their own points (partition.cpp). Then every tile is processed with its halo by
 // computePointGeometry (tile_geometry.cpp: tiles in flight in parallel, each with the in-memory
 // code inside), its results written to a file of its own (a killed run resumes from them). The
 // orientation pass joins the tiles' MST orientations through the points they share (join.cpp),
