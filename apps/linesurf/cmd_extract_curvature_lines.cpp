@@ -35,7 +35,7 @@ void runOutOfCore(CurvatureLineArgs& a, const std::string& why) {
   if (a.ascii) throwBadParameter("--ascii", "the out-of-core path writes binary PLY");
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
-  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
+  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why, true);
   ooc::OocCurvatureLineReport r;
   mpi.guard([&] { r = ooc::extractCurvatureLinesOutOfCore(a.input, a.output, o, a.extract); });
   endProgress();

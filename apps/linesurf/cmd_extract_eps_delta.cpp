@@ -39,7 +39,7 @@ void runOutOfCore(EpsDeltaArgs& a, const std::string& why) {
                                          "(linesurf info prints the noise of a sample)");
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
-  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
+  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why, true);
   ooc::OocEpsDeltaReport r;
   mpi.guard([&] { r = ooc::extractEpsDeltaOutOfCore(a.input, a.output, o, a.extract); });
   endProgress();

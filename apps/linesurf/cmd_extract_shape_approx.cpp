@@ -56,7 +56,7 @@ void runOutOfCore(ShapeApproxArgs& a, const std::string& why) {
     throwBadParameter("--clusters-out", "is not written out of core (clusters are cut per tile); run in memory for it");
   MpiRun mpi;
   if (mpi.rank != 0) globalOptions().quiet = true;  // rank 0 speaks for the job
-  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why);
+  const ooc::OocNormalsOptions o = outOfCoreOptions(a.geometry, a.input, a.output, a.ooc, mpi, why, true);
   ooc::OocShapeApproxReport r;
   mpi.guard([&] { r = ooc::extractShapeApproxOutOfCore(a.input, a.output, o, a.extract); });
   endProgress();

@@ -34,7 +34,7 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   std::string ext = std::filesystem::path(args.out).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext != ".ply") throwBadParameter("--output", "the out-of-core path writes .ply");
-  const ooc::OocNormalsOptions o = outOfCoreOptions(args.geometry, args.in, args.out, args.ooc, mpi, why);
+  const ooc::OocNormalsOptions o = outOfCoreOptions(args.geometry, args.in, args.out, args.ooc, mpi, why, false);
   ooc::OocNormalsReport r;
   mpi.guard([&] { r = ooc::computeNormalsOutOfCore(args.in, args.out, o); });
   endProgress();

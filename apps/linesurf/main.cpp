@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
         requireRange(spec.name, g.maxMegabytes, 1, 1e9, "MiB");
       }, "Memory and output budget, MiB: the largest image, buffer or output a command may make (estimated before "
          "the work), and the memory beyond which normals, the point extractions and lod build go out of core and "
-         "size their tiles, [1, 1e9]")
+         "size their tiles (out of core: the process's peak resident set, refused up front when too small), [1, 1e9]")
       ->type_name("MiB")
       ->default_str(fmt::format("{}", g.maxMegabytes));
   for (auto& reg : cli::registeredCommands()) reg(app);

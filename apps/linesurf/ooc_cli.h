@@ -29,9 +29,10 @@ struct OutOfCoreFlags {
 void bindOutOfCoreFlags(CLI::App* command, OutOfCoreFlags& flags);
 
 /// One out-of-core run's options (budget, tile folder OUT.tiles unless --tile-dir, progress, this
-/// MPI rank), after saying "IN: out of core (why), tiles in DIR".
+/// MPI rank), after saying "IN: out of core (why), tiles in DIR"; first refuses (exit 1) a
+/// --max-mb the run cannot keep, with the figure it needs. `extraction`: a point extraction.
 ooc::OocNormalsOptions outOfCoreOptions(const GeometryOptions& geometry, const std::string& in, const std::string& out,
-                                        const OutOfCoreFlags& flags, const MpiRun& mpi, const std::string& why);
+                                        const OutOfCoreFlags& flags, const MpiRun& mpi, const std::string& why, bool extraction);
 
 /// The extractions' lines on the tiles: input, tiles, reuse, halos.
 void sayTiles(const ooc::OocNormalsReport& r, const std::string& in);

@@ -2,7 +2,7 @@
 // "Tile folder"; design in docs/decisions.md).
 //
 // Passes over the input: (1) bounding box, (2) a 64^3 histogram that sizes the tiles, (3) binning
-// into one file per tile (partition.cpp). Then every tile is processed with its halo by
+// into one file per tile, tiles over the budget cut again over their own points (partition.cpp). Then every tile is processed with its halo by
 // computePointGeometry (tile_geometry.cpp: tiles in flight in parallel, each with the in-memory
 // code inside), its results written to a file of its own (a killed run resumes from them). The
 // orientation pass joins the tiles' MST orientations through the points they share (join.cpp),
@@ -16,6 +16,7 @@
 #include "linesurf/core/parallel.h"
 #include "linesurf/core/timer.h"
 #include "ooc/join.h"
+#include "ooc/memory_budget.h"
 #include "ooc/normals_writer.h"
 #include "ooc/partition.h"
 #include "ooc/tile_geometry.h"
@@ -28,13 +29,15 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
   validate(o.geometry);
   if (o.workDir.empty()) throwBadParameter("workDir", "empty path");
   if (o.ranks < 1 || o.rank < 0 || o.rank >= o.ranks) throwBadParameter("rank", "must be in [0, ranks)");
+  // Before any work and before any file: a budget the run cannot keep.
+  requireBudget(in, o, extraction != nullptr, extraction && extraction->usesCurvature());
   OocNormalsReport rep;
   Run r{o, in, out, o.workDir};
   r.extraction = extraction;
   r.extractionCurvature = extraction && extraction->usesCurvature();
   const bool extract = r.extracting();
   r.concurrent = size_t(std::max(1, std::min(currentThreadCount(), kTilesInFlight)));
-  r.ioBytes = std::clamp(o.memoryBytes / 8, 8.0 * 1024 * 1024, 256.0 * 1024 * 1024);
+  r.ioBytes = ioBufferBytes(o);
 
   if (o.ranks > 1 && !o.barrier) throwBadParameter("barrier", "needed when ranks > 1");
   const FileIdentity id = fileIdentity(in);
@@ -43,8 +46,12 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
   if (o.rank == 0) prepareFolder(r, rep, id, wantInput, wantArgs);
   if (o.barrier) o.barrier();
   if (o.rank != 0) loadSharedManifest(r, wantInput, wantArgs);
+  releaseFreedMemory();
   rep.points = r.info.count;
   rep.tiles = r.tileIds.size();
+  rep.refinedTiles = r.refinements.size();
+  rep.tileInteriorBudget = r.tilePoints / kHaloShare;
+  for (uint64_t c : r.tileCounts) rep.tileInteriorMax = std::max(rep.tileInteriorMax, c);
   {
     const Vec3f diag = r.bounds.diagonal();
     r.dupTol = 1e-6f * (r.info.count > 0 ? diag.norm() : 0.0f);
@@ -66,6 +73,7 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
   reportProgress(o.progress, "tiles", 0.0);
   forEachTile(r, todo, "tiles", [&](uint32_t tile) { processTile(r, tile); });
   rep.tTiles = t.seconds();
+  releaseFreedMemory();
   if (o.barrier) o.barrier();
   if (o.rank != 0 && !extract) return rep;  // rank 0 joins the orientations and writes the output
   std::vector<size_t> nodeOffset;
@@ -81,8 +89,10 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
       o.barrier();
     }
   }
+  releaseFreedMemory();
   if (extract) {
     extractTiles(r, nodeOffset, flip, rep.averageSpacing, *et);
+    releaseFreedMemory();
     if (o.barrier) o.barrier();
     if (o.rank != 0) return rep;
     t.reset();

@@ -349,11 +349,14 @@ PlyPointWriter::PlyPointWriter(const std::filesystem::path& path, uint64_t count
 PlyPointWriter::~PlyPointWriter() = default;  // an unfinished file's temporary goes with out_
 
 void PlyPointWriter::put(const char* data, size_t n) {
-  buf_.append(data, n);
-  if (buf_.size() >= (size_t(8) << 20)) {
+  constexpr size_t kBuffer = size_t(8) << 20;
+  if (buf_.size() + n >= kBuffer) {
+    // Written as they come once the buffer would be full: a large piece is not copied into it.
     out_->write(buf_.data(), buf_.size());
     buf_.clear();
+    if (n >= kBuffer) return out_->write(data, n);
   }
+  buf_.append(data, n);
 }
 
 void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radius, size_t n, const float* extra,
@@ -362,17 +365,22 @@ void PlyPointWriter::write(const Vec3f* pos, const Vec3f* nrm, const float* radi
   if (written_ + n > count_) throw std::logic_error("PlyPointWriter: more rows than declared");
   if (colors_ && !colors) throw std::logic_error("PlyPointWriter: rows without the declared colours");
   const size_t rowFloats = 3 + (normals_ ? 3 : 0) + (radius_ ? 1 : 0) + extra_;
-  row_.resize(n * (rowFloats * 4 + (colors_ ? 4 : 0)));
-  char* o = row_.data();
-  for (size_t i = 0; i < n; ++i) {
-    std::memcpy(o, pos[i].data(), 12), o += 12;
-    if (normals_) std::memcpy(o, nrm[i].data(), 12), o += 12;
-    if (colors_)
-      for (int c = 0; c < 4; ++c) *o++ = char(ply::colorByte(colors[i * 4 + size_t(c)]));
-    if (radius_) std::memcpy(o, &radius[i], 4), o += 4;
-    if (extra_) std::memcpy(o, extra + i * extra_, 4 * extra_), o += 4 * extra_;
+  // Encoded in slices, so that the rows' copy stays small whatever n is.
+  constexpr size_t kSlice = size_t(1) << 16;
+  for (size_t at = 0; at < n; at += kSlice) {
+    const size_t end = std::min(n, at + kSlice);
+    row_.resize((end - at) * (rowFloats * 4 + (colors_ ? 4 : 0)));
+    char* o = row_.data();
+    for (size_t i = at; i < end; ++i) {
+      std::memcpy(o, pos[i].data(), 12), o += 12;
+      if (normals_) std::memcpy(o, nrm[i].data(), 12), o += 12;
+      if (colors_)
+        for (int c = 0; c < 4; ++c) *o++ = char(ply::colorByte(colors[i * 4 + size_t(c)]));
+      if (radius_) std::memcpy(o, &radius[i], 4), o += 4;
+      if (extra_) std::memcpy(o, extra + i * extra_, 4 * extra_), o += 4 * extra_;
+    }
+    put(row_.data(), row_.size());
   }
-  put(row_.data(), row_.size());
   written_ += n;
 }
 

@@ -26,25 +26,47 @@ struct TileGeometry {
 };
 
 TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
-  const Grid& g = r.grid;
   const size_t rs = r.recordBytes();
   Points interior;
   r.decode(readRange(r.cellPath(tile), 0, r.tileCounts[r.denseOf.at(tile)] * rs), interior);
   Vec3d bmin, bmax;
-  g.box(tile, bmin, bmax);
-  const auto c = g.coords(tile);
-  // Neighbour tiles (26-ring) that hold points, and whether a face of the box borders the grid.
+  r.tileBox(tile, bmin, bmax);
+  const double width = r.tileWidth(tile);
+  // Neighbour tiles that hold points within one tile width of the box (the widest halo), and
+  // whether a face of the box has no point beyond it.
   std::vector<uint32_t> neighbours;
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
-        if ((dx | dy | dz) == 0 || x < 0 || y < 0 || z < 0 || x >= g.tiles[0] || y >= g.tiles[1] || z >= g.tiles[2]) continue;
-        const uint32_t u = uint32_t((size_t(z) * size_t(g.tiles[1]) + size_t(y)) * size_t(g.tiles[0]) + size_t(x));
-        if (r.denseOf.count(u)) neighbours.push_back(u);
-      }
   bool openLow[3], openHigh[3];
-  for (int a = 0; a < 3; ++a) openLow[a] = c[size_t(a)] == 0, openHigh[a] = c[size_t(a)] == g.tiles[size_t(a)] - 1;
+  const bool onGrid = tile < r.gridTiles();
+  if (onGrid) {
+    // A tile of the grid: the tiles of its 26-ring (or their refinements' tiles); a face on the
+    // grid's border has none beyond it.
+    const Grid& g = r.grid;
+    const auto c = g.coords(tile);
+    for (uint32_t u : r.tileIds) {
+      if (u == tile) continue;
+      const auto cu = g.coords(r.gridAncestor(u));
+      bool ring = true;
+      for (int a = 0; a < 3; ++a) ring = ring && std::abs(cu[size_t(a)] - c[size_t(a)]) <= 1;
+      if (ring) neighbours.push_back(u);
+    }
+    for (int a = 0; a < 3; ++a) openLow[a] = c[size_t(a)] == 0, openHigh[a] = c[size_t(a)] == g.tiles[size_t(a)] - 1;
+  } else {
+    // A tile of a refinement: every tile whose points' box reaches the widest halo.
+    for (size_t d = 0; d < r.tileIds.size(); ++d) {
+      const Bounds3f& b = r.tileBounds[d];
+      if (r.tileIds[d] == tile) continue;
+      bool near = true;
+      for (int a = 0; a < 3; ++a) near = near && double(b.max[a]) >= bmin[a] - width && double(b.min[a]) <= bmax[a] + width;
+      if (near) neighbours.push_back(r.tileIds[d]);
+    }
+  }
+  // Beyond the halo of width h: a face of a refinement's tile is open when no point of the cloud
+  // lies past it.
+  auto setOpen = [&](double h) {
+    if (onGrid) return;
+    for (int a = 0; a < 3; ++a)
+      openLow[a] = double(r.bounds.min[a]) >= bmin[a] - h, openHigh[a] = double(r.bounds.max[a]) <= bmax[a] + h;
+  };
 
   GeometryOptions go = r.o.geometry;
   go.curvature = r.tileCurvature();
@@ -52,13 +74,14 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
   // The cover radius is the radius `normals` writes; the extractions do not use it.
   go.coverRadius = !r.extracting();
   go.progress = {};
-  double h = g.width() * kHaloStart;
+  double h = width * kHaloStart;
   TileGeometry tg;
   // The attributes go to the extraction only (own points, in the cell's order, which is the
   // input's); the geometry does not use them.
   tg.ownAttrs = std::move(interior.att);
   interior.att.clear();
   for (;;) {
+    setOpen(h);
     // Halo: the neighbours' points inside the box widened by h.
     Points all = interior;
     std::vector<uint32_t> owner(interior.size(), tile);
@@ -108,12 +131,17 @@ TileGeometry tileGeometry(const Run& r, uint32_t tile, bool delaunay) {
     };
     tg.exact.assign(n, 0);
     tg.inexact = 0;
+    // A point with fewer than k neighbours here has more elsewhere unless the whole cloud is here
+    // (a far outlier alone in its tile: its queries found nothing, they did not stay inside).
+    const size_t k = size_t(tg.geo.k);
+    const bool whole = n == r.info.count;
     for (size_t i = 0; i < n; ++i) {
-      tg.exact[i] = double(tg.extras.reach[i]) < room(tg.all.pos[i]);
+      const bool full = whole || k == 0 || tg.geo.neighbours[i * k + k - 1] != PointGeometry::kNoNeighbour;
+      tg.exact[i] = full && double(tg.extras.reach[i]) < room(tg.all.pos[i]);
       if (tg.owner[i] == tile && !tg.exact[i]) ++tg.inexact;
     }
-    if (tg.inexact > 0 && h < g.width()) {
-      h = std::min(2 * h, g.width());
+    if (tg.inexact > 0 && h < width) {
+      h = std::min(2 * h, width);
       ++tg.widenings;
       continue;
     }

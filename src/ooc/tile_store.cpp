@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 
@@ -74,6 +75,41 @@ void decodeRecords(const std::string& bytes, bool normals, bool radius, size_t a
     }
     p += 4 * attrs;
   }
+}
+
+namespace {
+
+/// The refinement whose children include tile t (t at or above the grid's tiles).
+const Refinement& refinementOf(const Run& r, uint32_t t) {
+  auto it = std::upper_bound(r.refinements.begin(), r.refinements.end(), t,
+                             [](uint32_t v, const Refinement& x) { return v < x.firstId; });
+  if (it == r.refinements.begin() || t - (it - 1)->firstId >= (it - 1)->count())
+    throwIo((r.dir / "manifest.json").string(), "tile " + std::to_string(t) + " belongs to no grid");
+  return *(it - 1);
+}
+
+}  // namespace
+
+uint32_t Run::tileOf(const Vec3f& p) const {
+  uint32_t t = grid.tileOf(p);
+  for (auto it = refinedOf.find(t); it != refinedOf.end(); it = refinedOf.find(t)) {
+    const Refinement& x = refinements[it->second];
+    t = x.firstId + x.grid.tileOf(p);
+  }
+  return t;
+}
+
+void Run::tileBox(uint32_t t, Vec3d& bmin, Vec3d& bmax) const {
+  if (t < gridTiles()) return grid.box(t, bmin, bmax);
+  const Refinement& x = refinementOf(*this, t);
+  x.grid.box(t - x.firstId, bmin, bmax);
+}
+
+double Run::tileWidth(uint32_t t) const { return t < gridTiles() ? grid.width() : refinementOf(*this, t).grid.width(); }
+
+uint32_t Run::gridAncestor(uint32_t t) const {
+  while (t >= gridTiles()) t = refinementOf(*this, t).parent;
+  return t;
 }
 
 fs::path Run::cellPath(uint32_t t) const { return dir / "cells" / fmt::format("cell_{:06d}.bin", t); }

@@ -32,7 +32,7 @@ inline constexpr double kHaloShare = 1.35;      ///< tile points with halo / int
 inline constexpr int kTilesInFlight = 2;        ///< tiles processed at once (each parallel inside)
 inline constexpr uint32_t kVotesPerPair = 1024;  ///< shared points kept per (neighbour tile, component)
 inline constexpr const char* kFormat = "linesurf tile folder";
-inline constexpr int kVersion = 2;
+inline constexpr int kVersion = 3;
 inline constexpr size_t kExtractStats = 16;  ///< counters in a tile extraction file
 
 uint32_t floatBits(float f);
@@ -89,6 +89,17 @@ struct Grid {
   }
 };
 
+/// An overfull tile re-gridded over its own points' bounding box (beyond the thesis): the tiles of
+/// one uniform grid over the whole cloud are as many points as the budget allows only when the
+/// points fill the box, so a tile that holds more (a far outlier stretches the box and leaves the
+/// scan in one cell) is cut again, recursively, until each tile fits. Its non-empty children take
+/// the ids firstId + their tile index in `grid`.
+struct Refinement {
+  uint32_t parent = 0, firstId = 0;
+  Grid grid;
+  uint32_t count() const { return uint32_t(grid.tiles[0] * grid.tiles[1] * grid.tiles[2]); }
+};
+
 // --- tile cell files: u64 index, float x y z [, float nx ny nz] [, float radius] [, attributes] --
 /// The attributes are PointFileInfo::attributeFloats() floats: the colour, then the further
 /// properties (a point's own, carried to the output and to the extraction's segments).
@@ -133,7 +144,21 @@ struct Run {
   float dupTol = 0;
   std::vector<uint32_t> tileIds;     ///< non-empty tiles, ascending
   std::vector<uint64_t> tileCounts;  ///< their interior counts
+  std::vector<Bounds3f> tileBounds;  ///< their points' bounding boxes
   std::map<uint32_t, size_t> denseOf;
+  /// Tiles cut again, by firstId (ascending); the ids below grid.tiles' product are the grid's.
+  std::vector<Refinement> refinements;
+  std::map<uint32_t, size_t> refinedOf;  ///< parent id -> its refinement
+  uint32_t gridTiles() const { return uint32_t(grid.tiles[0] * grid.tiles[1] * grid.tiles[2]); }
+  /// The tile (a leaf of the refinements) that holds p.
+  uint32_t tileOf(const Vec3f& p) const;
+  /// A tile's box and width (a cube: the grid's or its refinement's tile).
+  void tileBox(uint32_t t, Vec3d& bmin, Vec3d& bmax) const;
+  double tileWidth(uint32_t t) const;
+  /// The grid tile a tile descends from.
+  uint32_t gridAncestor(uint32_t t) const;
+  /// The most points a tile may hold with its halo (its interior points x kHaloShare).
+  double tilePoints = 0;
   size_t blocks = 0;
   std::vector<uint32_t> blockCounts;  ///< [dense tile][block]: points of the tile among indices of that block
   size_t concurrent = 1;

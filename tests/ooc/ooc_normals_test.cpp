@@ -248,12 +248,12 @@ TEST(OocNormals, CurvatureInTilesIsTheInMemoryCurvature) {
 TEST(OocNormals, CliPicksTheOutOfCorePathWhenTheInputDoesNotFit) {
   const fs::path d = test::scratchDir("ooc_cli");
   ooc::SyntheticScanOptions s;
-  s.count = 60000;
+  s.count = 200000;  // about 95 MiB in memory, over --max-mb 64; the out-of-core path needs less
   ooc::writeSyntheticScan(d / "scan.ply", s);
   const auto big = test::runCli("normals '" + (d / "scan.ply").string() + "' -o '" + (d / "mem.ply").string() + "'");
   ASSERT_EQ(big.exitCode, 0) << big.out;
   EXPECT_EQ(big.out.find("out of core"), std::string::npos) << big.out;
-  const auto small = test::runCli("normals '" + (d / "scan.ply").string() + "' -o '" + (d / "ooc.ply").string() + "' --max-mb 20");
+  const auto small = test::runCli("normals '" + (d / "scan.ply").string() + "' -o '" + (d / "ooc.ply").string() + "' --max-mb 64");
   ASSERT_EQ(small.exitCode, 0) << small.out;
   EXPECT_NE(small.out.find("out of core"), std::string::npos) << small.out;
   EXPECT_TRUE(slurp(d / "ooc.ply") == slurp(d / "mem.ply"));
@@ -262,7 +262,7 @@ TEST(OocNormals, CliPicksTheOutOfCorePathWhenTheInputDoesNotFit) {
   // the out-of-core path by itself under a small budget (the radius is skipped, as in memory
   // every radius is set again).
   const auto next = test::runCli("extract eps-delta '" + (d / "ooc.ply").string() + "' -o '" + (d / "hybrid.ply").string() +
-                                 "' --max-mb 20");
+                                 "' --max-mb 64");
   ASSERT_EQ(next.exitCode, 0) << next.out;
   EXPECT_NE(next.out.find("out of core"), std::string::npos) << next.out;
 }

@@ -442,6 +442,11 @@ const std::vector<Case> kCases = {
   {"ConvertXyzOverBudget", "convert big.ply out.xyz --max-mb 1", 1, {"output", "40000 points", "--max-mb 1"}},
   {"EpsDeltaOverBudget", "extract eps-delta big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
   {"ShapeApproxOverBudget", "extract shape-approx big.ply -o out.ply --max-mb 1", 1, {"--max-mb", "out-of-core", "--max-mb 1"}},
+  // Out of core, a budget below what the process, the stages' buffers and two smallest tiles need
+  // (the budget is the peak resident set): one line with the figure, before any file.
+  {"NormalsOutOfCoreBelowItsFloor", "normals big.ply -o out.ply --out-of-core --max-mb 16", 1, {"--max-mb", "needs at least", "--max-mb 16"}},
+  {"EpsDeltaTilesBelowTheirFloor", "extract eps-delta big.ply -o out.ply --tiles 4 --max-mb 16", 1, {"--max-mb", "needs at least"}},
+  {"ShapeApproxOutOfCoreBelowItsFloor", "extract shape-approx big.ply -o out.ply --out-of-core --max-mb 24", 1, {"--max-mb 24"}},
   {"ShapeApproxClustersOutOfCore", "extract shape-approx pts.ply -o out.ply --clusters-out c.ply --tiles 2", 1,
    {"--clusters-out", "out of core"}},
   {"RenderGeometryOverBudget", "render big.ply -o out.png --size 16x16 --max-mb 1", 1, {"big.ply", "geometry"}},

@@ -25,8 +25,12 @@ struct OocNormalsOptions {
   /// Working folder for the tiles (created; reused by a run with the same input and arguments,
   /// cleared when it belongs to another input or other arguments).
   std::filesystem::path workDir;
-  /// Memory budget of the run in bytes (tiles in flight, their halos and the I/O buffers).
+  /// Memory budget of the run in bytes: the peak resident set of the process (binary and
+  /// libraries included). The tiles follow the points until each fits its share; a budget below
+  /// what the process, the stages' buffers and the smallest tiles need is refused before any work.
   double memoryBytes = 1024.0 * 1024 * 1024;
+  /// The budget's name in messages ("--max-mb" in the CLI); figures are in MiB.
+  std::string budgetName = "memoryBytes";
   /// At least this many tiles (0: as few as the budget allows).
   int minTiles = 0;
   /// Keep the working folder after a successful run (default: removed).
@@ -47,6 +51,12 @@ struct OocNormalsReport {
   size_t tilesReused = 0;      ///< finished tiles found in the working folder (a resumed run)
   bool folderCleared = false;  ///< the folder held another input's (or other arguments') tiles
   size_t tilePointsMax = 0;    ///< largest tile with its halo (points)
+  uint64_t tileInteriorMax = 0;  ///< largest tile without its halo (points)
+  /// The most points a tile may hold without its halo: the budget's share of one tile in flight
+  /// over a point's bytes, less the halo's share. Every tile holds at most this many, unless its
+  /// points share one spot (nothing to cut).
+  double tileInteriorBudget = 0;
+  size_t refinedTiles = 0;     ///< tiles over the budget cut again over their own points' box
   uint64_t inexactPoints = 0;  ///< interior points whose queries reached past the widest halo
   size_t haloWidenings = 0;    ///< tiles recomputed with a wider halo
   size_t orientationComponents = 0;
@@ -60,6 +70,13 @@ struct OocNormalsReport {
 /// Bytes per point the in-memory `normals` path holds (model, neighbour graph, orientation and
 /// Delaunay scratch), measured: used to decide whether a cloud fits a budget.
 double inMemoryNormalsBytesPerPoint(int k);
+
+/// Throws Error (BadParameter, naming o.budgetName) when o.memoryBytes is below what an
+/// out-of-core run of `in` needs whatever its tiles: the process's resident set now, the largest
+/// stage's buffers and two tiles of the smallest size that holds a neighbourhood; the message
+/// gives the figure. `extraction`: the run ends with a point extraction. Every out-of-core run
+/// checks this first; callers may check it before saying anything.
+void requireOutOfCoreBudget(const std::filesystem::path& in, const OocNormalsOptions& o, bool extraction);
 
 /// Reads `in` (binary PLY or XYZ with x y z [nx ny nz]) and writes `out` (binary PLY with
 /// x y z nx ny nz radius), as `linesurf normals` does in memory. Throws linesurf::Error.
