@@ -34,15 +34,7 @@ void run(FeatureArgs& a) {
     in.cloud.attributes.normals = true;
   }
   FeatureLineStats st;
-  HybridModel out;
-  try {
-    out = extractFeatureLines(in.cloud, a.extract, &st);
-  } catch (const OptionError&) {
-    throw;
-  } catch (const Error& e) {
-    if (e.path() == "model") throw Error(Error::Kind::BadInput, a.input, e.where(), e.reason());
-    throw;
-  }
+  HybridModel out = blamingFiles({{"model", a.input}}, [&] { return extractFeatureLines(in.cloud, a.extract, &st); });
   if (out.segments.empty())  // a smooth cloud: said, not written as an empty model
     throw Error(Error::Kind::BadInput, a.input, "",
                 fmt::format("no crease sharper than {} degrees ({} neighbour pairs across one, {} samples); nothing written",

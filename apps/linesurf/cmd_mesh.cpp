@@ -30,16 +30,8 @@ void run(MeshArgs& a) {
     throw Error(Error::Kind::BadInput, a.in, "", "has no normals (the surface needs oriented points: run `linesurf normals` first)");
   a.mesh.progress = progressBar();
   MeshStats st;
-  TriangleMesh mesh;
-  try {
-    mesh = extractMesh(model, a.mesh, &st, budget());
-  } catch (const OptionError&) {
-    throw;
-  } catch (const Error& e) {
-    // What the surface refuses in the model (a non-finite point, coincident points) is the file's fault.
-    if (e.path() == "model") throw Error(Error::Kind::BadInput, a.in, e.where(), e.reason());
-    throw;
-  }
+  // What the surface refuses in the model (a non-finite point, coincident points) is the file's fault.
+  TriangleMesh mesh = blamingFiles({{"model", a.in}}, [&] { return extractMesh(model, a.mesh, &st, budget()); });
   endProgress();
   if (mesh.faces.empty())
     throw Error(Error::Kind::BadInput, a.in, "",

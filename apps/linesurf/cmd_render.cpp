@@ -163,14 +163,7 @@ void run(RenderArgs& a) {
   if (surface) {
     MeshStats ms;
     Timer meshing;
-    try {
-      triMesh = extractMesh(model, MeshOptions{}, &ms, budget());
-    } catch (const OptionError&) {
-      throw;
-    } catch (const Error& e) {
-      if (e.path() == "model") throw Error(Error::Kind::BadInput, a.model, e.where(), e.reason());
-      throw;
-    }
+    triMesh = blamingFiles({{"model", a.model}}, [&] { return extractMesh(model, MeshOptions{}, &ms, budget()); });
     if (triMesh->faces.empty())
       throw Error(Error::Kind::BadInput, a.model, "", fmt::format("its surface gives no triangles ({} cells visited)", ms.cells));
     surfaceSphere = boundingSphere(model);  // the camera the splat render of the same model gets

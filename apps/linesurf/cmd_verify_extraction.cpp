@@ -31,17 +31,8 @@ void run(VerifyArgs& a) {
   HybridModel input = readModel(a.input);
   HybridModel hybrid = readModel(a.hybrid);
   a.verify.progress = progressBar();
-  RecordedVerifyResult rv;
-  try {
-    rv = verifyAsRecorded(input, hybrid, a.hybrid, a.verify);
-  } catch (const OptionError&) {
-    throw;
-  } catch (const Error& e) {
-    // What the surfaces refuse in the models (a non-finite point, no normals) is the file's fault.
-    if (e.path() == "cloud") throw Error(Error::Kind::BadInput, a.input, e.where(), e.reason());
-    if (e.path() == "model") throw Error(Error::Kind::BadInput, a.hybrid, e.where(), e.reason());
-    throw;
-  }
+  const RecordedVerifyResult rv = blamingFiles({{"cloud", a.input}, {"model", a.hybrid}},
+                                               [&] { return verifyAsRecorded(input, hybrid, a.hybrid, a.verify); });
   const VerifyReport& r = rv.report;
   const double epsilon = rv.epsilon, delta = rv.delta;
   const int k = rv.k;

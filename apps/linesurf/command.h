@@ -4,10 +4,13 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
 #include "linesurf/core/budget.h"
+#include "linesurf/core/error.h"
+#include "linesurf/core/options.h"
 #include "linesurf/core/progress.h"
 #include "linesurf/io/atomic_file.h"
 
@@ -56,6 +59,22 @@ void checkFiles(const std::vector<std::string>& inputs, const std::vector<Output
 
 /// The command's budget (--max-mb): every output and the working memory, estimated before the work.
 Budget budget();
+
+/// Runs `work`; a library error that blames one of the named arguments (what an algorithm refuses
+/// in the data: a non-finite point, coincident points, no normals) is the file's fault, rethrown
+/// as BadInput naming the file that argument came from. Option errors pass as they are.
+template <typename F>
+auto blamingFiles(std::initializer_list<std::pair<const char*, std::string>> files, F&& work) -> decltype(work()) {
+  try {
+    return work();
+  } catch (const OptionError&) {
+    throw;
+  } catch (const Error& e) {
+    for (const auto& [argument, path] : files)
+      if (e.path() == argument) throw Error(Error::Kind::BadInput, path, e.where(), e.reason());
+    throw;
+  }
+}
 /// Refuses (BadParameter, exit 1) work whose estimated size exceeds --max-mb, naming `option`.
 void checkSize(const std::string& option, double bytes, const std::string& what);
 
