@@ -95,12 +95,7 @@ void run(EpsDeltaArgs& a) {
                   st.delta, std::acos(std::max(-1.0, 1.0 - st.delta)) * 180.0 / 3.14159265358979));
   {
     // The noise tells whether the thesis's epsilon can do useful work on this scan.
-    double sigma = st.noiseSigma;
-    if (o.epsilonNoise <= 0) {
-      std::vector<Vec3f> pos(in.cloud.points.size());
-      for (size_t i = 0; i < pos.size(); ++i) pos[i] = in.cloud.points[i].position;
-      sigma = estimateNoise(pos).sigma;
-    }
+    const double sigma = o.epsilonNoise > 0 ? st.noiseSigma : estimateNoise(in.cloud).sigma;
     say(fmt::format("noise        sigma {:.6g} ({:.3f} x average spacing){}", sigma,
                     geo.averageSpacing > 0 ? sigma / geo.averageSpacing : 0.0,
                     o.epsilonNoise > 0 ? fmt::format("; epsilon = max({} x spacing, {} x sigma)", o.epsilonRelative, o.epsilonNoise) : ""));

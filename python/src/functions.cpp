@@ -228,9 +228,7 @@ delaunay_neighbours: delaunay_offsets / delaunay_indices (CSR); with curvature: 
         NoiseEstimate e;
         {
           py::gil_scoped_release release;
-          std::vector<Vec3f> pos(a.model->points.size());
-          for (size_t i = 0; i < pos.size(); ++i) pos[i] = a.model->points[i].position;
-          e = estimateNoise(pos, o);
+          e = estimateNoise(*a.model, o);
         }
         py::dict d;
         d["sigma"] = e.sigma, d["lower_quartile"] = e.lowerQuartile, d["upper_quartile"] = e.upperQuartile;

@@ -225,9 +225,7 @@ double resolveEpsilon(const EpsDeltaOptions& options, const PointGeometry& geome
   if (options.epsilon > 0) return options.epsilon;
   const double relative = options.epsilonRelative * double(geometry.averageSpacing);
   if (options.epsilonNoise <= 0) return relative;
-  std::vector<Vec3f> pos(cloud.points.size());
-  for (size_t i = 0; i < pos.size(); ++i) pos[i] = cloud.points[i].position;
-  const double sigma = estimateNoise(pos).sigma;
+  const double sigma = estimateNoise(cloud).sigma;
   if (noiseSigma) *noiseSigma = sigma;
   return std::max(relative, options.epsilonNoise * sigma);
 }

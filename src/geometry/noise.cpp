@@ -179,4 +179,10 @@ NoiseEstimate estimateNoise(std::span<const Vec3f> positions, const NoiseOptions
   return est;
 }
 
+NoiseEstimate estimateNoise(const HybridModel& model, const NoiseOptions& options) {
+  std::vector<Vec3f> pos(model.points.size());
+  for (size_t i = 0; i < pos.size(); ++i) pos[i] = model.points[i].position;
+  return estimateNoise(pos, options);
+}
+
 }  // namespace linesurf

@@ -12,6 +12,7 @@
 #include <span>
 
 #include "linesurf/core/math.h"
+#include "linesurf/core/model.h"
 
 namespace linesurf {
 
@@ -41,5 +42,7 @@ struct NoiseEstimate {
 /// samples none of which has a well-posed fit (collinear points), give fitted == 0 and sigma 0.
 /// Throws Error(BadParameter) for a non-finite position.
 NoiseEstimate estimateNoise(std::span<const Vec3f> positions, const NoiseOptions& options = {});
+/// The same over a model's points (its segments are not samples of the scan).
+NoiseEstimate estimateNoise(const HybridModel& model, const NoiseOptions& options = {});
 
 }  // namespace linesurf
