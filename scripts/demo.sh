@@ -37,5 +37,23 @@ run compare "$OUT/al_points.png" "$OUT/al_segments.png" --diff "$OUT/al_diff.png
 # Interactive pages (WebGL2, open offline in a browser): the hybrid and the line model.
 run view "$OUT/igea_eps_delta.ply" -o "$OUT/igea_eps_delta.html"
 run view "$OUT/al_segments.ply" -o "$OUT/al_segments.html"
+
+# A real scan as it comes, where ../shared is beside the clone: the coloured photogrammetric lion
+# (LAS 1.2, z-up, vegetation and outliers) cleaned, oriented, extracted with a tolerance relative
+# to its noise, put into a hierarchy and drawn from it.
+LION="$(dirname "$DATA")/../shared/data/lion_takanawa.las"
+if [ -f "$LION" ]; then
+  run clean "$LION" -o "$OUT/lion_clean.ply"
+  run normals "$OUT/lion_clean.ply" -o "$OUT/lion_normals.ply"
+  run extract eps-delta "$OUT/lion_normals.ply" -o "$OUT/lion_eps_delta.ply" --epsilon-noise 2
+  run lod build "$OUT/lion_eps_delta.ply" -o "$OUT/lion.lod"
+  run render "$OUT/lion_normals.ply" -o "$OUT/lion_points.png"
+  run render "$OUT/lion_eps_delta.ply" -o "$OUT/lion_eps_delta.png"
+  run render "$OUT/lion.lod" -o "$OUT/lion_lod.png" --budget 100000
+  run compare "$OUT/lion_points.png" "$OUT/lion_eps_delta.png"
+  run view "$OUT/lion_eps_delta.ply" -o "$OUT/lion_eps_delta.html"
+else
+  echo; echo "demo: no ../shared/data/lion_takanawa.las beside the clone: the real-scan part is skipped"
+fi
 echo
 echo "demo: pictures (*.png), models (*.ply) and viewer pages (*.html) in $OUT"
