@@ -22,6 +22,7 @@
 
 #include "linesurf/core/parallel.h"
 #include "linesurf/extract/contour.h"
+#include "linesurf/extract/curvature_lines.h"
 #include "linesurf/extract/eps_delta.h"
 #include "linesurf/extract/shape_approx.h"
 #include "linesurf/geometry/point_geometry.h"
@@ -143,13 +144,15 @@ const HybridModel* cachedModel(const std::string& name, int kind, std::string& e
   return slot.get();
 }
 
-// kind 0: points; 1: eps-delta; 2: shape approx greedy; 3: shape approx hierarchical.
+// kind 0: points; 1: eps-delta; 2: shape approx greedy; 3: shape approx hierarchical; 4: curvature
+// lines (chains of segments with bit-equal shared endpoints).
 const HybridModel* model(int m, int kind, std::string& error) {
   return cachedModel(std::string(kModels[m]) + "_points.ply", kind, error, [&](const std::filesystem::path& path) {
     HybridModel cloud = readModel(path);
     const PointGeometry geo = computePointGeometry(cloud);
     applyGeometry(cloud, geo);
     if (kind == 1) return extractEpsDelta(cloud, geo);
+    if (kind == 4) return extractCurvatureLines(cloud, geo);
     if (kind == 0) return cloud;
     ShapeApproxOptions o;
     o.method = kind == 2 ? ClusteringMethod::Greedy : ClusteringMethod::Hierarchical;
@@ -279,7 +282,7 @@ BENCHMARK(BM_ContourPrepare)->Args({0, 0})->Args({1, 0})->Args({1, 1})->Unit(ben
 // The segments of model m prepared as the renderer does (SIMD batches, the exact path for the
 // lanes they leave), 8 views, one thread: ns per segment and the share of the segments the
 // batches handed to the exact path.
-void segmentPrepare(benchmark::State& state, const HybridModel& m, const RenderOptions& o) {
+void segmentPrepare(benchmark::State& state, const HybridModel& m, const RenderOptions& o, bool shareChainEnds = true) {
   const Renderer r(m, o);
   const std::vector<Camera> views = Camera::spreadViews(r.sphere(), 8, 512, 512);
   std::vector<PreparedSegment> segs(m.segments.size());
@@ -288,7 +291,9 @@ void segmentPrepare(benchmark::State& state, const HybridModel& m, const RenderO
   for (auto _ : state) {
     FrameContext frame = FrameContext::make(views[v++ % views.size()], o, r.sphere(), m.attributes.colors);
     frame.endpointNormals = m.attributes.endpointNormals;
-    exact += prepareSegments(m.segments.data(), 0, segs.size(), frame, segmentSetupFrame(frame), segs.data(), status.data());
+    detail::SegmentSetupFrame setup = segmentSetupFrame(frame);
+    setup.shareChainEnds = shareChainEnds;
+    exact += prepareSegments(m.segments.data(), 0, segs.size(), frame, setup, segs.data(), status.data());
     all += segs.size();
     benchmark::DoNotOptimize(status.data());
   }
@@ -324,6 +329,23 @@ void BM_HybridSegmentPrepare(benchmark::State& state) {
                  " simd=" + renderSimdTarget());
 }
 BENCHMARK(BM_HybridSegmentPrepare)->ArgsProduct({{3, 4}, {1, 2, 3}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// Chained against isolated endpoints (SegmentSetupFrame::shareChainEnds): segmentPrepare of
+// Igea's curvature lines (range(0) 0) or the dragon's contour lines (1), each endpoint set up on
+// its own (range(1) 0) or a chain's shared endpoint once (1), both segment methods (range(2):
+// ScreenSpace, Approx). The ratio of the two ns/segment is the saving.
+void BM_ChainPrepare(benchmark::State& state) {
+  std::string error;
+  const HybridModel* m = state.range(0) == 0 ? model(4, 4, error) : contourModel(1, 1, error);
+  if (!m) return state.SkipWithError(error.c_str());
+  RenderOptions o;
+  o.segmentMethod = kMethods[state.range(2)];
+  segmentPrepare(state, *m, o, state.range(1) == 1);
+  state.SetLabel(std::string(state.range(0) == 0 ? "igea curvature lines" : "dragon contour lines") +
+                 (state.range(1) == 1 ? " chained" : " isolated") +
+                 (state.range(2) == 0 ? " screen-space" : " approx") + " simd=" + renderSimdTarget());
+}
+BENCHMARK(BM_ChainPrepare)->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // The bunny contour segments of one view prepared one at a time (prepareSegment), the first
 // `limit` drawn ones (their records in the cache: the arithmetic alone for the benchmarks below).

@@ -125,9 +125,29 @@ HWY_NOINLINE void SegmentToCamera(const SegmentSetupFrame& F, SegmentSetupBatch&
     hn::StoreU(hn::Add(row(2, X, Y, Z), t[2]), d, z + i);
   };
   auto norm2 = [](VF x, VF y, VF z) { return hn::Add(hn::Add(hn::Mul(x, x), hn::Mul(y, y)), hn::Mul(z, z)); };
+  // a vector of lanes whose p1 are all bit-equal to the next lanes' p0 (a chain's shared
+  // endpoints; compared as bits: +0 and -0 may round apart) takes them from the p0 already in
+  // camera space, the same arithmetic on the same bits; so p0 first, over the whole batch
+  const hn::RebindToUnsigned<DF> du;
+  uint64_t shared = 0;
+  if (F.shareChainEnds)
+    for (int i = 0, v = 0; i < n; i += lanes, ++v) {
+      auto U = [&](const float* a, int at) { return hn::BitCast(du, hn::LoadU(d, a + at)); };
+      const auto last = hn::FirstN(du, size_t(n - 1 - i));  // lanes with a next lane in the batch
+      const auto eq = hn::And(hn::And(hn::Eq(U(B.p1x, i), U(B.p0x, i + 1)), hn::Eq(U(B.p1y, i), U(B.p0y, i + 1))),
+                              hn::Eq(U(B.p1z, i), U(B.p0z, i + 1)));
+      if (i + lanes < n && hn::AllTrue(du, hn::And(eq, last))) shared |= uint64_t(1) << v;
+    }
+  for (int i = 0; i < n; i += lanes) point(B.p0x, B.p0y, B.p0z, i);
+  for (int i = 0, v = 0; i < n; i += lanes, ++v) {
+    if (shared >> v & 1) {
+      hn::StoreU(hn::LoadU(d, B.p0x + i + 1), d, B.p1x + i), hn::StoreU(hn::LoadU(d, B.p0y + i + 1), d, B.p1y + i);
+      hn::StoreU(hn::LoadU(d, B.p0z + i + 1), d, B.p1z + i);
+    } else {
+      point(B.p1x, B.p1y, B.p1z, i);
+    }
+  }
   for (int i = 0; i < n; i += lanes) {
-    point(B.p0x, B.p0y, B.p0z, i);
-    point(B.p1x, B.p1y, B.p1z, i);
     VF wx = hn::LoadU(d, B.wx + i), wy = hn::LoadU(d, B.wy + i), wz = hn::LoadU(d, B.wz + i);
     if (F.smoothFrame) {
       const VF ax = hn::LoadU(d, B.m0x + i), ay = hn::LoadU(d, B.m0y + i), az = hn::LoadU(d, B.m0z + i);

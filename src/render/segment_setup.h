@@ -49,6 +49,10 @@ struct SegmentSetupFrame {
   float invF = 1;     ///< 1 / focal length
   float reach = 0;    ///< cutoff reconstructionScale kMaxStretch: the widest kernel per unit radius
   bool smoothFrame = false;  ///< the model's segments carry endpoint normals
+  /// A chain's shared endpoint (p1 of a lane bit-equal to p0 of the next: curvature lines, contour
+  /// lines) goes to camera space once, as the next lane's p0 (segmentToCamera); false: every
+  /// endpoint on its own (the same bits either way: the benches' reference)
+  bool shareChainEnds = true;
   /// FrameContext::primitiveColor: the segment's colour (modelColors) else defaultColor, its
   /// alpha alphaOverride where that is >= 0
   bool modelColors = true;

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -439,4 +440,49 @@ TEST(SegmentPrepare, BatchesTakeCameraSpaceAsToCameraRoundsIt) {
 }
 
 }  // namespace
+}  // namespace linesurf
+
+namespace linesurf {
+TEST(SegmentPrepare, ChainsShareTheirEndpointsBitForBit) {
+  // a helix traced as one chain (consecutive segments with bit-equal endpoints, as curvature and
+  // contour lines store them), with endpoint normals and without: setting a shared endpoint up
+  // once gives every record and status the bits of setting it up twice
+  const Camera cam = Camera::lookAt(Vec3f(0.3f, -0.4f, 3), Vec3f::Zero(), Vec3f(0, 1, 0), 40, 256, 256);
+  RenderOptions o;
+  for (bool smooth : {false, true}) {
+    FrameContext frame = FrameContext::make(cam, o, BoundingSphere{Vec3f::Zero(), 1});
+    frame.endpointNormals = smooth;
+    std::vector<Segment> segs;
+    Vec3f prev(0.8f, 0, -0.8f);
+    for (int i = 1; i <= 1000; ++i) {
+      const float t = 0.02f * float(i);
+      const Vec3f p(0.8f * std::cos(t), 0.8f * std::sin(t), -0.8f + 0.0016f * float(i));
+      Segment s;
+      s.p0 = prev, s.p1 = p, s.radius = 0.015f;
+      s.normal = Vec3f(0.3f * std::cos(t), 0.3f * std::sin(t), 1);
+      s.normal0 = s.normal, s.normal1 = Vec3f(0.3f * std::cos(t + 0.02f), 0.3f * std::sin(t + 0.02f), 1);
+      if (i % 97 == 0) s.p0.x() += 1e-3f;  // a few breaks in the chain
+      segs.push_back(s);
+      prev = p;
+    }
+    std::vector<PreparedSegment> a(segs.size()), b(segs.size());
+    std::vector<PrimitiveStatus> sa(segs.size()), sb(segs.size());
+    detail::SegmentSetupFrame setup = segmentSetupFrame(frame);
+    ASSERT_TRUE(setup.shareChainEnds);
+    prepareSegments(segs.data(), 0, segs.size(), frame, setup, a.data(), sa.data());
+    setup.shareChainEnds = false;
+    prepareSegments(segs.data(), 0, segs.size(), frame, setup, b.data(), sb.data());
+    size_t drawn = 0;
+    for (size_t i = 0; i < segs.size(); ++i) {
+      ASSERT_EQ(int(sa[i]), int(sb[i])) << i;
+      if (!visible(sa[i])) continue;
+      ++drawn;
+      const char* x = reinterpret_cast<const char*>(&a[i]);
+      const char* y = reinterpret_cast<const char*>(&b[i]);
+      // the record's bytes after `extra` (its first 8, not written in the common case)
+      EXPECT_EQ(std::memcmp(x + 8, y + 8, 16 * size_t(detail::kRecordChunks) - 8), 0) << i << " smooth " << smooth;
+    }
+    EXPECT_GT(drawn, segs.size() / 3);
+  }
+}
 }  // namespace linesurf
