@@ -43,6 +43,9 @@ void runOutOfCore(const NormalsArgs& args, const std::string& why) {
   say(fmt::format("{}: {} points, k = {}, {} threads, {} tiles (largest {} points with halo){}", args.in, r.points,
                   args.geometry.k, currentThreadCount(), r.tiles, r.tilePointsMax,
                   r.tilesReused ? fmt::format(", {} reused from an earlier run", r.tilesReused) : ""));
+  if (r.tilesRecomputed)
+    say(fmt::format("tile folder    {} tile(s) whose working files failed their proof (another tile's or input's, damaged, truncated): recomputed",
+                    r.tilesRecomputed));
   say(fmt::format("halo           {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", r.haloWidenings,
                   r.inexactPoints));
   if (r.orientationComponents > 0)

@@ -77,6 +77,9 @@ void sayTiles(const ooc::OocNormalsReport& g, const std::string& in) {
   if (g.folderCleared) say("tile folder held another input's or other arguments' tiles: not reused, rebuilt");
   say(fmt::format("input        {} points ({}), {} tiles (largest {} points with halo){}, {} threads", g.points, in, g.tiles,
                   g.tilePointsMax, g.tilesReused ? fmt::format(", {} reused", g.tilesReused) : "", currentThreadCount()));
+  if (g.tilesRecomputed)
+    say(fmt::format("tile folder  {} tile(s) whose working files failed their proof (another tile's or input's, damaged, truncated): recomputed",
+                    g.tilesRecomputed));
   say(fmt::format("halo         {} tile(s) widened, {} point(s) whose neighbours reach past the widest halo", g.haloWidenings,
                   g.inexactPoints));
 }

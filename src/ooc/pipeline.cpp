@@ -42,6 +42,8 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
   if (o.ranks > 1 && !o.barrier) throwBadParameter("barrier", "needed when ranks > 1");
   const FileIdentity id = fileIdentity(in);
   const json wantInput = identityJson(in, id), wantArgs = argumentsJson(o, extraction);
+  r.inputHash = id.hash;
+  r.argsHash = hash64(wantArgs.dump().data(), wantArgs.dump().size());
   std::error_code ec;
   if (o.rank == 0) prepareFolder(r, rep, id, wantInput, wantArgs);
   if (o.barrier) o.barrier();
@@ -64,11 +66,21 @@ OocNormalsReport runPipeline(const fs::path& in, const fs::path& out, const OocN
     if (int(d % size_t(o.ranks)) != o.rank) continue;
     const uint32_t tile = r.tileIds[d];
     // Done: its result, with the curvature of `normals --curvature`, or with the geometry the
-    // extraction reads (unless the tile is extracted already, which removes it).
-    if (fs::exists(r.resultPath(tile), ec) && (!r.curvatureOut() || fs::exists(r.curvaturePath(tile), ec)) &&
-        (!extract || fs::exists(r.ownGeometryPath(tile), ec) || fs::exists(r.extractPath(tile), ec)))
+    // extraction reads (unless the tile is extracted already, which removes it), each proving
+    // it is this tile's, of this input and these arguments, and whole. Anything else is removed
+    // and the tile computed again: a swapped, damaged, truncated or foreign file is never read.
+    if (proven(r, Stage::Result, tile, r.resultPath(tile)) &&
+        (!r.curvatureOut() || proven(r, Stage::Curvature, tile, r.curvaturePath(tile))) &&
+        (!extract || proven(r, Stage::Geometry, tile, r.ownGeometryPath(tile)) ||
+         proven(r, Stage::Extraction, tile, r.extractPath(tile)))) {
       ++rep.tilesReused;
-    else todo.push_back(r.tileIds[d]);
+      continue;
+    }
+    bool any = false;
+    for (const fs::path& p : {r.resultPath(tile), r.curvaturePath(tile), r.ownGeometryPath(tile), r.extractPath(tile)})
+      any = fs::remove(p, ec) || any;
+    if (any) ++rep.tilesRecomputed;
+    todo.push_back(tile);
   }
   reportProgress(o.progress, "tiles", 0.0);
   forEachTile(r, todo, "tiles", [&](uint32_t tile) { processTile(r, tile); });

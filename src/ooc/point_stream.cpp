@@ -20,6 +20,7 @@
 #include "io/detail/ply_format.h"
 #include "io/detail/readers.h"
 #include "linesurf/core/error.h"
+#include "ooc/scan_hash.h"
 #include "linesurf/io/atomic_file.h"
 
 namespace linesurf::ooc {
@@ -71,18 +72,16 @@ FileIdentity fileIdentity(const std::filesystem::path& path) {
   if (::stat(path.c_str(), &st) != 0) throwBadInput(path.string(), "", "no such file");
   id.size = uint64_t(st.st_size);
   id.mtimeNs = int64_t(st.st_mtim.tv_sec) * 1000000000ll + st.st_mtim.tv_nsec;
+  // The whole content, not samples: an edit anywhere with the old mtime restored is seen.
   std::FILE* f = openInput(path.string());
-  std::vector<char> buf(65536);
-  uint64_t h = fnv1a(&id.size, sizeof id.size);
-  for (int c = 0; c < 17; ++c) {
-    // chunk 0 is the start of the file (the header), the others evenly spaced up to its end
-    const uint64_t at = c == 0 ? 0 : (id.size > buf.size() ? (id.size - buf.size()) * uint64_t(c) / 16 : 0);
-    if (std::fseek(f, long(at), SEEK_SET) != 0) break;
-    const size_t got = std::fread(buf.data(), 1, buf.size(), f);
-    h = fnv1a(buf.data(), got, h);
-  }
+  std::vector<char> buf(1 << 20);
+  detail::Hasher h(id.size);
+  for (size_t got; (got = std::fread(buf.data(), 1, buf.size(), f)) > 0;) h.add(buf.data(), got);
+  const bool failed = std::ferror(f) != 0;
   std::fclose(f);
-  id.hash = h;
+  if (failed) throwIo(path.string(), "read error while hashing the input");
+  const uint64_t hv = h.finish();
+  id.hash = hv;
   return id;
 }
 
@@ -301,7 +300,7 @@ size_t PointReader::readXyz(std::vector<Vec3f>& pos, std::vector<Vec3f>& nrm, si
     ++line_;
     const std::string where = "line " + std::to_string(line_);
     float v[6];
-    const int n = detail::parseXyzLine(text, path_, where, counted_ ? nullptr : &info_.comments, v);
+    const int n = linesurf::detail::parseXyzLine(text, path_, where, counted_ ? nullptr : &info_.comments, v);
     if (n == 0) continue;
     if (n != 3 && n != 6)
       throwBadInput(path_, where, "expected 3 (x y z) or 6 (x y z nx ny nz) numbers, found " + std::to_string(n));

@@ -96,7 +96,7 @@ void extractTile(const Run& r, uint32_t tile, double epsilon, const std::vector<
     putRaw(b, uint32_t(x.provenance[sI].size()));
     for (uint32_t j : x.provenance[sI]) putRaw(b, uint32_t(og.idx[j]));
   }
-  writeWhole(r.extractPath(tile), b);
+  writeWhole(r.extractPath(tile), sealed(r, Stage::Extraction, tile, std::move(b)));
   // The tile's geometry is spent: free its disk now rather than at the end of the run.
   std::error_code ec;
   fs::remove(r.ownGeometryPath(tile), ec);
@@ -111,7 +111,8 @@ void extractTiles(const Run& r, const std::vector<size_t>& nodeOffset, const std
   std::vector<uint32_t> todo;
   std::error_code ec;
   for (size_t d = 0; d < r.tileIds.size(); ++d)
-    if (int(d % size_t(r.o.ranks)) == r.o.rank && !fs::exists(r.extractPath(r.tileIds[d]), ec)) todo.push_back(r.tileIds[d]);
+    if (int(d % size_t(r.o.ranks)) == r.o.rank && !proven(r, Stage::Extraction, r.tileIds[d], r.extractPath(r.tileIds[d])))
+      todo.push_back(r.tileIds[d]);
   forEachTile(r, todo, r.extraction->stage(),
               [&](uint32_t tile) { extractTile(r, tile, et.epsilon, nodeOffset, flip, avg); });
   et.tExtract = t.seconds();
@@ -189,7 +190,7 @@ void writeHybrid(const Run& r, ExtractTotals& et) {
     if (!segs[d]) continue;
     const fs::path p = r.extractPath(r.tileIds[d]);
     const uint64_t start = headBytes + kept[d] * kKeptRecord;
-    const std::string all = readRange(p, start, fs::file_size(p) - start);
+    const std::string all = readRange(p, start, fs::file_size(p) - kProofBytes - start);
     const char* q = all.data();
     std::string rows;
     for (uint64_t sI = 0; sI < segs[d]; ++sI) {

@@ -239,10 +239,10 @@ void processTile(const Run& r, uint32_t tile) {
       for (size_t i = 0; i < n; ++i)
         if (tg.owner[i] == tile)
           putRaw(c, geo.kMin[i]), putRaw(c, geo.kMax[i]), putRaw(c, geo.minCurvatureDir[i]), putRaw(c, geo.maxCurvatureDir[i]);
-      writeWhole(r.curvaturePath(tile), c);
+      writeWhole(r.curvaturePath(tile), sealed(r, Stage::Curvature, tile, std::move(c)));
     }
-    if (r.extracting()) writeWhole(r.ownGeometryPath(tile), encodeOwnGeometry(ownGeometry(tg, tile, r.tileCurvature())));
-    writeWhole(r.resultPath(tile), encodeResult(sum, res, sides, shared));
+    if (r.extracting()) writeWhole(r.ownGeometryPath(tile), sealed(r, Stage::Geometry, tile, encodeOwnGeometry(ownGeometry(tg, tile, r.tileCurvature()))));
+    writeWhole(r.resultPath(tile), sealed(r, Stage::Result, tile, encodeResult(sum, res, sides, shared)));
   }
 }
 

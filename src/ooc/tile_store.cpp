@@ -23,6 +23,65 @@ float bitsFloat(uint32_t u) {
   return f;
 }
 
+namespace {
+
+struct ProofRecord {  // 64 bytes on disk, after the payload
+  char magic[8];
+  uint32_t stage, format;
+  uint64_t input, args;
+  uint32_t tile, folderVersion;
+  uint64_t length, checksum, self;
+};
+static_assert(sizeof(ProofRecord) == kProofBytes);
+
+ProofRecord expected(const Run& r, Stage stage, uint32_t tile) {
+  ProofRecord p{};
+  std::memcpy(p.magic, "LSPROOF1", 8);
+  p.stage = uint32_t(stage), p.format = kProofFormat, p.input = r.inputHash, p.args = r.argsHash;
+  p.tile = tile, p.folderVersion = uint32_t(kVersion);
+  return p;
+}
+
+}  // namespace
+
+std::string sealed(const Run& r, Stage stage, uint32_t tile, std::string payload) {
+  ProofRecord p = expected(r, stage, tile);
+  p.length = payload.size();
+  p.checksum = hash64(payload.data(), payload.size(), uint64_t(stage));
+  p.self = hash64(reinterpret_cast<const char*>(&p), offsetof(ProofRecord, self));
+  putRaw(payload, p);
+  return payload;
+}
+
+bool proven(const Run& r, Stage stage, uint32_t tile, const fs::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  bool ok = false;
+  if (std::fseek(f, 0, SEEK_END) == 0) {
+    const long size = std::ftell(f);
+    ProofRecord p;
+    if (size >= long(kProofBytes) && std::fseek(f, size - long(kProofBytes), SEEK_SET) == 0 &&
+        std::fread(&p, 1, kProofBytes, f) == kProofBytes) {
+      ProofRecord want = expected(r, stage, tile);
+      want.length = uint64_t(size) - kProofBytes, want.checksum = p.checksum;
+      want.self = hash64(reinterpret_cast<const char*>(&want), offsetof(ProofRecord, self));
+      if (std::memcmp(&want, &p, kProofBytes) == 0 && std::fseek(f, 0, SEEK_SET) == 0) {
+        Hasher x{uint64_t(stage)};
+        std::vector<char> buf(1 << 20);
+        uint64_t left = want.length;
+        while (left > 0) {
+          const size_t got = std::fread(buf.data(), 1, size_t(std::min<uint64_t>(left, buf.size())), f);
+          if (got == 0) break;
+          x.add(buf.data(), got), left -= got;
+        }
+        ok = left == 0 && x.finish() == p.checksum;
+      }
+    }
+  }
+  std::fclose(f);
+  return ok;
+}
+
 void writeWhole(const fs::path& path, const std::string& bytes) {
   const fs::path tmp = path.string() + ".tmp";
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
@@ -214,7 +273,9 @@ std::string encodeOwnGeometry(const OwnGeometry& og) {
 }
 
 OwnGeometry decodeOwnGeometry(const fs::path& path, size_t attrFloats) {
-  const std::string s = readRange(path, 0, fs::file_size(path));
+  const uint64_t size = fs::file_size(path);
+  if (size < kProofBytes) throwIo(path.string(), "not a tile geometry file");
+  const std::string s = readRange(path, 0, size - kProofBytes);
   if (s.size() < 25 || s.compare(0, 8, "LSGEO001") != 0) throwIo(path.string(), "not a tile geometry file");
   const char* q = s.data() + 8;
   const uint64_t m = getRaw<uint64_t>(q), stars = getRaw<uint64_t>(q);
@@ -242,11 +303,12 @@ void writeOrientation(const Run& r, const std::vector<size_t>& nodeOffset, const
   for (size_t v : nodeOffset) putRaw(b, uint64_t(v));
   b.append(reinterpret_cast<const char*>(flip.data()), flip.size());
   putRaw(b, avg);
-  writeWhole(r.orientationPath(), b);
+  writeWhole(r.orientationPath(), sealed(r, Stage::Orientation, 0, std::move(b)));
 }
 
 void readOrientation(const Run& r, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip, float& avg) {
   const fs::path p = r.orientationPath();
+  if (!proven(r, Stage::Orientation, 0, p)) throwIo(p.string(), "the orientation file is not this run's (changed during the run?)");
   const std::string b = readRange(p, 0, fs::file_size(p));
   const char* q = b.data();
   nodeOffset.resize(size_t(getRaw<uint64_t>(q)));

@@ -20,6 +20,7 @@
 #include "linesurf/core/math.h"
 #include "linesurf/ooc/ooc_normals.h"
 #include "linesurf/ooc/point_stream.h"
+#include "ooc/scan_hash.h"
 
 namespace linesurf::ooc::detail {
 
@@ -32,7 +33,7 @@ inline constexpr double kHaloShare = 1.35;      ///< tile points with halo / int
 inline constexpr int kTilesInFlight = 2;        ///< tiles processed at once (each parallel inside)
 inline constexpr uint32_t kVotesPerPair = 1024;  ///< shared points kept per (neighbour tile, component)
 inline constexpr const char* kFormat = "linesurf tile folder";
-inline constexpr int kVersion = 3;
+inline constexpr int kVersion = 4;  ///< 4: every binary working file ends in a proof
 inline constexpr size_t kExtractStats = 16;  ///< counters in a tile extraction file
 
 uint32_t floatBits(float f);
@@ -56,6 +57,14 @@ T getRaw(const char*& p) {
   p += sizeof(T);
   return v;
 }
+
+// --- the proof every binary working file ends with (docs/file-format.md "Tile folder") ----------
+/// What a working file is: a file is used only when its proof names the stage, format, input,
+/// arguments and tile the reader expects and its payload has the stated length and checksum.
+enum class Stage : uint32_t { Result = 1, Curvature = 2, Geometry = 3, Extraction = 4, Orientation = 5 };
+inline constexpr uint32_t kProofFormat = 1;
+inline constexpr size_t kProofBytes = 64;
+/// The checksum is hash64 (ooc/scan_hash.h).
 
 // --- the grid -----------------------------------------------------------------------------------
 struct Grid {
@@ -164,6 +173,9 @@ struct Run {
   size_t concurrent = 1;
   double ioBytes = 0;
 
+  /// The input's content hash and the shaping arguments' hash, in every working file's proof.
+  uint64_t inputHash = 0, argsHash = 0;
+
   fs::path cellPath(uint32_t t) const;
   fs::path resultPath(uint32_t t) const;
   fs::path extractPath(uint32_t t) const;
@@ -258,5 +270,11 @@ OwnGeometry decodeOwnGeometry(const fs::path& path, size_t attrFloats);
 /// offsets, one flip per (tile, component) node, and the average spacing.
 void writeOrientation(const Run& r, const std::vector<size_t>& nodeOffset, const std::vector<uint8_t>& flip, float avg);
 void readOrientation(const Run& r, std::vector<size_t>& nodeOffset, std::vector<uint8_t>& flip, float& avg);
+
+/// `payload` with its proof appended (stage, tile, this run's input and arguments).
+std::string sealed(const Run& r, Stage stage, uint32_t tile, std::string payload);
+/// Whether the file at `path` ends in a proof for (stage, tile) of this run whose length and
+/// checksum match its payload. Never throws: a missing or unreadable file is not proven.
+bool proven(const Run& r, Stage stage, uint32_t tile, const fs::path& path);
 
 }  // namespace linesurf::ooc::detail

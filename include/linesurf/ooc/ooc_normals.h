@@ -49,6 +49,9 @@ struct OocNormalsReport {
   uint64_t points = 0;
   size_t tiles = 0;            ///< non-empty tiles
   size_t tilesReused = 0;      ///< finished tiles found in the working folder (a resumed run)
+  /// Tiles whose working files failed their proof (another tile's, another input's, damaged,
+  /// truncated) and were computed again.
+  size_t tilesRecomputed = 0;
   bool folderCleared = false;  ///< the folder held another input's (or other arguments') tiles
   size_t tilePointsMax = 0;    ///< largest tile with its halo (points)
   uint64_t tileInteriorMax = 0;  ///< largest tile without its halo (points)
