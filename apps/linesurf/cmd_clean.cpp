@@ -30,7 +30,7 @@ void run(const CleanArgs& a) {
   Timer total;
   validate(a.geometry);
   validate(a.outliers);
-  checkFiles({a.in}, {{"--output", a.out, {".ply", ".xyz"}}, {"--outliers-out", a.outliersOut, {".ply", ".xyz"}}});
+  checkFiles({a.in}, {{"--output", a.out, {".ply", ".xyz", ".las"}}, {"--outliers-out", a.outliersOut, {".ply", ".xyz", ".las"}}});
   HybridModel model = readModel(a.in);
   const double readTime = total.seconds();
   if (model.points.empty()) throw Error(Error::Kind::BadInput, a.in, "", "holds no points");
@@ -63,9 +63,9 @@ void run(const CleanArgs& a) {
 RegisterCommand reg(22, [](CLI::App& app) {
   auto a = std::make_shared<CleanArgs>();
   CLI::App* sub = app.add_subcommand("clean", "Remove a scan's outliers: points off the surface, isolated points, floaters");
-  sub->add_option("IN", a->in, "Input point cloud (.ply, .xyz)")->type_name("FILE")->required();
-  sub->add_option("-o,--output", a->out, "The cloud without its outliers (.ply, .xyz)")->type_name("FILE")->required();
-  sub->add_option("--outliers-out", a->outliersOut, "Also write the outliers (.ply, .xyz)")->type_name("FILE");
+  sub->add_option("IN", a->in, "Input point cloud (.ply, .xyz, .las)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", a->out, "The cloud without its outliers (.ply, .xyz, .las)")->type_name("FILE")->required();
+  sub->add_option("--outliers-out", a->outliersOut, "Also write the outliers (.ply, .xyz, .las)")->type_name("FILE");
   bindOptions(sub, a->geometry, {"k"});
   sub->add_option("--off-surface", a->outliers.offSurface,
                   "Off the surface: median distance to the neighbours' tangent planes above this x their median spacing, [0.1, 1e6]")

@@ -63,7 +63,7 @@ void run(const NormalsArgs& args) {
   Timer total;
   validate(args.geometry);  // before reading the cloud
   // The path is chosen below by its own estimate (in memory or out of core).
-  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz"}}}, /*inputsHeldWhole=*/false);
+  checkFiles({args.in}, {{"--output", args.out, {".ply", ".xyz", ".las"}}}, /*inputsHeldWhole=*/false);
   if (const std::string why = args.ooc.requested(); !why.empty()) {
     runOutOfCore(args, why);
     return;
@@ -82,6 +82,12 @@ void run(const NormalsArgs& args) {
   if (model.points.empty()) throw Error(Error::Kind::BadInput, args.in, "", "holds no points");
   checkGeometry(args.in, model.points.size(), args.geometry.k);
   checkModelOutput("--output", args.out, model.points.size(), model.segments.size());
+  // Refused before the work, in the words `convert` uses, rather than when the file is written.
+  std::string outExt = std::filesystem::path(args.out).extension().string();
+  for (char& c : outExt) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (outExt == ".las" && !model.segments.empty())
+    throwBadParameter(args.out, fmt::format("a LAS file holds points only, and the model has {} line segments (write .ply)",
+                                            model.segments.size()));
   GeometryOptions o = args.geometry;
   o.delaunayNeighbours = o.curvature;
   o.progress = progressBar();
@@ -116,7 +122,7 @@ RegisterCommand reg(20, [](CLI::App& app) {
   auto args = std::make_shared<NormalsArgs>();
   CLI::App* sub = app.add_subcommand("normals", "Estimate oriented normals (and curvature) of a point cloud (thesis §6.1)");
   sub->add_option("IN", args->in, "Input point cloud (.ply, .xyz)")->type_name("FILE")->required();
-  sub->add_option("-o,--output", args->out, "Output .ply with normals (and curvature properties)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", args->out, "Output .ply, .xyz or .las with normals (and curvature properties)")->type_name("FILE")->required();
   GeometryOptions& o = args->geometry;
   // --curvature also writes vertex properties k_min, k_max, dmin_x, dmin_y, dmin_z
   bindOptions(sub, o, {"k", "recomputeNormals", "orientNormals", "orientationPenalty", "orient", "viewpoint", "curvature", "curvatureFit"});

@@ -31,7 +31,7 @@ void run(const SmoothArgs& a) {
   Timer total;
   validate(a.geometry);
   validate(a.mls);
-  checkFiles({a.in}, {{"--output", a.out, {".ply", ".xyz"}}});
+  checkFiles({a.in}, {{"--output", a.out, {".ply", ".xyz", ".las"}}});
   HybridModel model = readModel(a.in);
   if (model.points.empty()) throw Error(Error::Kind::BadInput, a.in, "", "holds no points");
   if (!model.segments.empty()) throw Error(Error::Kind::BadInput, a.in, "", "is a hybrid model: smooth projects the points of a cloud");
@@ -92,7 +92,7 @@ RegisterCommand reg(24, [](CLI::App& app) {
   auto a = std::make_shared<SmoothArgs>();
   CLI::App* sub = app.add_subcommand("smooth", "Project every point onto the cloud's MLS surface (thesis §9.1)");
   sub->add_option("IN", a->in, "Input point cloud (.ply, .xyz; normals computed when it has none)")->type_name("FILE")->required();
-  sub->add_option("-o,--output", a->out, "The projected cloud (.ply, .xyz)")->type_name("FILE")->required();
+  sub->add_option("-o,--output", a->out, "The projected cloud (.ply, .xyz, .las)")->type_name("FILE")->required();
   bindOptions(sub, a->geometry, {"k", "recomputeNormals", "orient", "viewpoint"});
   sub->add_option("--support", a->mls.supportScale, "MLS support radius, in spacings, [1.5, 10]")->capture_default_str()->type_name("FLOAT");
   sub->add_flag("--robust", a->mls.robust, "RIMLS: refit with robust weights, so that creases stay sharp (beyond the thesis)");

@@ -88,6 +88,11 @@ FileIdentity fileIdentity(const std::filesystem::path& path) {
 // ---------------------------------------------------------------------------------------------
 PointReader::PointReader(const std::filesystem::path& path) : path_(path.string()) {
   const std::string ext = lower(path.extension().string());
+  // LAS is read whole (io/las_io.h): its origin and colour rule need every record first, which
+  // the chunked reader does not do yet, so a LAS input is refused here before any work.
+  if (ext == ".las")
+    throwBadInput(path_, "", "the out-of-core path does not stream LAS yet: raise --max-mb to read it in memory, or "
+                             "'linesurf convert' it to binary .ply first");
   if (ext != ".ply" && ext != ".xyz")
     throwBadInput(path_, "", "the out-of-core path reads .ply (binary) and .xyz point files");
   ply_ = ext == ".ply";

@@ -551,6 +551,87 @@ TEST(LasCli, InfoConvertAndNormals) {
   EXPECT_EQ(differ, 0u);
 }
 
+TEST(LasCli, NormalsCleanAndSmoothWriteLasBitExact) {
+  const fs::path dir = test::scratchDir("las_cli_out");
+  LasBuilder in;
+  in.format = 3;
+  in.offset = {500000, 5000000, 100};  // a UTM-like tile far from the origin
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) {
+      LasPoint p;
+      p.xyz = {100 * i, 100 * j, (i - 15) * (i - 15) + (j - 15) * (j - 15)};
+      p.rgb = {uint16_t(2000 * i), 300, uint16_t(1000 * j)};
+      in.points.push_back(p);
+    }
+  writeBytes(dir / "tile.las", in.bytes());
+  auto q = [](const fs::path& p) { return "'" + p.string() + "'"; };
+  const std::string src = in.bytes();
+  const auto [so, sl] = recordsOf(src);
+  test::CliResult r = test::runCli("-q normals " + q(dir / "tile.las") + " -o " + q(dir / "n.las"));
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  // The same normals and radii as the PLY output, through LAS 1.4 extra bytes.
+  r = test::runCli("-q normals " + q(dir / "tile.las") + " -o " + q(dir / "n.ply"));
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const HybridModel nl = readModel(dir / "n.las"), np = readModel(dir / "n.ply");
+  ASSERT_TRUE(nl.attributes.normals);
+  ASSERT_TRUE(nl.attributes.radii);
+  ASSERT_EQ(nl.points.size(), np.points.size());
+  EXPECT_EQ(modelOrigin(nl), modelOrigin(np));
+  size_t differ = 0;
+  for (size_t i = 0; i < np.points.size(); ++i)
+    differ += nl.points[i].normal != np.points[i].normal || nl.points[i].radius != np.points[i].radius ||
+              nl.points[i].position != np.points[i].position;
+  EXPECT_EQ(differ, 0u);
+  // Point order kept: the integer X Y Z records come back bit-exact.
+  const std::string out = readBytes(dir / "n.las");
+  const auto [oo, ol] = recordsOf(out);
+  differ = 0;
+  for (size_t i = 0; i < in.points.size(); ++i) differ += src.substr(so + i * sl, 12) != out.substr(oo + i * ol, 12);
+  EXPECT_EQ(differ, 0u);
+  r = test::runCli("-q clean " + q(dir / "tile.las") + " -o " + q(dir / "c.las"));
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  EXPECT_EQ(modelOrigin(readModel(dir / "c.las")), modelOrigin(np));
+  r = test::runCli("-q smooth " + q(dir / "tile.las") + " -o " + q(dir / "s.las"));
+  ASSERT_EQ(r.exitCode, 0) << r.out;
+  const HybridModel s = readModel(dir / "s.las");
+  EXPECT_EQ(s.points.size(), in.points.size());
+  // Smoothing moves the points, so the origin (the centre of the records' range) moves with
+  // them; it stays far from zero, and object-space points stay within 1 m of the input's.
+  EXPECT_LT((modelOrigin(s) - modelOrigin(np)).norm(), 1.0);
+}
+
+TEST(LasCli, NormalsOfAHybridRefusesLasInOneLine) {
+  const fs::path dir = test::scratchDir("las_cli_hybrid");
+  HybridModel m;
+  for (int i = 0; i < 40; ++i) {
+    Point p;
+    p.position = Vec3f(float(i % 7), float(i / 7), 0.1f * float(i % 3));
+    m.points.push_back(p);
+  }
+  Segment s;
+  s.p0 = Vec3f(0, 0, 0), s.p1 = Vec3f(1, 0, 0), s.normal = Vec3f(0, 0, 1);
+  m.segments.push_back(s);
+  writeModel(dir / "h.ply", m);
+  const fs::path out = dir / "h.las";
+  test::CliResult r = test::runCli("-q normals '" + (dir / "h.ply").string() + "' -k 8 -o '" + out.string() + "'");
+  EXPECT_EQ(r.exitCode, 1) << r.out;
+  EXPECT_EQ(r.out, out.string() + ": a LAS file holds points only, and the model has 1 line segments (write .ply)\n");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(LasBadInput, OutOfCoreRefusesLasInOneLine) {
+  const fs::path dir = test::scratchDir("las_bad_ooc");
+  writeBytes(dir / "tile.las", smallFile().bytes());
+  const fs::path out = dir / "n.ply";
+  test::CliResult r = test::runCli("-q normals '" + (dir / "tile.las").string() + "' --out-of-core -o '" + out.string() + "'");
+  EXPECT_EQ(r.exitCode, 2) << r.out;
+  EXPECT_EQ(r.out, (dir / "tile.las").string() +
+                       ": the out-of-core path does not stream LAS yet: raise --max-mb to read it in memory, or 'linesurf "
+                       "convert' it to binary .ply first\n");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);  // no tile folder, no temporary
+}
+
 TEST(LasShared, LionReadsDirectly) {
   LINESURF_REQUIRE_SHARED_DATA();
   const fs::path lion = test::sharedData() / "lion_takanawa.las";
