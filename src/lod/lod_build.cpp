@@ -292,6 +292,7 @@ std::string headerBytes(const HeaderJson& hj, uint64_t id, const std::vector<BNo
     put(head, uint8_t(n.leaf));
     put(head, uint8_t(0));
   }
+  format::put(head, lodChecksum(head.data(), head.size()));
   return head;
 }
 
@@ -348,7 +349,8 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   facts.attributes = model.attributes, facts.shading = shading, facts.masses = masses != nullptr;
   const HeaderJson hj = headerJson(facts, options, "");
   const uint64_t tableOffset = format::kPreambleBytes + hj.json.size();
-  const uint64_t blocksOffset = tableOffset + uint64_t(count) * format::kRecordBytes;
+  const uint64_t blocksOffset =
+      tableOffset + uint64_t(count) * format::kRecordBytes + format::tableTrailerBytes(format::kVersion);
 
   // Leaf blocks first: their sizes follow from their counts, so each is written in place (in
   // parallel, each into its own range); inner blocks follow as they are made, deepest level

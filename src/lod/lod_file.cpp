@@ -193,19 +193,28 @@ LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
   char pre[format::kPreambleBytes];
   if (f.read(0, pre, sizeof pre) != sizeof pre || std::memcmp(pre, format::kMagic, 8) != 0)
     bad(ps, "header", "not a linesurf level-of-detail hierarchy (no LINESLOD magic)");
-  // A node-table checksum comes with the next format version (with the blocks' attributes).
-  if (uint32_t v = format::get<uint32_t>(pre + 8); v != format::kVersion)
-    bad(ps, "header", fmt::format("version {} (this linesurf reads version {})", v, format::kVersion));
+  const uint32_t version = format::get<uint32_t>(pre + 8);
+  if (version < format::kOldestVersion || version > format::kVersion)
+    bad(ps, "header", fmt::format("version {} (this linesurf reads versions {} to {})", version, format::kOldestVersion,
+                                  format::kVersion));
+  header_.version = version;
   const uint32_t jsonBytes = format::get<uint32_t>(pre + 12);
   header_.hierarchyId = format::get<uint64_t>(pre + 16);
   const uint64_t count = format::get<uint64_t>(pre + 24);
   const uint64_t tableOffset = format::kPreambleBytes + uint64_t(jsonBytes);
+  const uint64_t trailer = format::tableTrailerBytes(version);
   // The JSON and the table are sized by the file before they are read.
-  if (count == 0 || count > fileSize_ / format::kRecordBytes || tableOffset + count * format::kRecordBytes > fileSize_)
+  if (count == 0 || count > fileSize_ / format::kRecordBytes ||
+      tableOffset + count * format::kRecordBytes + trailer > fileSize_)
     bad(ps, "header", fmt::format("truncated: the header and the table of {} nodes need more than the file's {} bytes",
                                   count, fileSize_));
-  std::string js(jsonBytes, '\0');
-  if (f.read(format::kPreambleBytes, js.data(), jsonBytes) != jsonBytes) bad(ps, "header", "cannot read the JSON header");
+  const uint64_t tableEnd = tableOffset + count * format::kRecordBytes;
+  // Version 2 proves the whole header (preamble, JSON, table) before any of it is believed.
+  std::string head(tableEnd + trailer, '\0');
+  if (f.read(0, head.data(), head.size()) != head.size()) bad(ps, "header", "cannot read the header and the table");
+  if (trailer && lodChecksum(head.data(), tableEnd) != format::get<uint64_t>(head.data() + tableEnd))
+    bad(ps, "node table", "checksum mismatch (the header or the node table was changed or damaged)");
+  const std::string js = head.substr(format::kPreambleBytes, jsonBytes);
   try {
     const auto j = nlohmann::json::parse(js);
     if (!j.is_object() || j.value("format", "") != "linesurf-lod") bad(ps, "header", "format is not linesurf-lod");
@@ -237,11 +246,10 @@ LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
   } catch (const nlohmann::json::exception& e) {
     bad(ps, "header", std::string("invalid JSON header: ") + e.what());
   }
-  std::string table(count * format::kRecordBytes, '\0');
-  if (f.read(tableOffset, table.data(), table.size()) != table.size()) bad(ps, "node table", "cannot read the table");
+  const char* const table = head.data() + tableOffset;
   nodes_.resize(count);
   for (uint64_t i = 0; i < count; ++i) {
-    const char* r = table.data() + i * format::kRecordBytes;
+    const char* r = table + i * format::kRecordBytes;
     NodeInfo& n = nodes_[i];
     if (format::get<uint64_t>(r) != header_.hierarchyId)
       bad(ps, fmt::format("node {}", i), "its table record belongs to another hierarchy; refused");
@@ -259,7 +267,7 @@ LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
     n.level = uint8_t(r[85]);
     n.leaf = r[86] != 0;
   }
-  validateHierarchy(header_, nodes_, tableOffset + count * format::kRecordBytes, ps);
+  validateHierarchy(header_, nodes_, tableEnd + trailer, ps);
 }
 
 void LodFile::readBlock(uint32_t i, std::vector<char>& buf) const {

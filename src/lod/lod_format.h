@@ -14,9 +14,15 @@ static_assert(std::endian::native == std::endian::little, "the .lod layout is li
 
 inline constexpr char kMagic[8] = {'L', 'I', 'N', 'E', 'S', 'L', 'O', 'D'};
 inline constexpr char kBlockMagic[8] = {'L', 'S', 'L', 'O', 'D', 'N', 'D', '1'};
-inline constexpr uint32_t kVersion = 1;
+inline constexpr uint32_t kVersion = 2;  // written; version 1 (no table checksum) is still read
+inline constexpr uint32_t kOldestVersion = 1;
 inline constexpr size_t kPreambleBytes = 32;  // magic, version u32, json bytes u32, id u64, nodes u64
 inline constexpr size_t kRecordBytes = 88;
+// Version 2: the table is followed by lodChecksum of every byte before it (preamble, JSON with the
+// id filled in, table), so that an edited bound, count or flag is refused, not drawn.
+inline constexpr size_t kTableChecksumBytes = 8;
+/// Bytes between the table's end and the first block, by format version.
+inline constexpr uint64_t tableTrailerBytes(uint32_t version) { return version >= 2 ? kTableChecksumBytes : 0; }
 inline constexpr size_t kBlockHeaderBytes = 32;  // magic, id u64, node u32, points u32, segments u32, 0 u32
 inline constexpr size_t kPointBytes = 64;
 inline constexpr size_t kSegmentBytes = 100;

@@ -374,7 +374,8 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   facts.frame = frame, facts.sphere = sphere, facts.maxRadius = maxRadius;
   facts.attributes = attributes, facts.shading = shading, facts.masses = masses;
   const HeaderJson hj = headerJson(facts, options, name);
-  const uint64_t blocksOffset = format::kPreambleBytes + hj.json.size() + uint64_t(count) * format::kRecordBytes;
+  const uint64_t blocksOffset = format::kPreambleBytes + hj.json.size() + uint64_t(count) * format::kRecordBytes +
+                                format::tableTrailerBytes(format::kVersion);
 
   std::vector<uint64_t> offsets(count), sizes(count), sums(count);
   std::vector<uint32_t> nPoints(count), nSegments(count);

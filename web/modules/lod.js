@@ -50,7 +50,8 @@ export function createLod(L, ctx) {
     if (pre.byteLength < 32) throw new Error(L.url + ': truncated preamble');
     const dv = new DataView(pre);
     if (!magic(dv, 0, 'LINESLOD')) throw new Error(L.url + ': not a linesurf level-of-detail hierarchy (no LINESLOD magic)');
-    if (dv.getUint32(8, true) !== 1) throw new Error(L.url + ': version ' + dv.getUint32(8, true) + ' (this page reads version 1)');
+    const version = dv.getUint32(8, true);
+    if (version !== 1 && version !== 2) throw new Error(L.url + ': version ' + version + ' (this page reads versions 1 and 2)');
     const jsonBytes = dv.getUint32(12, true);
     self.idLo = dv.getUint32(16, true);
     self.idHi = dv.getUint32(20, true);
@@ -58,7 +59,8 @@ export function createLod(L, ctx) {
     if (self.idHex !== L.hierarchy) throw new Error(L.url + ': the server now holds hierarchy ' + self.idHex + ', not ' + L.hierarchy);
     const count = Number(dv.getBigUint64(24, true));
     if (!(count >= 1)) throw new Error(L.url + ': no nodes');
-    const end = 32 + jsonBytes + count * RECORD;
+    // Version 2 appends the table checksum (the server's reader checked it before serving).
+    const end = 32 + jsonBytes + count * RECORD + (version >= 2 ? 8 : 0);
     const rest = await fetchRange(32, end);
     if (rest.byteLength !== end - 32) throw new Error(L.url + ': truncated header or node table');
     let header;

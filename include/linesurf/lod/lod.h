@@ -83,6 +83,7 @@ struct NodeInfo {
 
 struct LodHeader {
   uint64_t hierarchyId = 0;
+  uint32_t version = 0;  ///< the file's format version (1 has no node-table checksum)
   ModelFrame frame;
   BoundingSphere sphere;  ///< of the whole prepared model, in the rendering frame
   float maxRadius = 0;    ///< largest primitive radius (part of sphere.radius)
