@@ -133,7 +133,7 @@ void run(RenderArgs& a) {
   }
   if (!triMesh && !lodFile && model.empty()) throw Error(Error::Kind::BadInput, a.model, "", "the model holds no points and no segments");
   // LAS is z-up, and a file made from one says so: orbit about its axis unless told otherwise.
-  if (const std::string up = lodFile || triMesh ? std::string() : recordedUpAxis(model);
+  if (const std::string up = lodFile ? lodFile->header().upAxis : triMesh ? std::string() : recordedUpAxis(model);
       !up.empty() && a.upAxisFlag && a.upAxisFlag->count() == 0 && a.view.eye == std::nullopt && a.view.target == std::nullopt) {
     a.view.upAxis = parseUpAxis(up);
     say(fmt::format("{}: up axis {} (recorded in the file; --up-axis overrides)", a.model, up));

@@ -53,6 +53,12 @@ void serveHierarchy(const ViewArgs& a, ViewerPageOptions o) {
   std::error_code ec;
   const uint64_t bytes = std::filesystem::file_size(a.model, ec);
   o.renderArguments = fmt::format("--budget {}", a.budget);
+  // A hierarchy built from a z-up model (LAS) records its axis: the page orbits about it.
+  if (const std::string& up = file.header().upAxis;
+      !up.empty() && a.upAxisFlag && a.upAxisFlag->count() == 0 && !o.view.eye && !o.view.target) {
+    o.view.upAxis = parseUpAxis(up);
+    say(fmt::format("{}: up axis {} (recorded in the hierarchy; --up-axis overrides)", a.model, up));
+  }
   LodServeOptions s;
   s.host = a.host;
   s.port = a.port;

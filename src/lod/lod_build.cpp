@@ -11,6 +11,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/options.h"
 #include "linesurf/core/parallel.h"
+#include "linesurf/io/las_io.h"
 #include "linesurf/lod/lod.h"
 #include "lod_build_parts.h"
 #include "lod_format.h"
@@ -244,6 +245,8 @@ HeaderJson headerJson(const HeaderFacts& f, const BuildOptions& options, const s
       {"recordBytes", {{"node", format::kRecordBytes}, {"point", format::kPointBytes}, {"segment", format::kSegmentBytes},
                        {"blockHeader", format::kBlockHeaderBytes}}},
   };
+  // Optional, so a model without one gives the bytes it always gave.
+  if (!f.upAxis.empty()) j["upAxis"] = f.upAxis;
   HeaderJson hj;
   hj.json = j.dump();
   while ((format::kPreambleBytes + hj.json.size()) % 8) hj.json.push_back(' ');
@@ -347,6 +350,7 @@ std::string buildLod(const HybridModel& model, const ModelFrame& frame, const Bu
   facts.points = P, facts.segments = S, facts.nodes = count, facts.depth = depth;
   facts.frame = frame, facts.sphere = sphere, facts.maxRadius = maxRadius;
   facts.attributes = model.attributes, facts.shading = shading, facts.masses = masses != nullptr;
+  facts.upAxis = recordedUpAxis(model);
   const HeaderJson hj = headerJson(facts, options, "");
   const uint64_t tableOffset = format::kPreambleBytes + hj.json.size();
   const uint64_t blocksOffset =

@@ -54,6 +54,7 @@ struct HeaderFacts {
   float maxRadius = 0;
   Attributes attributes;
   bool shading = false, masses = false;
+  std::string upAxis;  ///< the model's recorded up axis ("z" for LAS), empty when none
 };
 /// The JSON part of the header, padded so that the table starts 8-aligned, and where the
 /// hierarchy id's placeholder is in the file.

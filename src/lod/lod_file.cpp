@@ -231,6 +231,11 @@ LodFile::LodFile(const std::filesystem::path& path) : path_(path) {
     header_.sphere.center = vec3(j.at("sphere").at("center"), ps, "sphere centre");
     header_.sphere.radius = floatNumber(j.at("sphere").at("radius"), ps, "sphere radius");
     header_.maxRadius = floatNumber(j.at("maxRadius"), ps, "maxRadius");
+    if (j.contains("upAxis")) {
+      const auto& u = j.at("upAxis");
+      if (!u.is_string() || (u != "x" && u != "y" && u != "z")) bad(ps, "header", "upAxis is not \"x\", \"y\" or \"z\"");
+      header_.upAxis = u.get<std::string>();
+    }
     const auto& a = j.at("attributes");
     header_.attributes.normals = a.at("normals");
     header_.attributes.colors = a.at("colors");

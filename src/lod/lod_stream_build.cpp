@@ -17,6 +17,7 @@
 #include "linesurf/core/error.h"
 #include "linesurf/core/parallel.h"
 #include "linesurf/io/atomic_file.h"
+#include "linesurf/io/las_io.h"
 #include "linesurf/io/model_frame.h"
 #include "linesurf/io/model_stream.h"
 #include "linesurf/lod/lod.h"
@@ -120,10 +121,12 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   };
   Attributes attributes;
   bool shading = false, masses = false, first = true, firstPoints = true, pointNormals = true, segmentNormals = true;
+  std::string upAxis;
   HybridModel c;
   while (reader.next(c, kRowsPerRead)) {
     progress("reading", double(reader.pointsRead() + reader.segmentsRead()) / double(N) / 3);
     if (first) {
+      upAxis = recordedUpAxis(c);
       // All but `normals` follow from the header, which every chunk carries whole; `normals`
       // needs them on every element that has rows (as the whole-file reader decides).
       attributes = c.attributes;
@@ -373,6 +376,7 @@ BuildReport buildLodStreaming(const fs::path& input, const fs::path& output, con
   facts.points = P, facts.segments = S, facts.nodes = count, facts.depth = depth;
   facts.frame = frame, facts.sphere = sphere, facts.maxRadius = maxRadius;
   facts.attributes = attributes, facts.shading = shading, facts.masses = masses;
+  facts.upAxis = upAxis;
   const HeaderJson hj = headerJson(facts, options, name);
   const uint64_t blocksOffset = format::kPreambleBytes + hj.json.size() + uint64_t(count) * format::kRecordBytes +
                                 format::tableTrailerBytes(format::kVersion);

@@ -208,5 +208,25 @@ TEST(LodStream, RefusesWhatItCannotBuildAndLeavesNothing) {
   }
 }
 
+// A z-up model (LAS, or a PLY made from one) records its axis in the hierarchy, in memory and
+// streamed alike, so that render and view orbit a .lod about the axis its model had; a model
+// without one gives a header without the field.
+TEST(LodStream, TheRecordedUpAxisTravelsIntoTheHeader) {
+  const auto dir = test::scratchDir("lod_stream_up");
+  HybridModel m = sphereModel(5000, 1, Vec3f::Zero());
+  writeModel(dir / "plain.ply", m);
+  m.comments.push_back("linesurf_up_axis z");
+  writeModel(dir / "zup.ply", m);
+  lod::BuildOptions o;
+  o.leafSize = 256;
+  const std::string mem = inMemory(dir / "zup.ply", o);
+  const std::string str = streamed(dir / "zup.ply", dir / "zup.lod", o, 1e6);
+  EXPECT_TRUE(mem == str);
+  EXPECT_EQ(lod::LodFile(dir / "zup.lod").header().upAxis, "z");
+  streamed(dir / "plain.ply", dir / "plain.lod", o, 1e6);
+  EXPECT_EQ(lod::LodFile(dir / "plain.lod").header().upAxis, "");
+  EXPECT_EQ(slurp(dir / "plain.lod").find("upAxis"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace linesurf

@@ -89,6 +89,7 @@ struct LodHeader {
   float maxRadius = 0;    ///< largest primitive radius (part of sphere.radius)
   Attributes attributes;
   bool pointMasses = false;  ///< the original points carry masses
+  std::string upAxis;        ///< the model's recorded up axis (x, y or z; "z" for LAS), empty when none
   uint64_t points = 0, segments = 0;
   BuildOptions options;
 };
